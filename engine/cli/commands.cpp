@@ -1,0 +1,68 @@
+#include "cli/commands.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <memory>
+
+#include "core/error.hpp"
+#include "input/lammps_data.hpp"
+#include "input/run_input.hpp"
+#include "integrators/velocity_verlet.hpp"
+#include "simulation/run_loop.hpp"
+#include "text/thermo_output.hpp"
+
+namespace deli {
+
+namespace {
+std::string style_for(const System& system) {
+  if (!system.topology.angles.empty()) return "molecular";
+  if (!system.topology.bonds.empty()) return "bond";
+  return "atomic";
+}
+}  // namespace
+
+int command_run(const std::vector<std::string>& args) {
+  if (args.size() > 1) throw InputError("deli run takes at most one INPUT file; see deli --help");
+  const std::string path = args.empty() ? std::string(DELI_DEFAULT_INPUT) : args[0];
+  RunInput input = load_run_input(path);
+
+  std::printf("deli %s: %s\n", DELI_VERSION, path.c_str());
+  std::printf("%zu atoms, %zu bonds, %zu angles; box %g x %g x %g; dt %g, %lld steps\n",
+              input.system.particles.size(), input.system.topology.bonds.size(),
+              input.system.topology.angles.size(), input.system.box.length().x,
+              input.system.box.length().y, input.system.box.length().z, input.timestep,
+              static_cast<long long>(input.steps));
+
+  VelocityVerlet integrator(*input.force_field, input.skin, input.timestep);
+  ThermoTable table(stdout);
+  std::vector<Observer*> observers{&table};
+  std::unique_ptr<ThermoCsv> csv;
+  if (!input.thermo.file.empty()) {
+    csv = std::make_unique<ThermoCsv>(input.thermo.file);
+    observers.push_back(csv.get());
+  }
+  std::unique_ptr<ProgressLine> progress;
+  if (isatty(STDERR_FILENO)) {
+    progress = std::make_unique<ProgressLine>(stderr);
+    observers.insert(observers.begin(), progress.get());
+  }
+  const RunStatistics stats =
+      run(input.system, integrator, input.steps, input.thermo.every, observers);
+  std::printf("loop time %.3f s for %lld steps of %zu atoms: %.4g atom-steps/s, %lld neighbour "
+              "list builds\n",
+              stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
+              stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
+  return 0;
+}
+
+int command_write_data(const std::vector<std::string>& args) {
+  if (args.size() != 2) throw InputError("usage: deli write-data INPUT FILE");
+  RunInput input = load_run_input(args[0]);
+  write_lammps_data(input.system, args[1], style_for(input.system),
+                    "deli " DELI_VERSION " from " + args[0]);
+  std::printf("wrote %zu atoms to %s\n", input.system.particles.size(), args[1].c_str());
+  return 0;
+}
+
+}  // namespace deli

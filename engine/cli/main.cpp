@@ -1,0 +1,51 @@
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: deli <command> [arguments]\n"
+    "\n"
+    "commands:\n"
+    "  run [INPUT]               run a simulation (no INPUT: the default input,\n"
+    "                            " DELI_DEFAULT_INPUT ")\n"
+    "  write-data INPUT FILE     write the system INPUT builds as a LAMMPS data file\n"
+    "\n"
+    "options:\n"
+    "  -h, --help                this help\n"
+    "  --version                 the version\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  try {
+    if (args.empty() || args[0] == "-h" || args[0] == "--help" || args[0] == "help") {
+      std::fputs(kUsage, stdout);
+      return args.empty() ? 2 : 0;
+    }
+    if (args[0] == "--version") {
+      std::printf("deli %s\n", DELI_VERSION);
+      return 0;
+    }
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (args[0] == "run") return deli::command_run(rest);
+    if (args[0] == "write-data") return deli::command_write_data(rest);
+    std::fprintf(stderr, "deli: unknown command '%s'; run 'deli --help' for the commands\n",
+                 args[0].c_str());
+    return 2;
+  } catch (const deli::InputError& e) {
+    std::fprintf(stderr, "deli: input error: %s\n", e.what());
+  } catch (const deli::SimulationError& e) {
+    std::fprintf(stderr, "deli: simulation stopped: %s\n", e.what());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "deli: error: %s\n", e.what());
+  }
+  return 1;
+}

@@ -1,0 +1,33 @@
+#include "integrators/force_engine.hpp"
+
+namespace deli {
+
+ForceEngine::ForceEngine(const ForceField& force_field, double skin)
+    : force_field_(force_field), neighbors_(force_field.neighbor_cutoff(), skin) {}
+
+const ForceEvaluation& ForceEngine::compute(System& system) {
+  Particles& p = system.particles;
+  if (neighbors_.needs_rebuild(p.position)) {
+    if (neighbors_.builds() == 0) {
+      const SpecialPairs special = find_special_pairs(system.topology, p.size());
+      neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
+    }
+    for (std::size_t i = 0; i < p.size(); ++i) system.box.wrap(p.position[i], p.image[i]);
+    neighbors_.build(p.position, system.box);
+  }
+  last_ = force_field_.compute(system, neighbors_, force_);
+  return last_;
+}
+
+std::vector<std::array<std::int32_t, 2>> special_exclusions(const SpecialPairs& special,
+                                                            const std::array<double, 3>& factors) {
+  std::vector<std::array<std::int32_t, 2>> excluded;
+  for (int s = 0; s < 3; ++s) {
+    if (factors[s] == 1.0) continue;
+    excluded.insert(excluded.end(), special.by_separation[s].begin(),
+                    special.by_separation[s].end());
+  }
+  return excluded;
+}
+
+}  // namespace deli

@@ -1,0 +1,37 @@
+#pragma once
+
+#include <vector>
+
+#include "force_field.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// Keeps the neighbour list in step with the particles and evaluates the force field:
+// what every integrator calls once per force evaluation.
+class ForceEngine {
+ public:
+  ForceEngine(const ForceField& force_field, double skin);
+
+  // Rebuilds the neighbour list when needed (wrapping positions into the box first, the
+  // only time they are wrapped) and computes forces and energies.
+  const ForceEvaluation& compute(System& system);
+
+  const std::vector<Vec3>& force() const { return force_; }
+  const ForceEvaluation& last() const { return last_; }
+  const NeighborList& neighbors() const { return neighbors_; }
+  const ForceField& force_field() const { return force_field_; }
+
+ private:
+  const ForceField& force_field_;
+  NeighborList neighbors_;
+  std::vector<Vec3> force_;
+  ForceEvaluation last_;
+};
+
+// Exclusions and scaled pairs implied by the topology and the special_bonds factors.
+std::vector<std::array<std::int32_t, 2>> special_exclusions(const SpecialPairs& special,
+                                                            const std::array<double, 3>& factors);
+
+}  // namespace deli

@@ -1,0 +1,21 @@
+#pragma once
+
+#include <string>
+
+#include "integrators/force_engine.hpp"
+
+namespace deli {
+
+// Advances a system by one timestep. setup() brings forces up to date before the first
+// step; after every step, forces() holds those at the new positions.
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual std::string name() const = 0;
+  virtual double timestep() const = 0;
+  virtual void setup(System& system) = 0;
+  virtual void step(System& system) = 0;
+  virtual const ForceEngine& forces() const = 0;
+};
+
+}  // namespace deli

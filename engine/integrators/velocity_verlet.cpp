@@ -1,0 +1,25 @@
+#include "integrators/velocity_verlet.hpp"
+
+namespace deli {
+
+VelocityVerlet::VelocityVerlet(const ForceField& force_field, double skin, double timestep)
+    : engine_(force_field, skin), dt_(timestep) {}
+
+void VelocityVerlet::setup(System& system) { engine_.compute(system); }
+
+void VelocityVerlet::half_kick(Particles& p) const {
+  const std::vector<Vec3>& f = engine_.force();
+  for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] += f[i] * (0.5 * dt_ / p.mass[i]);
+}
+
+void VelocityVerlet::step(System& system) {
+  Particles& p = system.particles;
+  half_kick(p);
+  for (std::size_t i = 0; i < p.size(); ++i) p.position[i] += p.velocity[i] * dt_;
+  system.step += 1;
+  system.time += dt_;
+  engine_.compute(system);
+  half_kick(p);
+}
+
+}  // namespace deli

@@ -1,0 +1,25 @@
+#pragma once
+
+#include "integrators/integrator.hpp"
+
+namespace deli {
+
+// Velocity Verlet (LAMMPS fix nve): half kick, drift, force, half kick.
+class VelocityVerlet final : public Integrator {
+ public:
+  VelocityVerlet(const ForceField& force_field, double skin, double timestep);
+
+  std::string name() const override { return "verlet"; }
+  double timestep() const override { return dt_; }
+  void setup(System& system) override;
+  void step(System& system) override;
+  const ForceEngine& forces() const override { return engine_; }
+
+ private:
+  void half_kick(Particles& p) const;
+
+  ForceEngine engine_;
+  double dt_;
+};
+
+}  // namespace deli

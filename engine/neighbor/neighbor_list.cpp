@@ -1,0 +1,168 @@
+#include "neighbor/neighbor_list.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace deli {
+
+NeighborList::NeighborList(double cutoff, double skin) : cutoff_(cutoff), skin_(skin) {}
+
+void NeighborList::set_exclusions(std::vector<std::array<std::int32_t, 2>> excluded) {
+  std::sort(excluded.begin(), excluded.end());
+  excluded.erase(std::unique(excluded.begin(), excluded.end()), excluded.end());
+  excluded_ = std::move(excluded);
+  excluded_offsets_.clear();
+  position_at_build_.clear();  // force a rebuild
+}
+
+bool NeighborList::is_excluded(std::int32_t i, std::int32_t j) const {
+  const auto begin = excluded_.begin() + static_cast<std::ptrdiff_t>(excluded_offsets_[i]);
+  const auto end = excluded_.begin() + static_cast<std::ptrdiff_t>(excluded_offsets_[i + 1]);
+  return std::binary_search(begin, end, std::array<std::int32_t, 2>{i, j});
+}
+
+namespace {
+
+// Cell grid over the box (periodic axes) or over the particles' extent (open axes), with
+// cells at least `reach` wide so that all partners lie in the 27 surrounding cells.
+struct CellGrid {
+  std::array<int, 3> count{};
+  Vec3 origin, inverse_width;
+  std::array<bool, 3> periodic{};
+
+  int axis_cell(double x, int a) const {
+    int c = static_cast<int>(std::floor((x - origin[a]) * inverse_width[a]));
+    if (periodic[a]) {
+      c %= count[a];
+      if (c < 0) c += count[a];
+    }
+    return std::clamp(c, 0, count[a] - 1);
+  }
+};
+
+CellGrid make_grid(const std::vector<Vec3>& position, const Box& box, double reach) {
+  CellGrid grid;
+  for (int a = 0; a < 3; ++a) {
+    grid.periodic[a] = box.periodic(a);
+    double lo = box.lo()[a], extent = box.length()[a];
+    if (!box.periodic(a)) {
+      double lo_p = box.lo()[a], hi_p = box.hi()[a];
+      for (const Vec3& x : position) lo_p = std::min(lo_p, x[a]), hi_p = std::max(hi_p, x[a]);
+      lo = lo_p, extent = hi_p - lo_p;
+    }
+    grid.count[a] = std::max(1, static_cast<int>(std::min(extent / reach, 1024.0)));
+    grid.origin[a] = lo;
+    grid.inverse_width[a] = extent;  // extent for now; inverted below
+  }
+  // A sparse or spread-out system would get more cells than particles: coarser cells
+  // (never narrower than `reach`) keep memory proportional to the particle count.
+  const double limit = std::max(27.0, 2.0 * static_cast<double>(position.size()));
+  while (static_cast<double>(grid.count[0]) * grid.count[1] * grid.count[2] > limit) {
+    for (int& c : grid.count) c = (c + 1) / 2;
+  }
+  for (int a = 0; a < 3; ++a) {
+    grid.inverse_width[a] = grid.count[a] / std::max(grid.inverse_width[a], 1e-300);
+  }
+  return grid;
+}
+
+}  // namespace
+
+void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
+  const auto n = static_cast<std::int32_t>(position.size());
+  const double reach = cutoff_ + skin_;
+  const double reach2 = reach * reach;
+
+  excluded_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (const auto& pair : excluded_) ++excluded_offsets_[pair[0] + 1];
+  std::partial_sum(excluded_offsets_.begin(), excluded_offsets_.end(), excluded_offsets_.begin());
+
+  const CellGrid grid = make_grid(position, box, reach);
+  const int cells = grid.count[0] * grid.count[1] * grid.count[2];
+
+  // Counting sort of particles into cells; within a cell, ascending index.
+  std::vector<int> cell_of(static_cast<std::size_t>(n));
+  std::vector<std::size_t> cell_start(static_cast<std::size_t>(cells) + 1, 0);
+  for (std::int32_t i = 0; i < n; ++i) {
+    const Vec3& x = position[i];
+    const int c = (grid.axis_cell(x.z, 2) * grid.count[1] + grid.axis_cell(x.y, 1)) * grid.count[0] +
+                  grid.axis_cell(x.x, 0);
+    cell_of[i] = c;
+    ++cell_start[c + 1];
+  }
+  std::partial_sum(cell_start.begin(), cell_start.end(), cell_start.begin());
+  std::vector<std::int32_t> cell_members(static_cast<std::size_t>(n));
+  {
+    std::vector<std::size_t> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::int32_t i = 0; i < n; ++i) cell_members[fill[cell_of[i]]++] = i;
+  }
+
+  // The distinct neighbouring cells of each cell (with fewer than 3 cells along a
+  // periodic axis, several offsets reach the same cell: visit it once).
+  auto neighbour_cells = [&](int c, std::vector<int>& out) {
+    out.clear();
+    const int cx = c % grid.count[0], cy = (c / grid.count[0]) % grid.count[1],
+              cz = c / (grid.count[0] * grid.count[1]);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          std::array<int, 3> k{cx + dx, cy + dy, cz + dz};
+          bool inside = true;
+          for (int a = 0; a < 3; ++a) {
+            if (grid.periodic[a]) {
+              k[a] = (k[a] + grid.count[a]) % grid.count[a];
+            } else if (k[a] < 0 || k[a] >= grid.count[a]) {
+              inside = false;
+            }
+          }
+          if (inside) out.push_back((k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0]);
+        }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+
+  neighbors_.clear();
+  offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
+  std::vector<std::vector<int>> stencil(static_cast<std::size_t>(cells));
+  for (int c = 0; c < cells; ++c) neighbour_cells(c, stencil[c]);
+
+  std::vector<std::int32_t> found;
+  for (std::int32_t i = 0; i < n; ++i) {
+    found.clear();
+    const Vec3 xi = position[i];
+    for (int c : stencil[cell_of[i]]) {
+      for (std::size_t m = cell_start[c]; m < cell_start[c + 1]; ++m) {
+        const std::int32_t j = cell_members[m];
+        if (j <= i) continue;
+        if (norm2(box.minimum_image(position[j] - xi)) >= reach2) continue;
+        found.push_back(j);
+      }
+    }
+    std::sort(found.begin(), found.end());
+    for (std::int32_t j : found) {
+      if (excluded_offsets_[i] != excluded_offsets_[i + 1] && is_excluded(i, j)) continue;
+      neighbors_.push_back(j);
+    }
+    offsets_[i + 1] = neighbors_.size();
+  }
+  position_at_build_ = position;
+  ++builds_;
+}
+
+bool NeighborList::needs_rebuild(const std::vector<Vec3>& position) const {
+  if (position_at_build_.size() != position.size()) return true;
+  const double limit2 = 0.25 * skin_ * skin_;
+  for (std::size_t i = 0; i < position.size(); ++i) {
+    if (norm2(position[i] - position_at_build_[i]) > limit2) return true;
+  }
+  return false;
+}
+
+bool NeighborList::update(const std::vector<Vec3>& position, const Box& box) {
+  if (!needs_rebuild(position)) return false;
+  build(position, box);
+  return true;
+}
+
+}  // namespace deli

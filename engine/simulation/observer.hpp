@@ -1,0 +1,17 @@
+#pragma once
+
+#include "simulation/thermo.hpp"
+
+namespace deli {
+
+// Something that watches a run: the thermo table, a CSV file, the progress line.
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  virtual void on_start(const System&, std::int64_t /*steps*/) {}
+  virtual void on_thermo(const ThermoSample&) {}
+  virtual void on_step(const System&) {}  // after every step: keep it cheap
+  virtual void on_finish(const System&) {}
+};
+
+}  // namespace deli

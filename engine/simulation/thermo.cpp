@@ -1,0 +1,33 @@
+#include "simulation/thermo.hpp"
+
+namespace deli {
+
+double kinetic_energy(const Particles& p) {
+  double twice = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) twice += p.mass[i] * norm2(p.velocity[i]);
+  return 0.5 * twice;
+}
+
+Vec3 total_momentum(const Particles& p) {
+  Vec3 m;
+  for (std::size_t i = 0; i < p.size(); ++i) m += p.velocity[i] * p.mass[i];
+  return m;
+}
+
+ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation) {
+  ThermoSample s;
+  s.step = system.step;
+  s.time = system.time;
+  s.kinetic = kinetic_energy(system.particles);
+  s.potential = evaluation.potential;
+  s.total = s.kinetic + s.potential;
+  const double dof = 3.0 * static_cast<double>(system.particles.size()) - 3.0;
+  s.temperature = dof > 0 ? 2.0 * s.kinetic / dof : 0.0;
+  s.pressure = (2.0 * s.kinetic + evaluation.virial.trace()) / (3.0 * system.box.volume());
+  s.momentum = total_momentum(system.particles);
+  s.term_names = evaluation.names;
+  s.term_energies = evaluation.energies;
+  return s;
+}
+
+}  // namespace deli

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "force_field.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// Thermodynamic state at one step. Temperature uses 3N - 3 degrees of freedom and the
+// pressure (2 K + W) / (3 V) with W the virial, both as LAMMPS' default thermo does.
+struct ThermoSample {
+  std::int64_t step = 0;
+  double time = 0;
+  double kinetic = 0, potential = 0, total = 0;
+  double temperature = 0, pressure = 0;
+  Vec3 momentum;
+  std::vector<std::string> term_names;
+  std::vector<double> term_energies;
+};
+
+ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation);
+
+double kinetic_energy(const Particles& particles);
+Vec3 total_momentum(const Particles& particles);
+
+}  // namespace deli

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <array>
+#include <cmath>
+
+#include "core/vec3.hpp"
+
+namespace deli {
+
+// Orthorhombic box [lo, hi), periodic or open per axis. Along an open axis the bounds
+// only define the volume used for pressure; particles may leave them.
+class Box {
+ public:
+  Box() = default;
+  Box(Vec3 lo, Vec3 hi, std::array<bool, 3> periodic);
+
+  const Vec3& lo() const { return lo_; }
+  const Vec3& hi() const { return hi_; }
+  Vec3 length() const { return hi_ - lo_; }
+  bool periodic(int axis) const { return periodic_[axis]; }
+  const std::array<bool, 3>& periodic() const { return periodic_; }
+  double volume() const;
+
+  // Lengths and inverse lengths with zeros on open axes, so that
+  // d -= period * nearbyint(d * inverse_period) is the minimum image without a branch.
+  const Vec3& period() const { return period_; }
+  const Vec3& inverse_period() const { return inverse_period_; }
+
+  Vec3 minimum_image(Vec3 d) const {
+    d.x -= period_.x * std::nearbyint(d.x * inverse_period_.x);
+    d.y -= period_.y * std::nearbyint(d.y * inverse_period_.y);
+    d.z -= period_.z * std::nearbyint(d.z * inverse_period_.z);
+    return d;
+  }
+
+  // Maps x into [lo, hi) along periodic axes and counts the crossings in image.
+  void wrap(Vec3& x, std::array<int, 3>& image) const;
+  // Position with periodic crossings undone.
+  Vec3 unwrapped(const Vec3& x, const std::array<int, 3>& image) const;
+
+ private:
+  Vec3 lo_, hi_{1, 1, 1};
+  std::array<bool, 3> periodic_{true, true, true};
+  Vec3 period_{1, 1, 1}, inverse_period_{1, 1, 1};
+};
+
+}  // namespace deli

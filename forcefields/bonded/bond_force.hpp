@@ -1,0 +1,53 @@
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/error.hpp"
+#include "force_term.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// All bonds of one style; params indexed by bond type.
+template <class Evaluator>
+class BondForce final : public ForceTerm {
+ public:
+  using Params = typename Evaluator::Params;
+
+  BondForce(std::string name, std::vector<Params> by_type)
+      : name_(std::move(name)), by_type_(std::move(by_type)) {}
+
+  std::string name() const override { return name_; }
+
+  double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
+                 SymTensor& virial) const override {
+    const std::vector<Vec3>& x = system.particles.position;
+    double energy = 0.0;
+    for (const Bond& b : system.topology.bonds) {
+      const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
+      double f_over_r, e;
+      if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) {
+        throw SimulationError("step " + std::to_string(system.step) + ": " + name_ +
+                              " bond between atoms " + std::to_string(system.particles.id[b.i]) +
+                              " and " + std::to_string(system.particles.id[b.j]) +
+                              " is stretched to r = " + std::to_string(norm(d)) +
+                              ", beyond where the potential is defined; reduce the timestep or "
+                              "start from a relaxed configuration");
+      }
+      const Vec3 f = d * f_over_r;
+      force[b.i] += f;
+      force[b.j] -= f;
+      energy += e;
+      virial.add_outer(d, f);
+    }
+    return energy;
+  }
+
+ private:
+  std::string name_;
+  std::vector<Params> by_type_;
+};
+
+}  // namespace deli

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <cmath>
+
+namespace deli {
+
+// Bond evaluators: evaluate(params, r2, f_over_r, energy) returns false where the
+// potential is undefined (the caller reports the bond). Coefficients follow LAMMPS.
+
+// E = K (r - r0)^2 (LAMMPS bond_style harmonic: no factor 1/2).
+struct HarmonicBond {
+  struct Params {
+    double k = 0, r0 = 0;
+  };
+  static bool evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
+    const double r = std::sqrt(r2);
+    const double dr = r - p.r0;
+    energy = p.k * dr * dr;
+    f_over_r = r > 0.0 ? -2.0 * p.k * dr / r : 0.0;
+    return true;
+  }
+};
+
+// Kremer-Grest FENE (LAMMPS bond_style fene): -K R0^2/2 ln(1 - (r/R0)^2), plus the WCA
+// repulsion 4 eps [(sig/r)^12 - (sig/r)^6] + eps for r < 2^(1/6) sig.
+struct FeneBond {
+  struct Params {
+    double k = 0, r0 = 0, epsilon = 0, sigma = 0;
+  };
+  static bool evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
+    const double r0sq = p.r0 * p.r0;
+    const double log_arg = 1.0 - r2 / r0sq;
+    if (log_arg <= 0.0) return false;
+    f_over_r = -p.k / log_arg;
+    energy = -0.5 * p.k * r0sq * std::log(log_arg);
+    const double sigma2 = p.sigma * p.sigma;
+    if (r2 < 1.2599210498948732 * sigma2) {  // 2^(1/3) sigma^2
+      const double sr2 = sigma2 / r2;
+      const double sr6 = sr2 * sr2 * sr2;
+      f_over_r += 48.0 * p.epsilon * sr6 * (sr6 - 0.5) / r2;
+      energy += 4.0 * p.epsilon * sr6 * (sr6 - 1.0) + p.epsilon;
+    }
+    return true;
+  }
+};
+
+}  // namespace deli

@@ -1,0 +1,30 @@
+#include "force_field.hpp"
+
+#include <algorithm>
+
+#include "system/system.hpp"
+
+namespace deli {
+
+void ForceField::add(std::unique_ptr<ForceTerm> term) { terms_.push_back(std::move(term)); }
+
+double ForceField::neighbor_cutoff() const {
+  double cutoff = 0.0;
+  for (const auto& term : terms_) cutoff = std::max(cutoff, term->neighbor_cutoff());
+  return cutoff;
+}
+
+ForceEvaluation ForceField::compute(const System& system, const NeighborList& neighbors,
+                                    std::vector<Vec3>& force) const {
+  force.assign(system.particles.size(), Vec3{});
+  ForceEvaluation result;
+  for (const auto& term : terms_) {
+    const double e = term->compute(system, neighbors, force, result.virial);
+    result.names.push_back(term->name());
+    result.energies.push_back(e);
+    result.potential += e;
+  }
+  return result;
+}
+
+}  // namespace deli

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "force_term.hpp"
+
+namespace deli {
+
+// Energies of each term from one evaluation, in the order the terms were added.
+struct ForceEvaluation {
+  std::vector<std::string> names;
+  std::vector<double> energies;
+  double potential = 0.0;
+  SymTensor virial;  // sum over interactions of r_ij (x) f_ij
+};
+
+// The potential: a list of terms sharing one neighbour list.
+class ForceField {
+ public:
+  void add(std::unique_ptr<ForceTerm> term);
+  const std::vector<std::unique_ptr<ForceTerm>>& terms() const { return terms_; }
+  double neighbor_cutoff() const;
+
+  // Overwrites `force` with the total force.
+  ForceEvaluation compute(const System& system, const NeighborList& neighbors,
+                          std::vector<Vec3>& force) const;
+
+  // LAMMPS special_bonds lj factors for 1-2, 1-3, 1-4 neighbours.
+  std::array<double, 3> special_lj{0.0, 0.0, 0.0};
+
+ private:
+  std::vector<std::unique_ptr<ForceTerm>> terms_;
+};
+
+}  // namespace deli

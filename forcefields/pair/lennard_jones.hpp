@@ -1,0 +1,41 @@
+#pragma once
+
+#include <cmath>
+
+namespace deli {
+
+// 12-6 Lennard-Jones, truncated at a cutoff, optionally shifted to zero energy there.
+// WCA is this with cutoff 2^(1/6) sigma and the shift.
+struct LennardJones {
+  struct Params {
+    double lj1 = 0, lj2 = 0;  // 48 eps sig^12, 24 eps sig^6: force
+    double lj3 = 0, lj4 = 0;  // 4 eps sig^12, 4 eps sig^6: energy
+    double cutoff2 = 0;
+    double energy_shift = 0;
+  };
+
+  static Params make(double epsilon, double sigma, double cutoff, bool shift) {
+    Params p;
+    const double s6 = std::pow(sigma, 6);
+    p.lj1 = 48.0 * epsilon * s6 * s6;
+    p.lj2 = 24.0 * epsilon * s6;
+    p.lj3 = 4.0 * epsilon * s6 * s6;
+    p.lj4 = 4.0 * epsilon * s6;
+    p.cutoff2 = cutoff * cutoff;
+    if (shift) {
+      const double r6inv = 1.0 / (p.cutoff2 * p.cutoff2 * p.cutoff2);
+      p.energy_shift = r6inv * (p.lj3 * r6inv - p.lj4);
+    }
+    return p;
+  }
+
+  // For r2 < cutoff2: force divided by r (so F_i = d_ij * f_over_r) and energy.
+  static void evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
+    const double r2inv = 1.0 / r2;
+    const double r6inv = r2inv * r2inv * r2inv;
+    f_over_r = r6inv * (p.lj1 * r6inv - p.lj2) * r2inv;
+    energy = r6inv * (p.lj3 * r6inv - p.lj4) - p.energy_shift;
+  }
+};
+
+}  // namespace deli

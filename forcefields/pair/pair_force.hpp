@@ -1,0 +1,101 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "force_term.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// A pair whose interaction is scaled by a special_bonds factor strictly between 0 and 1;
+// such pairs are excluded from the neighbour list and evaluated here.
+struct ScaledPair {
+  std::int32_t i, j;
+  double factor;
+};
+
+// The one pair loop: any evaluator with Params and evaluate(params, r2, f_over_r, energy)
+// (HOOMD-style) becomes a force term. Parameters are a dense type x type table.
+template <class Evaluator>
+class PairForce final : public ForceTerm {
+ public:
+  using Params = typename Evaluator::Params;
+
+  PairForce(std::string name, int type_count, std::vector<Params> table, double max_cutoff,
+            std::vector<ScaledPair> scaled_pairs)
+      : name_(std::move(name)),
+        type_count_(type_count),
+        table_(std::move(table)),
+        max_cutoff_(max_cutoff),
+        scaled_pairs_(std::move(scaled_pairs)) {}
+
+  std::string name() const override { return name_; }
+  double neighbor_cutoff() const override { return max_cutoff_; }
+
+  double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
+                 SymTensor& virial) const override {
+    const std::vector<Vec3>& x = system.particles.position;
+    const std::vector<int>& type = system.particles.type;
+    const Box& box = system.box;
+    const Vec3 period = box.period(), inverse = box.inverse_period();
+    const std::vector<std::int32_t>& list = neighbors.neighbors();
+    const std::vector<std::size_t>& offsets = neighbors.offsets();
+
+    double energy = 0.0;
+    SymTensor w;
+    const auto n = static_cast<std::int32_t>(x.size());
+    for (std::int32_t i = 0; i < n; ++i) {
+      const Vec3 xi = x[i];
+      const Params* row = &table_[static_cast<std::size_t>(type[i] * type_count_)];
+      Vec3 fi;
+      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const std::int32_t j = list[k];
+        double dx = xi.x - x[j].x, dy = xi.y - x[j].y, dz = xi.z - x[j].z;
+        dx -= period.x * std::nearbyint(dx * inverse.x);
+        dy -= period.y * std::nearbyint(dy * inverse.y);
+        dz -= period.z * std::nearbyint(dz * inverse.z);
+        const double r2 = dx * dx + dy * dy + dz * dz;
+        const Params& p = row[type[j]];
+        if (r2 >= p.cutoff2) continue;
+        double f_over_r, e;
+        Evaluator::evaluate(p, r2, f_over_r, e);
+        const double fx = dx * f_over_r, fy = dy * f_over_r, fz = dz * f_over_r;
+        fi.x += fx, fi.y += fy, fi.z += fz;
+        force[j].x -= fx, force[j].y -= fy, force[j].z -= fz;
+        energy += e;
+        w.xx += dx * fx, w.yy += dy * fy, w.zz += dz * fz;
+        w.xy += dx * fy, w.xz += dx * fz, w.yz += dy * fz;
+      }
+      force[i] += fi;
+    }
+    for (const ScaledPair& s : scaled_pairs_) {
+      const Vec3 d = box.minimum_image(x[s.i] - x[s.j]);
+      const double r2 = norm2(d);
+      const Params& p = table_[static_cast<std::size_t>(type[s.i] * type_count_ + type[s.j])];
+      if (r2 >= p.cutoff2) continue;
+      double f_over_r, e;
+      Evaluator::evaluate(p, r2, f_over_r, e);
+      const Vec3 f = d * (s.factor * f_over_r);
+      force[s.i] += f;
+      force[s.j] -= f;
+      energy += s.factor * e;
+      w.add_outer(d, f);
+    }
+    virial += w;
+    return energy;
+  }
+
+ private:
+  std::string name_;
+  int type_count_;
+  std::vector<Params> table_;
+  double max_cutoff_;
+  std::vector<ScaledPair> scaled_pairs_;
+};
+
+}  // namespace deli

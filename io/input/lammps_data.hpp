@@ -1,0 +1,33 @@
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "system/system.hpp"
+
+namespace deli {
+
+struct LammpsDataOptions {
+  std::array<bool, 3> periodic{true, true, true};
+  // "" = take the style from the "Atoms # style" comment, or else infer it from the column count.
+  std::string atom_style;
+};
+
+struct LammpsDataFile {
+  // Particles sorted by atom id ascending; atom_types carry the Masses entries.
+  System system;
+  std::string atom_style;  // atomic | bond | angle | molecular | full
+  bool has_velocities = false;
+};
+
+// Reads a LAMMPS data file (as LAMMPS write_data writes it) restricted to what deli models:
+// orthorhombic box, atoms, masses, velocities, bonds and angles. Anything else (force-field
+// coefficients, dihedrals, charges, triclinic boxes) is an InputError naming file:line.
+LammpsDataFile read_lammps_data(const std::string& path, const LammpsDataOptions& options);
+
+// Writes a file LAMMPS read_data accepts; doubles carry 17 significant digits so that
+// read_lammps_data gives back bit-identical values.
+void write_lammps_data(const System& system, const std::string& path, const std::string& atom_style,
+                       const std::string& title);
+
+}  // namespace deli

@@ -1,0 +1,335 @@
+#include "input/run_input.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <numbers>
+
+#include "bonded/bond_force.hpp"
+#include "bonded/bond_styles.hpp"
+#include "bonded/harmonic_angle.hpp"
+#include "core/error.hpp"
+#include "input/lammps_data.hpp"
+#include "input/toml_table.hpp"
+#include "pair/lennard_jones.hpp"
+#include "pair/pair_coefficients.hpp"
+#include "pair/pair_force.hpp"
+#include "system/builders.hpp"
+
+namespace deli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::array<bool, 3> read_boundary(TomlTable& t) {
+  std::array<bool, 3> periodic{true, true, true};
+  if (!t.has("boundary")) return periodic;
+  const std::string b = t.string("boundary");
+  if (b.size() != 3) t.fail("expected three letters, p (periodic) or f (open), e.g. \"ppf\"", "boundary");
+  for (int a = 0; a < 3; ++a) {
+    if (b[a] != 'p' && b[a] != 'f') {
+      t.fail(std::string("letter '") + b[a] + "' is neither p (periodic) nor f (open)", "boundary");
+    }
+    periodic[a] = b[a] == 'p';
+  }
+  return periodic;
+}
+
+double positive(TomlTable& t, const std::string& key, std::optional<double> fallback = {}) {
+  const double v = t.number(key, fallback);
+  if (!(v > 0.0) || !std::isfinite(v)) t.fail("must be a positive number, found " + std::to_string(v), key);
+  return v;
+}
+
+void set_box_periodicity(System& system, const std::array<bool, 3>& periodic) {
+  system.box = Box(system.box.lo(), system.box.hi(), periodic);
+}
+
+System read_system(TomlTable& t, const fs::path& input_dir) {
+  const std::array<bool, 3> periodic = read_boundary(t);
+  const bool from_data = t.has("data");
+  auto lattice = t.table("lattice");
+  auto chains = t.table("chains");
+  const int sources = int(from_data) + int(lattice.has_value()) + int(chains.has_value());
+  if (sources != 1) {
+    t.fail("give exactly one of 'data' (a LAMMPS data file), [system.lattice] or [system.chains]");
+  }
+  System system;
+  if (from_data) {
+    fs::path data = t.string("data");
+    if (data.is_relative()) data = input_dir / data;
+    LammpsDataOptions options;
+    options.periodic = periodic;
+    options.atom_style = t.choice("atom_style", {"", "atomic", "bond", "angle", "molecular", "full"}, "");
+    if (!fs::exists(data)) t.fail("file " + data.string() + " does not exist", "data");
+    system = read_lammps_data(data.string(), options).system;
+  } else if (lattice) {
+    FccLattice f;
+    lattice->choice("type", {"fcc"});
+    f.density = positive(*lattice, "density");
+    const auto cells = lattice->numbers("cells", 3);
+    for (int a = 0; a < 3; ++a) {
+      if (cells[a] < 1 || cells[a] != std::floor(cells[a])) lattice->fail("cells must be positive integers", "cells");
+      f.cells[a] = static_cast<int>(cells[a]);
+    }
+    f.mass = positive(*lattice, "mass", 1.0);
+    lattice->finish();
+    system = build_fcc(f);
+    set_box_periodicity(system, periodic);
+  } else {
+    RandomChains c;
+    c.count = static_cast<int>(chains->integer("count"));
+    c.length = static_cast<int>(chains->integer("length"));
+    if (c.count < 1 || c.length < 1) chains->fail("count and length must be at least 1");
+    c.density = positive(*chains, "density");
+    c.bond_length = positive(*chains, "bond_length", 0.97);
+    c.min_distance = positive(*chains, "min_distance", 0.9);
+    c.mass = positive(*chains, "mass", 1.0);
+    c.angles = chains->boolean("angles", false);
+    c.seed = static_cast<std::uint64_t>(chains->integer("seed", 1));
+    chains->finish();
+    system = build_random_chains(c);
+    set_box_periodicity(system, periodic);
+  }
+  return system;
+}
+
+void read_velocities(TomlTable& root, System& system) {
+  auto v = root.table("velocities");
+  if (!v) return;
+  const double temperature = v->number("temperature");
+  if (temperature < 0) v->fail("must not be negative", "temperature");
+  const auto seed = v->integer("seed");
+  v->finish();
+  assign_maxwell_boltzmann(system.particles, temperature, static_cast<std::uint64_t>(seed));
+}
+
+int type_index(TomlTable& t, const std::string& key, double value, int count, const std::string& what) {
+  if (value != std::floor(value) || value < 1 || value > count) {
+    t.fail(what + " type " + std::to_string(value) + " does not exist: the system has " +
+               std::to_string(count) + " " + what + " type(s), numbered from 1",
+           key);
+  }
+  return static_cast<int>(value) - 1;
+}
+
+std::vector<ScaledPair> scaled_special_pairs(const System& system, const std::array<double, 3>& factors) {
+  std::vector<ScaledPair> scaled;
+  const SpecialPairs special = find_special_pairs(system.topology, system.particles.size());
+  for (int s = 0; s < 3; ++s) {
+    if (factors[s] == 0.0 || factors[s] == 1.0) continue;
+    for (const auto& [i, j] : special.by_separation[s]) scaled.push_back({i, j, factors[s]});
+  }
+  return scaled;
+}
+
+void read_pair(TomlTable& t, const System& system, ForceField& ff) {
+  const std::string style = t.choice("style", {"lj/cut", "wca", "none"});
+  if (style == "none") return t.finish();
+  const int types = static_cast<int>(system.atom_types.size());
+  const bool wca = style == "wca";
+  const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
+  const bool shift = wca ? true : t.boolean("shift", false);
+  const Mixing mixing =
+      t.choice("mixing", {"arithmetic", "geometric"}, "arithmetic") == "arithmetic" ? Mixing::arithmetic : Mixing::geometric;
+  PairCoefficients coeffs(types, global_cutoff);
+  for (TomlTable& c : t.tables("coeffs")) {
+    const auto pair = c.numbers("types", 2);
+    const int a = type_index(c, "types", pair[0], types, "atom");
+    const int b = type_index(c, "types", pair[1], types, "atom");
+    const double epsilon = c.number("epsilon");
+    if (epsilon < 0) c.fail("must not be negative", "epsilon");
+    const double sigma = positive(c, "sigma");
+    std::optional<double> cutoff;
+    if (wca) {
+      cutoff = std::pow(2.0, 1.0 / 6.0) * sigma;
+    } else if (c.has("cutoff")) {
+      cutoff = positive(c, "cutoff");
+    }
+    if (coeffs.is_set(a, b)) c.fail("coefficients for this type pair were already given", "types");
+    coeffs.set(a, b, epsilon, sigma, cutoff);
+    c.finish();
+  }
+  const std::vector<int> missing = coeffs.resolve(mixing);
+  if (!missing.empty()) {
+    t.fail("no coefficients for atom type " + std::to_string(missing.front() + 1) +
+               " with itself; add {types = [" + std::to_string(missing.front() + 1) + ", " +
+               std::to_string(missing.front() + 1) + "], epsilon = ..., sigma = ...} to coeffs",
+           "coeffs");
+  }
+  t.finish();
+  std::vector<LennardJones::Params> table;
+  double max_cutoff = 0.0;
+  for (int a = 0; a < types; ++a) {
+    for (int b = 0; b < types; ++b) {
+      const PairCoefficient& c = coeffs.at(a, b);
+      table.push_back(LennardJones::make(c.epsilon, c.sigma, c.cutoff, shift));
+      max_cutoff = std::max(max_cutoff, c.cutoff);
+    }
+  }
+  ff.add(std::make_unique<PairForce<LennardJones>>("pair", types, std::move(table), max_cutoff,
+                                                   scaled_special_pairs(system, ff.special_lj)));
+}
+
+template <class Style>
+std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::string& what,
+                                            const auto& read_one) {
+  std::vector<typename Style::Params> params(static_cast<std::size_t>(types));
+  std::vector<bool> given(static_cast<std::size_t>(types), false);
+  for (TomlTable& c : t.tables("coeffs")) {
+    const int k = type_index(c, "type", c.number("type"), types, what);
+    if (given[k]) c.fail("coefficients for this " + what + " type were already given", "type");
+    params[k] = read_one(c);
+    given[k] = true;
+    c.finish();
+  }
+  for (int k = 0; k < types; ++k) {
+    if (!given[k]) {
+      t.fail("no coefficients for " + what + " type " + std::to_string(k + 1) +
+                 "; add {type = " + std::to_string(k + 1) + ", ...} to coeffs",
+             "coeffs");
+    }
+  }
+  return params;
+}
+
+void read_bond(std::optional<TomlTable> t, const System& system, ForceField& ff) {
+  const int types = system.topology.bond_types;
+  if (!t) {
+    if (!system.topology.bonds.empty()) {
+      throw InputError("the system has bonds but the input has no [forcefield.bond] table; "
+                       "add one with style = \"harmonic\" or \"fene\" and its coeffs");
+    }
+    return;
+  }
+  const std::string style = t->choice("style", {"harmonic", "fene"});
+  if (style == "harmonic") {
+    auto params = by_type<HarmonicBond>(*t, types, "bond", [](TomlTable& c) {
+      return HarmonicBond::Params{c.number("k"), positive(c, "r0")};
+    });
+    ff.add(std::make_unique<BondForce<HarmonicBond>>("bond", std::move(params)));
+  } else {
+    auto params = by_type<FeneBond>(*t, types, "bond", [](TomlTable& c) {
+      return FeneBond::Params{c.number("k"), positive(c, "r0"), c.number("epsilon"), positive(c, "sigma")};
+    });
+    ff.add(std::make_unique<BondForce<FeneBond>>("bond", std::move(params)));
+  }
+  t->finish();
+}
+
+void read_angle(std::optional<TomlTable> t, const System& system, ForceField& ff) {
+  if (!t) {
+    if (!system.topology.angles.empty()) {
+      throw InputError("the system has angles but the input has no [forcefield.angle] table; "
+                       "add one with style = \"harmonic\" and its coeffs");
+    }
+    return;
+  }
+  t->choice("style", {"harmonic"});
+  auto params = by_type<HarmonicAngle>(*t, system.topology.angle_types, "angle", [](TomlTable& c) {
+    return HarmonicAngle::Params{c.number("k"), c.number("theta0") * std::numbers::pi / 180.0};
+  });
+  t->finish();
+  ff.add(std::make_unique<HarmonicAngle>(std::move(params)));
+}
+
+std::unique_ptr<ForceField> read_force_field(TomlTable& root, const System& system) {
+  auto ff = std::make_unique<ForceField>();
+  auto t = root.table("forcefield");
+  if (!t) root.fail("missing the [forcefield] table");
+  if (auto special = t->table("special_bonds")) {
+    const auto lj = special->numbers("lj", 3);
+    for (int s = 0; s < 3; ++s) {
+      if (lj[s] < 0 || lj[s] > 1) special->fail("factors must lie in [0, 1]", "lj");
+      ff->special_lj[s] = lj[s];
+    }
+    special->finish();
+  } else {
+    ff->special_lj = {0.0, 0.0, 0.0};  // LAMMPS' default
+  }
+  auto pair = t->table("pair");
+  if (!pair) t->fail("missing [forcefield.pair] (style = \"none\" for no pair interactions)");
+  read_pair(*pair, system, *ff);
+  read_bond(t->table("bond"), system, *ff);
+  read_angle(t->table("angle"), system, *ff);
+  t->finish();
+  return ff;
+}
+
+void check_box_fits_cutoff(const RunInput& input, const TomlTable& root) {
+  const double cutoff = input.force_field->neighbor_cutoff();
+  for (int a = 0; a < 3; ++a) {
+    if (!input.system.box.periodic(a)) continue;
+    const double length = input.system.box.length()[a];
+    if (length < 2.0 * cutoff) {
+      root.fail("the periodic box is " + std::to_string(length) + " long along " +
+                std::string(1, "xyz"[a]) + ", less than twice the pair cutoff (" +
+                std::to_string(cutoff) + "): make the box larger or the cutoff shorter");
+    }
+  }
+}
+
+}  // namespace
+
+RunInput load_run_input(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw InputError(path + ": cannot read the input file (does it exist?)");
+  std::stringstream text;
+  text << file.rdbuf();
+  return parse_run_input(text.str(), path);
+}
+
+RunInput parse_run_input(const std::string& text, const std::string& path) {
+  toml::table doc;
+  try {
+    doc = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(located(path, static_cast<long>(e.source().begin.line),
+                             std::string(e.description())));
+  }
+  RunInput input;
+  input.path = path;
+  TomlTable root(doc, path, "");
+  const fs::path dir = fs::path(path).parent_path();
+
+  auto system = root.table("system");
+  if (!system) root.fail("missing the [system] table");
+  input.system = read_system(*system, dir);
+  system->finish();
+  read_velocities(root, input.system);
+  input.force_field = read_force_field(root, input.system);
+
+  if (auto n = root.table("neighbor")) {
+    input.skin = n->number("skin", 0.3);
+    if (input.skin < 0) n->fail("must not be negative", "skin");
+    n->finish();
+  }
+  auto integrator = root.table("integrator");
+  if (!integrator) root.fail("missing the [integrator] table (type = \"verlet\", timestep = ...)");
+  input.integrator = integrator->choice("type", {"verlet"}, "verlet");
+  input.timestep = positive(*integrator, "timestep");
+  integrator->finish();
+
+  auto run = root.table("run");
+  if (!run) root.fail("missing the [run] table (steps = ...)");
+  input.steps = run->integer("steps");
+  if (input.steps < 0) run->fail("must not be negative", "steps");
+  run->finish();
+
+  if (auto output = root.table("output")) {
+    if (auto thermo = output->table("thermo")) {
+      input.thermo.every = thermo->integer("every", 100);
+      if (input.thermo.every < 0) thermo->fail("must not be negative", "every");
+      input.thermo.file = thermo->string("file", "");
+      thermo->finish();
+    }
+    output->finish();
+  }
+  root.finish();
+  check_box_fits_cutoff(input, root);
+  return input;
+}
+
+}  // namespace deli

@@ -1,0 +1,34 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "force_field.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+struct ThermoOutputSpec {
+  std::int64_t every = 100;
+  std::string file;  // "" = no CSV
+};
+
+// Everything a `deli run` needs, read from a TOML input and the files it names.
+struct RunInput {
+  std::string path;
+  System system;
+  std::unique_ptr<ForceField> force_field;
+  std::string integrator = "verlet";
+  double timestep = 0.005;
+  double skin = 0.3;
+  std::int64_t steps = 0;
+  ThermoOutputSpec thermo;
+};
+
+// Reads and validates the input; every error is an InputError naming file:line and key.
+RunInput load_run_input(const std::string& path);
+// The same from TOML text; `path` names it in messages and anchors relative file names.
+RunInput parse_run_input(const std::string& text, const std::string& path);
+
+}  // namespace deli

@@ -1,0 +1,71 @@
+#include "text/thermo_output.hpp"
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace deli {
+
+void ThermoTable::on_thermo(const ThermoSample& s) {
+  if (!header_written_) {
+    std::fprintf(out_, "%10s %12s %14s %14s %14s %12s %12s %10s\n", "step", "time", "kinetic",
+                 "potential", "total", "temperature", "pressure", "|momentum|");
+    header_written_ = true;
+  }
+  std::fprintf(out_, "%10lld %12.6g %14.8g %14.8g %14.8g %12.6g %12.6g %10.3g\n",
+               static_cast<long long>(s.step), s.time, s.kinetic, s.potential, s.total,
+               s.temperature, s.pressure, norm(s.momentum));
+  std::fflush(out_);
+}
+
+ThermoCsv::ThermoCsv(const std::string& path) : path_(path), out_(path) {
+  if (!out_) throw InputError(path + ": cannot open the thermo file for writing; check the "
+                              "directory exists and is writable");
+  out_.precision(17);
+}
+
+void ThermoCsv::on_thermo(const ThermoSample& s) {
+  if (!header_written_) {
+    out_ << "step,time,kinetic,potential,total,temperature,pressure,px,py,pz";
+    for (const std::string& name : s.term_names) out_ << ",e_" << name;
+    out_ << '\n';
+    header_written_ = true;
+  }
+  out_ << s.step << ',' << s.time << ',' << s.kinetic << ',' << s.potential << ',' << s.total
+       << ',' << s.temperature << ',' << s.pressure << ',' << s.momentum.x << ','
+       << s.momentum.y << ',' << s.momentum.z;
+  for (double e : s.term_energies) out_ << ',' << e;
+  out_ << '\n';
+  out_.flush();
+}
+
+void ProgressLine::on_start(const System& system, std::int64_t steps) {
+  first_step_ = system.step;
+  steps_ = steps;
+  start_ = last_draw_ = std::chrono::steady_clock::now();
+}
+
+void ProgressLine::on_step(const System& system) {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_draw_ < std::chrono::milliseconds(250)) return;
+  last_draw_ = now;
+  const double done = static_cast<double>(system.step - first_step_);
+  const double seconds = std::chrono::duration<double>(now - start_).count();
+  const double rate = seconds > 0 ? done / seconds : 0.0;
+  const double eta = rate > 0 ? (static_cast<double>(steps_) - done) / rate : 0.0;
+  const long eta_s = std::lround(eta);
+  std::fprintf(out_, "\r\033[K%5.1f%%  %.4g steps/s  ETA %ld:%02ld:%02ld",
+               100.0 * done / static_cast<double>(steps_), rate, eta_s / 3600, (eta_s / 60) % 60,
+               eta_s % 60);
+  std::fflush(out_);
+  drawn_ = true;
+}
+
+void ProgressLine::erase() {
+  if (!drawn_) return;
+  std::fprintf(out_, "\r\033[K");
+  std::fflush(out_);
+  drawn_ = false;
+}
+
+}  // namespace deli

@@ -1,0 +1,134 @@
+// The Verlet list holds exactly the pairs an O(N^2) minimum-image search finds, across
+// periodic boundaries, in boxes down to twice the cutoff, and after particles move.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "neighbor/neighbor_list.hpp"
+
+namespace deli {
+namespace {
+
+using PairSet = std::set<std::pair<std::int32_t, std::int32_t>>;
+
+PairSet brute_force(const std::vector<Vec3>& x, const Box& box, double reach,
+                    const PairSet& excluded = {}) {
+  PairSet pairs;
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(x.size()); ++i)
+    for (std::int32_t j = i + 1; j < static_cast<std::int32_t>(x.size()); ++j)
+      if (norm2(box.minimum_image(x[j] - x[i])) < reach * reach && !excluded.count({i, j}))
+        pairs.insert({i, j});
+  return pairs;
+}
+
+PairSet listed(const NeighborList& list) {
+  PairSet pairs;
+  for (std::size_t i = 0; i + 1 < list.offsets().size(); ++i) {
+    const auto begin = list.neighbors().begin() + static_cast<std::ptrdiff_t>(list.offsets()[i]);
+    const auto end = list.neighbors().begin() + static_cast<std::ptrdiff_t>(list.offsets()[i + 1]);
+    EXPECT_TRUE(std::is_sorted(begin, end)) << "neighbours of " << i << " not in index order";
+    for (auto it = begin; it != end; ++it) {
+      EXPECT_TRUE(pairs.insert({static_cast<std::int32_t>(i), *it}).second) << "duplicate pair";
+    }
+  }
+  return pairs;
+}
+
+std::vector<Vec3> random_positions(std::size_t n, const Box& box, std::uint64_t seed,
+                                   double overhang = 0.0) {
+  std::mt19937_64 rng(seed);
+  std::vector<Vec3> x(n);
+  for (Vec3& p : x) {
+    for (int a = 0; a < 3; ++a) {
+      std::uniform_real_distribution<double> u(box.lo()[a] - overhang, box.hi()[a] + overhang);
+      p[a] = u(rng);
+    }
+  }
+  return x;
+}
+
+struct BoxCase {
+  const char* name;
+  Vec3 hi;
+  std::array<bool, 3> periodic;
+  std::size_t n;
+};
+
+class NeighborListMatchesBruteForce : public ::testing::TestWithParam<BoxCase> {};
+
+TEST_P(NeighborListMatchesBruteForce, OnRandomConfigurations) {
+  const BoxCase& c = GetParam();
+  const double cutoff = 2.5, skin = 0.3;
+  const Box box({-1.0, 0.0, 2.0}, c.hi + Vec3{-1.0, 0.0, 2.0}, c.periodic);
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    // Particles slightly outside the box along periodic axes (as between rebuilds).
+    const auto x = random_positions(c.n, box, seed, 0.1);
+    NeighborList list(cutoff, skin);
+    list.build(x, box);
+    EXPECT_EQ(listed(list), brute_force(x, box, cutoff + skin)) << "seed " << seed;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Boxes, NeighborListMatchesBruteForce,
+    ::testing::Values(BoxCase{"periodic_many_cells", {12, 13, 14}, {true, true, true}, 900},
+                      // 2 x cutoff: one or two cells per axis, each partner seen once.
+                      BoxCase{"smallest_legal_box", {5.0, 5.0, 5.0}, {true, true, true}, 120},
+                      BoxCase{"two_cells_per_axis", {6.0, 6.5, 7.0}, {true, true, true}, 200},
+                      BoxCase{"open", {9, 9, 9}, {false, false, false}, 400},
+                      BoxCase{"slab_ppf", {8, 8, 20}, {true, true, false}, 500},
+                      BoxCase{"thin_periodic", {5.0, 30, 6}, {true, false, true}, 300}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(NeighborList, ExcludedPairsNeverAppear) {
+  const Box box({0, 0, 0}, {7, 7, 7}, {true, true, true});
+  const auto x = random_positions(200, box, 11);
+  PairSet excluded;
+  std::vector<std::array<std::int32_t, 2>> excluded_list;
+  for (std::int32_t i = 0; i + 1 < 200; i += 2) {
+    excluded.insert({i, i + 1});
+    excluded_list.push_back({i, i + 1});
+  }
+  NeighborList list(2.5, 0.3);
+  list.set_exclusions(excluded_list);
+  list.build(x, box);
+  EXPECT_EQ(listed(list), brute_force(x, box, 2.8, excluded));
+}
+
+// After moves of less than skin/2 the list still holds every pair within the cutoff; a
+// move beyond skin/2 triggers a rebuild.
+TEST(NeighborList, StaysValidWithinHalfSkin) {
+  const double cutoff = 2.5, skin = 0.4;
+  const Box box({0, 0, 0}, {8, 8, 8}, {true, true, true});
+  auto x = random_positions(400, box, 3);
+  const auto at_build = x;
+  NeighborList list(cutoff, skin);
+  list.build(x, box);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (Vec3& p : x) {
+    Vec3 d{u(rng), u(rng), u(rng)};
+    p += d * (0.199 / norm(d));
+  }
+  EXPECT_FALSE(list.needs_rebuild(x));
+  const PairSet within = brute_force(x, box, cutoff);
+  const PairSet have = listed(list);
+  for (const auto& pair : within) EXPECT_TRUE(have.count(pair)) << pair.first << "," << pair.second;
+  x[17] = at_build[17] + Vec3{0.201, 0, 0};
+  EXPECT_TRUE(list.needs_rebuild(x));
+}
+
+TEST(NeighborList, SameInputSameOrder) {
+  const Box box({0, 0, 0}, {10, 10, 10}, {true, true, true});
+  const auto x = random_positions(800, box, 8);
+  NeighborList a(2.5, 0.3), b(2.5, 0.3);
+  a.build(x, box);
+  b.build(x, box);
+  EXPECT_EQ(a.neighbors(), b.neighbors());
+  EXPECT_EQ(a.offsets(), b.offsets());
+}
+
+}  // namespace
+}  // namespace deli
