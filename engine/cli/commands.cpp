@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "input/lammps_data.hpp"
 #include "input/run_input.hpp"
+#include "integrators/quickmin.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
 #include "text/thermo_output.hpp"
@@ -15,6 +16,15 @@
 namespace deli {
 
 namespace {
+void minimize_if_asked(RunInput& input) {
+  if (input.minimize.max_steps == 0) return;
+  const MinimizeResult r = quickmin(input.system, *input.force_field, input.skin, input.minimize);
+  std::printf("minimize (quickmin): %lld steps, energy %.10g -> %.10g, largest force component "
+              "%.3g (%s)\n",
+              static_cast<long long>(r.steps), r.initial_energy, r.final_energy, r.max_force,
+              r.converged ? "converged" : "max_steps reached");
+}
+
 std::string style_for(const System& system) {
   if (!system.topology.angles.empty()) return "molecular";
   if (!system.topology.bonds.empty()) return "bond";
@@ -34,6 +44,7 @@ int command_run(const std::vector<std::string>& args) {
               input.system.box.length().y, input.system.box.length().z, input.timestep,
               static_cast<long long>(input.steps));
 
+  minimize_if_asked(input);
   VelocityVerlet integrator(*input.force_field, input.skin, input.timestep);
   ThermoTable table(stdout);
   std::vector<Observer*> observers{&table};
@@ -59,6 +70,7 @@ int command_run(const std::vector<std::string>& args) {
 int command_write_data(const std::vector<std::string>& args) {
   if (args.size() != 2) throw InputError("usage: deli write-data INPUT FILE");
   RunInput input = load_run_input(args[0]);
+  minimize_if_asked(input);
   write_lammps_data(input.system, args[1], style_for(input.system),
                     "deli " DELI_VERSION " from " + args[0]);
   std::printf("wrote %zu atoms to %s\n", input.system.particles.size(), args[1].c_str());

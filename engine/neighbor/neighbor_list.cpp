@@ -69,6 +69,50 @@ CellGrid make_grid(const std::vector<Vec3>& position, const Box& box, double rea
 
 }  // namespace
 
+namespace {
+
+// One neighbouring cell of a cell and the periodic shift to add to its particles'
+// positions so that the separation is the minimum image.
+struct StencilEntry {
+  int cell;
+  Vec3 shift;
+};
+
+// For every cell, the cells within `reach` cells along each axis. With at least
+// 2 * reach + 1 cells along every periodic axis each neighbouring cell is reached through
+// exactly one periodic shift, so separations need no minimum-image rounding.
+std::vector<std::vector<StencilEntry>> make_stencils(const CellGrid& grid, const Box& box,
+                                                     int reach) {
+  const int cells = grid.count[0] * grid.count[1] * grid.count[2];
+  std::vector<std::vector<StencilEntry>> stencils(static_cast<std::size_t>(cells));
+  for (int c = 0; c < cells; ++c) {
+    const std::array<int, 3> home{c % grid.count[0], (c / grid.count[0]) % grid.count[1],
+                                  c / (grid.count[0] * grid.count[1])};
+    for (int dz = -reach; dz <= reach; ++dz)
+      for (int dy = -reach; dy <= reach; ++dy)
+        for (int dx = -reach; dx <= reach; ++dx) {
+          std::array<int, 3> k{home[0] + dx, home[1] + dy, home[2] + dz};
+          Vec3 shift;
+          bool inside = true;
+          for (int a = 0; a < 3; ++a) {
+            if (k[a] >= 0 && k[a] < grid.count[a]) continue;
+            if (!grid.periodic[a]) {
+              inside = false;
+              break;
+            }
+            const int wraps = k[a] < 0 ? -1 : 1;
+            k[a] -= wraps * grid.count[a];
+            shift[a] = wraps * box.period()[a];
+          }
+          if (!inside) continue;
+          stencils[c].push_back({(k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0], shift});
+        }
+  }
+  return stencils;
+}
+
+}  // namespace
+
 void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   const auto n = static_cast<std::int32_t>(position.size());
   const double reach = cutoff_ + skin_;
@@ -78,14 +122,34 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   for (const auto& pair : excluded_) ++excluded_offsets_[pair[0] + 1];
   std::partial_sum(excluded_offsets_.begin(), excluded_offsets_.end(), excluded_offsets_.begin());
 
-  const CellGrid grid = make_grid(position, box, reach);
+  // Particles may sit up to half a skin outside the box between builds: bin and measure
+  // their periodic images inside it.
+  std::vector<Vec3> inside(position);
+  for (Vec3& x : inside) {
+    std::array<int, 3> image{};
+    box.wrap(x, image);
+  }
+
+  // Cells half the reach wide (5^3 stencil) visit about half the volume of cells a full
+  // reach wide (3^3 stencil); small periodic boxes fall back to the latter and, below
+  // three cells along an axis, to minimum-image separations over distinct cells.
+  int stencil_reach = 2;
+  CellGrid grid = make_grid(inside, box, reach / 2);
+  for (int a = 0; a < 3; ++a) {
+    if (grid.periodic[a] && grid.count[a] < 5) stencil_reach = 1;
+  }
+  if (stencil_reach == 1) grid = make_grid(inside, box, reach);
+  bool shifted = true;
+  for (int a = 0; a < 3; ++a) {
+    if (grid.periodic[a] && grid.count[a] < 3) shifted = false;
+  }
   const int cells = grid.count[0] * grid.count[1] * grid.count[2];
 
   // Counting sort of particles into cells; within a cell, ascending index.
   std::vector<int> cell_of(static_cast<std::size_t>(n));
   std::vector<std::size_t> cell_start(static_cast<std::size_t>(cells) + 1, 0);
   for (std::int32_t i = 0; i < n; ++i) {
-    const Vec3& x = position[i];
+    const Vec3& x = inside[i];
     const int c = (grid.axis_cell(x.z, 2) * grid.count[1] + grid.axis_cell(x.y, 1)) * grid.count[0] +
                   grid.axis_cell(x.x, 0);
     cell_of[i] = c;
@@ -93,49 +157,60 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   }
   std::partial_sum(cell_start.begin(), cell_start.end(), cell_start.begin());
   std::vector<std::int32_t> cell_members(static_cast<std::size_t>(n));
+  std::vector<Vec3> member_position(static_cast<std::size_t>(n));
   {
     std::vector<std::size_t> fill(cell_start.begin(), cell_start.end() - 1);
-    for (std::int32_t i = 0; i < n; ++i) cell_members[fill[cell_of[i]]++] = i;
+    for (std::int32_t i = 0; i < n; ++i) {
+      member_position[fill[cell_of[i]]] = inside[i];
+      cell_members[fill[cell_of[i]]++] = i;
+    }
   }
 
-  // The distinct neighbouring cells of each cell (with fewer than 3 cells along a
-  // periodic axis, several offsets reach the same cell: visit it once).
-  auto neighbour_cells = [&](int c, std::vector<int>& out) {
-    out.clear();
-    const int cx = c % grid.count[0], cy = (c / grid.count[0]) % grid.count[1],
-              cz = c / (grid.count[0] * grid.count[1]);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          std::array<int, 3> k{cx + dx, cy + dy, cz + dz};
-          bool inside = true;
-          for (int a = 0; a < 3; ++a) {
-            if (grid.periodic[a]) {
-              k[a] = (k[a] + grid.count[a]) % grid.count[a];
-            } else if (k[a] < 0 || k[a] >= grid.count[a]) {
-              inside = false;
+  std::vector<std::vector<StencilEntry>> stencils;
+  if (shifted) {
+    stencils = make_stencils(grid, box, stencil_reach);
+  } else {
+    // Distinct neighbouring cells, separations by minimum image.
+    stencils = make_stencils(grid, Box(box.lo(), box.hi(), {false, false, false}), 1);
+    for (int c = 0; c < cells; ++c) {
+      std::vector<int> distinct;
+      const std::array<int, 3> home{c % grid.count[0], (c / grid.count[0]) % grid.count[1],
+                                    c / (grid.count[0] * grid.count[1])};
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            std::array<int, 3> k{home[0] + dx, home[1] + dy, home[2] + dz};
+            bool ok = true;
+            for (int a = 0; a < 3; ++a) {
+              if (grid.periodic[a]) {
+                k[a] = (k[a] + grid.count[a]) % grid.count[a];
+              } else if (k[a] < 0 || k[a] >= grid.count[a]) {
+                ok = false;
+              }
             }
+            if (ok) distinct.push_back((k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0]);
           }
-          if (inside) out.push_back((k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0]);
-        }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-  };
+      std::sort(distinct.begin(), distinct.end());
+      distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+      stencils[c].clear();
+      for (int d : distinct) stencils[c].push_back({d, Vec3{}});
+    }
+  }
 
   neighbors_.clear();
   offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
-  std::vector<std::vector<int>> stencil(static_cast<std::size_t>(cells));
-  for (int c = 0; c < cells; ++c) neighbour_cells(c, stencil[c]);
-
   std::vector<std::int32_t> found;
   for (std::int32_t i = 0; i < n; ++i) {
     found.clear();
-    const Vec3 xi = position[i];
-    for (int c : stencil[cell_of[i]]) {
-      for (std::size_t m = cell_start[c]; m < cell_start[c + 1]; ++m) {
+    const Vec3 xi = inside[i];
+    for (const StencilEntry& e : stencils[cell_of[i]]) {
+      const Vec3 origin = xi - e.shift;
+      for (std::size_t m = cell_start[e.cell]; m < cell_start[e.cell + 1]; ++m) {
         const std::int32_t j = cell_members[m];
         if (j <= i) continue;
-        if (norm2(box.minimum_image(position[j] - xi)) >= reach2) continue;
+        const Vec3 d = shifted ? member_position[m] - origin
+                               : box.minimum_image(member_position[m] - origin);
+        if (d.x * d.x + d.y * d.y + d.z * d.z >= reach2) continue;
         found.push_back(j);
       }
     }

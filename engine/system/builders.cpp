@@ -100,41 +100,49 @@ System build_random_chains(const RandomChains& chains) {
   std::mt19937_64 rng(chains.seed);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   OccupancyGrid grid(system.box, chains.min_distance);
-  std::array<int, 3> no_image{};
 
+  // Grow bead by bead; a chain that walks into a dead end is removed and regrown from a new
+  // random start, a bounded number of times.
+  const int chain_attempts = 1000;
   std::size_t n = 0;
   for (int c = 0; c < chains.count; ++c) {
-    for (int b = 0; b < chains.length; ++b) {
-      bool placed = false;
-      for (int attempt = 0; attempt < chains.attempts_per_bead && !placed; ++attempt) {
-        Vec3 x;
-        if (b == 0) {
-          x = {side * uniform(rng), side * uniform(rng), side * uniform(rng)};
-        } else {
-          x = p.position[n - 1] + random_unit_vector(rng) * chains.bond_length;
+    const std::size_t first = n;
+    bool grown = false;
+    for (int chain_try = 0; chain_try < chain_attempts && !grown; ++chain_try) {
+      n = first;
+      grown = true;
+      for (int b = 0; b < chains.length && grown; ++b) {
+        bool placed = false;
+        for (int attempt = 0; attempt < chains.attempts_per_bead && !placed; ++attempt) {
+          Vec3 x = b == 0 ? Vec3{side * uniform(rng), side * uniform(rng), side * uniform(rng)}
+                          : p.position[n - 1] + random_unit_vector(rng) * chains.bond_length;
+          std::array<int, 3> image{};
+          system.box.wrap(x, image);
+          if (!grid.is_free(p.position, x)) continue;
+          p.position[n] = x;
+          placed = true;
         }
-        system.box.wrap(x, no_image);
-        no_image = {0, 0, 0};
-        if (!grid.is_free(p.position, x)) continue;
-        p.position[n] = x;
-        placed = true;
+        if (!placed) {
+          for (std::size_t k = n; k-- > first;) grid.remove_last(p.position[k]);
+          grown = false;
+          break;
+        }
+        grid.add(p.position[n], n);
+        ++n;
       }
-      if (!placed) {
-        throw InputError("chain builder: could not place bead " + std::to_string(b + 1) +
-                         " of chain " + std::to_string(c + 1) + " after " +
-                         std::to_string(chains.attempts_per_bead) +
-                         " attempts; lower the density or min_distance");
-      }
-      grid.add(p.position[n], n);
-      p.mass[n] = chains.mass;
-      p.id[n] = static_cast<std::int64_t>(n + 1);
-      p.molecule[n] = c + 1;
-      if (b > 0) {
-        const auto i = static_cast<std::int32_t>(n);
-        system.topology.bonds.push_back({i - 1, i, 0});
-        if (chains.angles && b > 1) system.topology.angles.push_back({i - 2, i - 1, i, 0});
-      }
-      ++n;
+    }
+    if (!grown) {
+      throw InputError("chain builder: could not grow chain " + std::to_string(c + 1) + " of " +
+                       std::to_string(chains.count) + " in " + std::to_string(chain_attempts) +
+                       " tries; lower the density or min_distance");
+    }
+    for (std::size_t k = first; k < n; ++k) {
+      p.mass[k] = chains.mass;
+      p.id[k] = static_cast<std::int64_t>(k + 1);
+      p.molecule[k] = c + 1;
+      const auto i = static_cast<std::int32_t>(k);
+      if (k > first) system.topology.bonds.push_back({i - 1, i, 0});
+      if (chains.angles && k > first + 1) system.topology.angles.push_back({i - 2, i - 1, i, 0});
     }
   }
   return system;

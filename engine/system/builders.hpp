@@ -27,7 +27,7 @@ struct RandomChains {
   double mass = 1.0;
   bool angles = false;
   std::uint64_t seed = 1;
-  int attempts_per_bead = 1000;
+  int attempts_per_bead = 100;
 };
 // Throws InputError when the walk cannot be grown (too dense, min_distance too large).
 System build_random_chains(const RandomChains& chains);

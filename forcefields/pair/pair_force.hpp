@@ -56,9 +56,9 @@ class PairForce final : public ForceTerm {
       for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
         const std::int32_t j = list[k];
         double dx = xi.x - x[j].x, dy = xi.y - x[j].y, dz = xi.z - x[j].z;
-        dx -= period.x * std::nearbyint(dx * inverse.x);
-        dy -= period.y * std::nearbyint(dy * inverse.y);
-        dz -= period.z * std::nearbyint(dz * inverse.z);
+        dx -= period.x * Box::round_to_integer(dx * inverse.x);
+        dy -= period.y * Box::round_to_integer(dy * inverse.y);
+        dz -= period.z * Box::round_to_integer(dz * inverse.z);
         const double r2 = dx * dx + dy * dy + dz * dz;
         const Params& p = row[type[j]];
         if (r2 >= p.cutoff2) continue;

@@ -306,6 +306,14 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     if (input.skin < 0) n->fail("must not be negative", "skin");
     n->finish();
   }
+  if (auto m = root.table("minimize")) {
+    input.minimize.max_steps = m->integer("max_steps");
+    if (input.minimize.max_steps < 0) m->fail("must not be negative", "max_steps");
+    input.minimize.timestep = positive(*m, "timestep", 0.002);
+    input.minimize.max_displacement = positive(*m, "max_displacement", 0.05);
+    input.minimize.force_tolerance = positive(*m, "force_tolerance", 1e-3);
+    m->finish();
+  }
   auto integrator = root.table("integrator");
   if (!integrator) root.fail("missing the [integrator] table (type = \"verlet\", timestep = ...)");
   input.integrator = integrator->choice("type", {"verlet"}, "verlet");

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "force_field.hpp"
+#include "integrators/quickmin.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -24,6 +25,7 @@ struct RunInput {
   double skin = 0.3;
   std::int64_t steps = 0;
   ThermoOutputSpec thermo;
+  MinimizeSettings minimize;  // max_steps 0: none
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.
