@@ -15,11 +15,12 @@ double ForceField::neighbor_cutoff() const {
 }
 
 ForceEvaluation ForceField::compute(const System& system, const NeighborList& neighbors,
-                                    std::vector<Vec3>& force) const {
+                                    std::vector<Vec3>& force, bool tally) const {
   force.assign(system.particles.size(), Vec3{});
   ForceEvaluation result;
+  result.tallied = tally;
   for (const auto& term : terms_) {
-    const double e = term->compute(system, neighbors, force, result.virial);
+    const double e = term->compute(system, neighbors, force, result.virial, tally);
     result.names.push_back(term->name());
     result.energies.push_back(e);
     result.potential += e;

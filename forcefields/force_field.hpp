@@ -14,6 +14,7 @@ struct ForceEvaluation {
   std::vector<std::string> names;
   std::vector<double> energies;
   double potential = 0.0;
+  bool tallied = false;  // energies and virial filled in (else forces only)
   SymTensor virial;  // sum over interactions of r_ij (x) f_ij
 };
 
@@ -24,9 +25,9 @@ class ForceField {
   const std::vector<std::unique_ptr<ForceTerm>>& terms() const { return terms_; }
   double neighbor_cutoff() const;
 
-  // Overwrites `force` with the total force.
+  // Overwrites `force` with the total force; energies and virial only when `tally`.
   ForceEvaluation compute(const System& system, const NeighborList& neighbors,
-                          std::vector<Vec3>& force) const;
+                          std::vector<Vec3>& force, bool tally = true) const;
 
   // LAMMPS special_bonds lj factors for 1-2, 1-3, 1-4 neighbours.
   std::array<double, 3> special_lj{0.0, 0.0, 0.0};

@@ -5,7 +5,7 @@ namespace deli {
 ForceEngine::ForceEngine(const ForceField& force_field, double skin)
     : force_field_(force_field), neighbors_(force_field.neighbor_cutoff(), skin) {}
 
-const ForceEvaluation& ForceEngine::compute(System& system) {
+const ForceEvaluation& ForceEngine::compute(System& system, bool tally) {
   Particles& p = system.particles;
   if (neighbors_.needs_rebuild(p.position)) {
     if (neighbors_.builds() == 0) {
@@ -15,7 +15,7 @@ const ForceEvaluation& ForceEngine::compute(System& system) {
     for (std::size_t i = 0; i < p.size(); ++i) system.box.wrap(p.position[i], p.image[i]);
     neighbors_.build(p.position, system.box);
   }
-  last_ = force_field_.compute(system, neighbors_, force_);
+  last_ = force_field_.compute(system, neighbors_, force_, tally);
   return last_;
 }
 

@@ -16,7 +16,8 @@ class ForceEngine {
 
   // Rebuilds the neighbour list when needed (wrapping positions into the box first, the
   // only time they are wrapped) and computes forces and energies.
-  const ForceEvaluation& compute(System& system);
+  // Energies and virial only when `tally` (thermo steps).
+  const ForceEvaluation& compute(System& system, bool tally = true);
 
   const std::vector<Vec3>& force() const { return force_; }
   const ForceEvaluation& last() const { return last_; }

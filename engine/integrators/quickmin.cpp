@@ -41,8 +41,9 @@ MinimizeResult quickmin(System& system, const ForceField& force_field, double sk
     for (const Vec3& vi : v) vmax = std::max(vmax, norm(vi));
     const double step_scale = vmax * dt > settings.max_displacement ? settings.max_displacement / (vmax * dt) : 1.0;
     for (std::size_t i = 0; i < p.size(); ++i) p.position[i] += v[i] * (dt * step_scale);
-    engine.compute(system);
+    engine.compute(system, false);
   }
+  engine.compute(system);
   result.max_force = largest_component(engine.force());
   result.converged = result.converged || result.max_force < settings.force_tolerance;
   result.final_energy = engine.last().potential;

@@ -12,13 +12,13 @@ void VelocityVerlet::half_kick(Particles& p) const {
   for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] += f[i] * (0.5 * dt_ / p.mass[i]);
 }
 
-void VelocityVerlet::step(System& system) {
+void VelocityVerlet::step(System& system, bool tally) {
   Particles& p = system.particles;
   half_kick(p);
   for (std::size_t i = 0; i < p.size(); ++i) p.position[i] += p.velocity[i] * dt_;
   system.step += 1;
   system.time += dt_;
-  engine_.compute(system);
+  engine_.compute(system, tally);
   half_kick(p);
 }
 

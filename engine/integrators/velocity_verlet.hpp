@@ -12,7 +12,7 @@ class VelocityVerlet final : public Integrator {
   std::string name() const override { return "verlet"; }
   double timestep() const override { return dt_; }
   void setup(System& system) override;
-  void step(System& system) override;
+  void step(System& system, bool tally = true) override;
   const ForceEngine& forces() const override { return engine_; }
 
  private:

@@ -69,50 +69,6 @@ CellGrid make_grid(const std::vector<Vec3>& position, const Box& box, double rea
 
 }  // namespace
 
-namespace {
-
-// One neighbouring cell of a cell and the periodic shift to add to its particles'
-// positions so that the separation is the minimum image.
-struct StencilEntry {
-  int cell;
-  Vec3 shift;
-};
-
-// For every cell, the cells within `reach` cells along each axis. With at least
-// 2 * reach + 1 cells along every periodic axis each neighbouring cell is reached through
-// exactly one periodic shift, so separations need no minimum-image rounding.
-std::vector<std::vector<StencilEntry>> make_stencils(const CellGrid& grid, const Box& box,
-                                                     int reach) {
-  const int cells = grid.count[0] * grid.count[1] * grid.count[2];
-  std::vector<std::vector<StencilEntry>> stencils(static_cast<std::size_t>(cells));
-  for (int c = 0; c < cells; ++c) {
-    const std::array<int, 3> home{c % grid.count[0], (c / grid.count[0]) % grid.count[1],
-                                  c / (grid.count[0] * grid.count[1])};
-    for (int dz = -reach; dz <= reach; ++dz)
-      for (int dy = -reach; dy <= reach; ++dy)
-        for (int dx = -reach; dx <= reach; ++dx) {
-          std::array<int, 3> k{home[0] + dx, home[1] + dy, home[2] + dz};
-          Vec3 shift;
-          bool inside = true;
-          for (int a = 0; a < 3; ++a) {
-            if (k[a] >= 0 && k[a] < grid.count[a]) continue;
-            if (!grid.periodic[a]) {
-              inside = false;
-              break;
-            }
-            const int wraps = k[a] < 0 ? -1 : 1;
-            k[a] -= wraps * grid.count[a];
-            shift[a] = wraps * box.period()[a];
-          }
-          if (!inside) continue;
-          stencils[c].push_back({(k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0], shift});
-        }
-  }
-  return stencils;
-}
-
-}  // namespace
-
 void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   const auto n = static_cast<std::int32_t>(position.size());
   const double reach = cutoff_ + skin_;
@@ -158,69 +114,119 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   std::partial_sum(cell_start.begin(), cell_start.end(), cell_start.begin());
   std::vector<std::int32_t> cell_members(static_cast<std::size_t>(n));
   std::vector<Vec3> member_position(static_cast<std::size_t>(n));
+  std::vector<std::size_t> slot_of(static_cast<std::size_t>(n));
   {
     std::vector<std::size_t> fill(cell_start.begin(), cell_start.end() - 1);
     for (std::int32_t i = 0; i < n; ++i) {
-      member_position[fill[cell_of[i]]] = inside[i];
-      cell_members[fill[cell_of[i]]++] = i;
+      slot_of[i] = fill[cell_of[i]]++;
+      member_position[slot_of[i]] = inside[i];
+      cell_members[slot_of[i]] = i;
     }
   }
 
-  std::vector<std::vector<StencilEntry>> stencils;
-  if (shifted) {
-    stencils = make_stencils(grid, box, stencil_reach);
-  } else {
-    // Distinct neighbouring cells, separations by minimum image.
-    stencils = make_stencils(grid, Box(box.lo(), box.hi(), {false, false, false}), 1);
-    for (int c = 0; c < cells; ++c) {
-      std::vector<int> distinct;
-      const std::array<int, 3> home{c % grid.count[0], (c / grid.count[0]) % grid.count[1],
-                                    c / (grid.count[0] * grid.count[1])};
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            std::array<int, 3> k{home[0] + dx, home[1] + dy, home[2] + dz};
-            bool ok = true;
-            for (int a = 0; a < 3; ++a) {
-              if (grid.periodic[a]) {
-                k[a] = (k[a] + grid.count[a]) % grid.count[a];
-              } else if (k[a] < 0 || k[a] >= grid.count[a]) {
-                ok = false;
-              }
+  // The cells around each cell: with enough cells along every periodic axis each is
+  // reached through exactly one periodic shift (no minimum-image rounding); otherwise the
+  // distinct cells within one cell, measured by minimum image.
+  struct Neighbour {
+    int cell;
+    Vec3 shift;
+  };
+  const int span = shifted ? stencil_reach : 1;
+  std::vector<Neighbour> around;
+  auto cells_around = [&](int c) {
+    around.clear();
+    const std::array<int, 3> home{c % grid.count[0], (c / grid.count[0]) % grid.count[1],
+                                  c / (grid.count[0] * grid.count[1])};
+    for (int dz = -span; dz <= span; ++dz)
+      for (int dy = -span; dy <= span; ++dy)
+        for (int dx = -span; dx <= span; ++dx) {
+          // Half stencil: of the offsets +o and -o only the lexicographically positive one,
+          // so each pair of distinct cells is visited once (the home cell is handled apart).
+          if (shifted && (dz < 0 || (dz == 0 && (dy < 0 || (dy == 0 && dx <= 0))))) continue;
+          std::array<int, 3> k{home[0] + dx, home[1] + dy, home[2] + dz};
+          Vec3 shift;
+          bool inside_grid = true;
+          for (int a = 0; a < 3; ++a) {
+            if (k[a] >= 0 && k[a] < grid.count[a]) continue;
+            if (!grid.periodic[a]) {
+              inside_grid = false;
+              break;
             }
-            if (ok) distinct.push_back((k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0]);
+            const int wraps = k[a] < 0 ? -1 : 1;
+            k[a] -= wraps * grid.count[a];
+            shift[a] = wraps * box.period()[a];
           }
-      std::sort(distinct.begin(), distinct.end());
-      distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
-      stencils[c].clear();
-      for (int d : distinct) stencils[c].push_back({d, Vec3{}});
+          if (!inside_grid) continue;
+          around.push_back({(k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0], shift});
+        }
+    if (!shifted) {
+      std::sort(around.begin(), around.end(),
+                [](const Neighbour& l, const Neighbour& r) { return l.cell < r.cell; });
+      around.erase(std::unique(around.begin(), around.end(),
+                               [](const Neighbour& l, const Neighbour& r) { return l.cell == r.cell; }),
+                   around.end());
+      for (Neighbour& e : around) e.shift = Vec3{};
     }
+  };
+
+  // Image codes: the shift of a pair in the caller's (possibly unwrapped) positions is the
+  // stencil shift corrected by both particles' wrapping, a small multiple of the period
+  // per axis; codes cover -1, 0, 1 periods, and anything else drops the codes.
+  bool coded = shifted;
+  for (int code = 0; code < 27; ++code) {
+    const int c[3] = {code % 3 - 1, (code / 3) % 3 - 1, code / 9 - 1};
+    for (int a = 0; a < 3; ++a) image_shifts_[code][a] = c[a] * box.period()[a];
   }
+  auto code_of = [&](const Vec3& s) {
+    int code = 0, weight = 1;
+    for (int a = 0; a < 3; ++a, weight *= 3) {
+      const double periods = box.period()[a] > 0 ? s[a] * box.inverse_period()[a] : 0.0;
+      const long k = static_cast<long>(Box::round_to_integer(periods));
+      if (k < -1 || k > 1) coded = false;
+      code += static_cast<int>(k + 1) * weight;
+    }
+    return static_cast<std::uint8_t>(coded ? code : 13);
+  };
 
   neighbors_.clear();
+  image_codes_.clear();
   offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
-  std::vector<std::int32_t> found;
+  std::vector<std::pair<std::int32_t, std::uint8_t>> found;
   for (std::int32_t i = 0; i < n; ++i) {
     found.clear();
     const Vec3 xi = inside[i];
-    for (const StencilEntry& e : stencils[cell_of[i]]) {
-      const Vec3 origin = xi - e.shift;
-      for (std::size_t m = cell_start[e.cell]; m < cell_start[e.cell + 1]; ++m) {
+    const Vec3 wrap_i = inside[i] - position[i];
+    if (i == 0 || cell_of[i] != cell_of[i - 1]) cells_around(cell_of[i]);
+    auto scan = [&](int cell, std::size_t first, const Vec3& shift) {
+      const Vec3 origin = xi - shift;
+      for (std::size_t m = first; m < cell_start[cell + 1]; ++m) {
         const std::int32_t j = cell_members[m];
-        if (j <= i) continue;
         const Vec3 d = shifted ? member_position[m] - origin
                                : box.minimum_image(member_position[m] - origin);
         if (d.x * d.x + d.y * d.y + d.z * d.z >= reach2) continue;
-        found.push_back(j);
+        if (!shifted && j <= i) continue;
+        // x_i - x_j - shift = -(d): shift = (x_i - x_j) + d in the caller's positions.
+        const std::uint8_t code =
+            shifted ? code_of(shift - wrap_i + (member_position[m] - position[j])) : 13;
+        found.emplace_back(j, code);
       }
-    }
+    };
+    // Half stencil: partners later in the home cell, then the forward cells. The
+    // minimum-image fallback scans every distinct cell and keeps j > i.
+    if (shifted) scan(cell_of[i], slot_of[i] + 1, Vec3{});
+    for (const Neighbour& e : around) scan(e.cell, cell_start[e.cell], e.shift);
     std::sort(found.begin(), found.end());
-    for (std::int32_t j : found) {
-      if (excluded_offsets_[i] != excluded_offsets_[i + 1] && is_excluded(i, j)) continue;
+    for (const auto& [j, code] : found) {
+      if (excluded_offsets_[std::min(i, j)] != excluded_offsets_[std::min(i, j) + 1] &&
+          is_excluded(std::min(i, j), std::max(i, j))) {
+        continue;
+      }
       neighbors_.push_back(j);
+      image_codes_.push_back(code);
     }
     offsets_[i + 1] = neighbors_.size();
   }
+  if (!coded) image_codes_.clear();
   position_at_build_ = position;
   ++builds_;
 }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -8,11 +9,12 @@
 
 namespace deli {
 
-// Half Verlet list (each pair once, j > i) built through a cell list, with pairs whose
-// minimum-image distance is below cutoff + skin. Pairs in `excluded` never appear.
-// It stays valid until some particle has moved more than skin / 2 since the build: then
-// no pair can have closed from beyond cutoff + skin to within the cutoff.
-// Neighbours of each particle are in ascending index order, so results are deterministic.
+// Half Verlet list (each pair once, under either of its particles) built through a cell
+// list, with pairs whose minimum-image distance is below cutoff + skin. Pairs in
+// `excluded` never appear. It stays valid until some particle has moved more than skin / 2
+// since the build: then no pair can have closed from beyond cutoff + skin to within the
+// cutoff. Neighbours of each particle are in ascending index order and the list depends
+// only on the positions, so results are deterministic.
 class NeighborList {
  public:
   NeighborList(double cutoff, double skin);
@@ -32,6 +34,13 @@ class NeighborList {
   const std::vector<std::int32_t>& neighbors() const { return neighbors_; }
   const std::vector<std::size_t>& offsets() const { return offsets_; }
   std::size_t pair_count() const { return neighbors_.size(); }
+
+  // When the box is at least three reaches wide along every periodic axis, each listed pair
+  // also has a fixed periodic shift, valid until the next rebuild: x_i - x_j - shift is its
+  // minimum-image separation, with no rounding in the force loop. Otherwise (small boxes)
+  // image_codes() is empty and callers take minimum images.
+  const std::vector<std::uint8_t>& image_codes() const { return image_codes_; }
+  const std::array<Vec3, 27>& image_shifts() const { return image_shifts_; }
   std::int64_t builds() const { return builds_; }
 
  private:
@@ -42,6 +51,8 @@ class NeighborList {
   std::vector<std::size_t> excluded_offsets_;  // by first index, rebuilt with the list
   std::vector<std::int32_t> neighbors_;
   std::vector<std::size_t> offsets_;
+  std::vector<std::uint8_t> image_codes_;
+  std::array<Vec3, 27> image_shifts_{};
   std::vector<Vec3> position_at_build_;
   std::int64_t builds_ = 0;
 };

@@ -25,9 +25,10 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   const auto start = std::chrono::steady_clock::now();
   try {
     for (std::int64_t n = 1; n <= steps; ++n) {
-      integrator.step(system);
+      const bool sampled = (thermo_every > 0 && n % thermo_every == 0) || n == steps;
+      integrator.step(system, sampled);
       for (Observer* o : observers) o->on_step(system);
-      if ((thermo_every > 0 && n % thermo_every == 0) || n == steps) sample();
+      if (sampled) sample();
       stats.steps = n;
     }
   } catch (...) {

@@ -1,5 +1,7 @@
 #include "simulation/thermo.hpp"
 
+#include <stdexcept>
+
 namespace deli {
 
 double kinetic_energy(const Particles& p) {
@@ -15,6 +17,7 @@ Vec3 total_momentum(const Particles& p) {
 }
 
 ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation) {
+  if (!evaluation.tallied) throw std::logic_error("thermo asked of a force evaluation without energies");
   ThermoSample s;
   s.step = system.step;
   s.time = system.time;

@@ -21,8 +21,9 @@ class BondForce final : public ForceTerm {
 
   std::string name() const override { return name_; }
 
+  // Bonds are few: energy and virial are always tallied.
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
-                 SymTensor& virial) const override {
+                 SymTensor& virial, bool /*tally*/) const override {
     const std::vector<Vec3>& x = system.particles.position;
     double energy = 0.0;
     for (const Bond& b : system.topology.bonds) {

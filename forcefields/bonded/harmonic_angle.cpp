@@ -8,7 +8,7 @@
 namespace deli {
 
 double HarmonicAngle::compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
-                              SymTensor& virial) const {
+                              SymTensor& virial, bool /*tally*/) const {
   const std::vector<Vec3>& x = system.particles.position;
   double energy = 0.0;
   for (const Angle& a : system.topology.angles) {

@@ -16,7 +16,7 @@ class HarmonicAngle final : public ForceTerm {
 
   std::string name() const override { return "angle"; }
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
-                 SymTensor& virial) const override;
+                 SymTensor& virial, bool tally) const override;
 
  private:
   std::vector<Params> by_type_;

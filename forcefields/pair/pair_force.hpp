@@ -38,17 +38,38 @@ class PairForce final : public ForceTerm {
   double neighbor_cutoff() const override { return max_cutoff_; }
 
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
-                 SymTensor& virial) const override {
-    const std::vector<Vec3>& x = system.particles.position;
-    const std::vector<int>& type = system.particles.type;
+                 SymTensor& virial, bool tally) const override {
+    const bool coded = !neighbors.image_codes().empty();
+    double energy = 0.0;
+    if (tally) {
+      energy = coded ? loop<true, true>(system, neighbors, force, virial)
+                     : loop<true, false>(system, neighbors, force, virial);
+    } else {
+      coded ? loop<false, true>(system, neighbors, force, virial)
+            : loop<false, false>(system, neighbors, force, virial);
+    }
+    return energy + scaled_pairs(system, force, virial);
+  }
+
+ private:
+  // kTally: accumulate energy and virial. kCoded: periodic shifts from the list's image
+  // codes instead of minimum-image rounding.
+  template <bool kTally, bool kCoded>
+  double loop(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
+              SymTensor& virial) const {
+    const Vec3* x = system.particles.position.data();
+    const int* type = system.particles.type.data();
+    Vec3* f = force.data();
     const Box& box = system.box;
     const Vec3 period = box.period(), inverse = box.inverse_period();
-    const std::vector<std::int32_t>& list = neighbors.neighbors();
+    const std::int32_t* list = neighbors.neighbors().data();
+    const std::uint8_t* codes = neighbors.image_codes().data();
+    const Vec3* shifts = neighbors.image_shifts().data();
     const std::vector<std::size_t>& offsets = neighbors.offsets();
 
     double energy = 0.0;
     SymTensor w;
-    const auto n = static_cast<std::int32_t>(x.size());
+    const auto n = static_cast<std::int32_t>(system.particles.size());
     for (std::int32_t i = 0; i < n; ++i) {
       const Vec3 xi = x[i];
       const Params* row = &table_[static_cast<std::size_t>(type[i] * type_count_)];
@@ -56,9 +77,14 @@ class PairForce final : public ForceTerm {
       for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
         const std::int32_t j = list[k];
         double dx = xi.x - x[j].x, dy = xi.y - x[j].y, dz = xi.z - x[j].z;
-        dx -= period.x * Box::round_to_integer(dx * inverse.x);
-        dy -= period.y * Box::round_to_integer(dy * inverse.y);
-        dz -= period.z * Box::round_to_integer(dz * inverse.z);
+        if constexpr (kCoded) {
+          const Vec3& s = shifts[codes[k]];
+          dx -= s.x, dy -= s.y, dz -= s.z;
+        } else {
+          dx -= period.x * Box::round_to_integer(dx * inverse.x);
+          dy -= period.y * Box::round_to_integer(dy * inverse.y);
+          dz -= period.z * Box::round_to_integer(dz * inverse.z);
+        }
         const double r2 = dx * dx + dy * dy + dz * dz;
         const Params& p = row[type[j]];
         if (r2 >= p.cutoff2) continue;
@@ -66,31 +92,39 @@ class PairForce final : public ForceTerm {
         Evaluator::evaluate(p, r2, f_over_r, e);
         const double fx = dx * f_over_r, fy = dy * f_over_r, fz = dz * f_over_r;
         fi.x += fx, fi.y += fy, fi.z += fz;
-        force[j].x -= fx, force[j].y -= fy, force[j].z -= fz;
-        energy += e;
-        w.xx += dx * fx, w.yy += dy * fy, w.zz += dz * fz;
-        w.xy += dx * fy, w.xz += dx * fz, w.yz += dy * fz;
+        f[j].x -= fx, f[j].y -= fy, f[j].z -= fz;
+        if constexpr (kTally) {
+          energy += e;
+          w.xx += dx * fx, w.yy += dy * fy, w.zz += dz * fz;
+          w.xy += dx * fy, w.xz += dx * fz, w.yz += dy * fz;
+        }
       }
-      force[i] += fi;
+      f[i] += fi;
     }
+    if constexpr (kTally) virial += w;
+    return energy;
+  }
+
+  double scaled_pairs(const System& system, std::vector<Vec3>& force, SymTensor& virial) const {
+    const std::vector<Vec3>& x = system.particles.position;
+    const std::vector<int>& type = system.particles.type;
+    double energy = 0.0;
     for (const ScaledPair& s : scaled_pairs_) {
-      const Vec3 d = box.minimum_image(x[s.i] - x[s.j]);
+      const Vec3 d = system.box.minimum_image(x[s.i] - x[s.j]);
       const double r2 = norm2(d);
       const Params& p = table_[static_cast<std::size_t>(type[s.i] * type_count_ + type[s.j])];
       if (r2 >= p.cutoff2) continue;
       double f_over_r, e;
       Evaluator::evaluate(p, r2, f_over_r, e);
-      const Vec3 f = d * (s.factor * f_over_r);
-      force[s.i] += f;
-      force[s.j] -= f;
+      const Vec3 fs = d * (s.factor * f_over_r);
+      force[s.i] += fs;
+      force[s.j] -= fs;
       energy += s.factor * e;
-      w.add_outer(d, f);
+      virial.add_outer(d, fs);
     }
-    virial += w;
     return energy;
   }
 
- private:
   std::string name_;
   int type_count_;
   std::vector<Params> table_;

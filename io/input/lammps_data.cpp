@@ -539,15 +539,11 @@ LammpsDataFile DataReader::read() {
         }
         atom.image[a] = static_cast<int>(image);
       }
-      // LAMMPS would remap such an atom; deli takes positions as given, so they must be valid.
-      if (options_.periodic[a] && !(atom.position[a] >= lo_[a] && atom.position[a] < hi_[a])) {
-        fail(line, who + " has " + kAxisName[a] + " = " + std::string(tokens[columns.x + a]) +
-                       ", outside the periodic box [" + format_double(lo_[a]) + ", " +
-                       format_double(hi_[a]) + "); expected " + kAxisName[a] +
-                       "lo <= " + kAxisName[a] + " < " + kAxisName[a] +
-                       "hi (wrap it and adjust its image flag)");
-      }
     }
+    // Like LAMMPS' read_data, an atom outside a periodic box is mapped back into it with its
+    // image flag counting the crossings, so that its unwrapped position is kept.
+    Box({lo_[0], lo_[1], lo_[2]}, {hi_[0], hi_[1], hi_[2]}, options_.periodic)
+        .wrap(atom.position, atom.image);
     if (mass_line.empty() || mass_line[atom.type] == 0) {
       fail(line, who + " has atom type " + std::to_string(atom.type + 1) +
                      ", which has no entry in the Masses section");

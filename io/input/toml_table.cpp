@@ -44,7 +44,13 @@ void TomlTable::fail(const std::string& message, const std::string& key) const {
 const toml::node& TomlTable::require(const std::string& key) const {
   used_.insert(key);
   const toml::node* node = table_->get(key);
-  if (!node) fail("missing required key '" + key_path(key) + "'");
+  if (!node) {
+    std::vector<std::string> present;
+    for (const auto& [name, value] : *table_) present.emplace_back(name.str());
+    const std::string guess = closest_match(key, present);
+    fail("missing required key '" + key_path(key) + "'" +
+         (guess.empty() ? "" : "; found '" + guess + "': a misspelling of '" + key + "'?"));
+  }
   return *node;
 }
 

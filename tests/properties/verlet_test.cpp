@@ -33,7 +33,7 @@ EnergyRecord record_energy(RunInput input, double dt, double equilibration, doub
   VelocityVerlet verlet(*input.force_field, input.skin, dt);
   System& s = input.system;
   verlet.setup(s);
-  for (int n = 0; n < std::lround(equilibration / dt); ++n) verlet.step(s);
+  for (int n = 0; n < std::lround(equilibration / dt); ++n) verlet.step(s, true);
   const double atoms = static_cast<double>(s.particles.size());
   auto energy = [&] { return (kinetic_energy(s.particles) + verlet.forces().last().potential) / atoms; };
   const double e0 = energy();
@@ -41,7 +41,7 @@ EnergyRecord record_energy(RunInput input, double dt, double equilibration, doub
   double st = 0, se = 0, stt = 0, ste = 0;
   const long steps = std::lround(time / dt);
   for (long n = 1; n <= steps; ++n) {
-    verlet.step(s);
+    verlet.step(s, true);
     const double e = energy() - e0, t = n * dt;
     r.max_deviation = std::max(r.max_deviation, std::abs(e));
     st += t, se += e, stt += t * t, ste += t * e;
@@ -77,10 +77,10 @@ TEST(VelocityVerlet, TimeReversible) {
   std::vector<Vec3> start = s.particles.position;
   VelocityVerlet verlet(*input.force_field, input.skin, 0.005);
   verlet.setup(s);
-  for (int n = 0; n < 200; ++n) verlet.step(s);
+  for (int n = 0; n < 200; ++n) verlet.step(s, true);
   for (Vec3& v : s.particles.velocity) v = -v;
   verlet.setup(s);
-  for (int n = 0; n < 200; ++n) verlet.step(s);
+  for (int n = 0; n < 200; ++n) verlet.step(s, true);
   double worst = 0;
   for (std::size_t i = 0; i < start.size(); ++i) {
     const Vec3 x = s.box.unwrapped(s.particles.position[i], s.particles.image[i]);

@@ -385,7 +385,11 @@ Atoms
 
 1 1 1 -2 7
 )");
-  EXPECT_THAT(read_error(path), HasSubstr("outside the periodic box"));
+  const LammpsDataFile wrapped = read_lammps_data(path, {{true, true, true}, ""});
+  EXPECT_EQ(wrapped.system.particles.position[0].y, 3.0);
+  EXPECT_EQ(wrapped.system.particles.image[0][1], -1);
+  EXPECT_EQ(wrapped.system.particles.position[0].z, 2.0);
+  EXPECT_EQ(wrapped.system.particles.image[0][2], 1);
   const LammpsDataFile file = read_lammps_data(path, {{true, false, false}, ""});
   EXPECT_EQ(file.system.particles.position[0].z, 7.0);
 }
@@ -491,15 +495,17 @@ TEST_F(LammpsDataTest, TriclinicBoxIsAnError) {
   expect_error_at(read_error(path), path, 7, {"xy xz yz", "triclinic", "orthorhombic"});
 }
 
-TEST_F(LammpsDataTest, AtomOutsidePeriodicBoxIsAnError) {
+TEST_F(LammpsDataTest, AtomOutsidePeriodicBoxIsWrappedAsLammpsDoes) {
   const std::string path = write_file(std::string(kPreamble) + R"(
 Atoms
 
 1 1 1 1 1
-2 1 5 1 1
+2 1 5 1 1 2 0 0
 3 1 2 2 2
 )");
-  expect_error_at(read_error(path), path, 15, {"atom 2", "x = 5", "outside the periodic box"});
+  const LammpsDataFile file = read_lammps_data(path, {});
+  EXPECT_EQ(file.system.particles.position[1].x, 0.0);
+  EXPECT_EQ(file.system.particles.image[1][0], 3);
 }
 
 TEST_F(LammpsDataTest, HintAndOptionMismatchIsAnError) {
