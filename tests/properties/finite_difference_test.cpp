@@ -18,6 +18,7 @@ struct Case {
   std::string name;
   std::string toml;
 };
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
 std::string chains_input(const std::string& boundary, const std::string& forcefield,
                          bool angles = true) {

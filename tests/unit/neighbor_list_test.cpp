@@ -56,6 +56,7 @@ struct BoxCase {
   std::array<bool, 3> periodic;
   std::size_t n;
 };
+void PrintTo(const BoxCase& c, std::ostream* os) { *os << c.name; }
 
 class NeighborListMatchesBruteForce : public ::testing::TestWithParam<BoxCase> {};
 
