@@ -10,11 +10,11 @@
 namespace deli {
 
 // Half Verlet list (each pair once, under either of its particles) built through a cell
-// list, with pairs whose minimum-image distance is below cutoff + skin. Pairs in
-// `excluded` never appear. It stays valid until some particle has moved more than skin / 2
-// since the build: then no pair can have closed from beyond cutoff + skin to within the
-// cutoff. Neighbours of each particle are in ascending index order and the list depends
-// only on the positions, so results are deterministic.
+// list, with the pairs whose minimum-image distance is below cutoff + skin; pairs in
+// `excluded` never appear. It stays valid until some particle has moved more than skin/2
+// since the build: no pair can then have closed from beyond cutoff + skin to within the
+// cutoff. The list depends only on the positions (cell order, then particle order within a
+// cell), so results are deterministic.
 class NeighborList {
  public:
   NeighborList(double cutoff, double skin);
@@ -22,7 +22,7 @@ class NeighborList {
   double cutoff() const { return cutoff_; }
   double skin() const { return skin_; }
 
-  // Sorted (i < j) pairs to leave out (bonded exclusions).
+  // Pairs to leave out (bonded exclusions), in any order.
   void set_exclusions(std::vector<std::array<std::int32_t, 2>> excluded);
 
   void build(const std::vector<Vec3>& position, const Box& box);
@@ -34,6 +34,7 @@ class NeighborList {
   const std::vector<std::int32_t>& neighbors() const { return neighbors_; }
   const std::vector<std::size_t>& offsets() const { return offsets_; }
   std::size_t pair_count() const { return neighbors_.size(); }
+  std::int64_t builds() const { return builds_; }
 
   // When the box is at least three reaches wide along every periodic axis, each listed pair
   // also has a fixed periodic shift, valid until the next rebuild: x_i - x_j - shift is its
@@ -41,14 +42,32 @@ class NeighborList {
   // image_codes() is empty and callers take minimum images.
   const std::vector<std::uint8_t>& image_codes() const { return image_codes_; }
   const std::array<Vec3, 27>& image_shifts() const { return image_shifts_; }
-  std::int64_t builds() const { return builds_; }
 
  private:
+  struct Grid {
+    std::array<int, 3> count{};
+    Vec3 origin, inverse_width;
+    int span = 1;         // stencil half-width in cells
+    bool shifted = true;  // each neighbouring cell reached through one periodic shift
+    bool operator==(const Grid& o) const {
+      return count == o.count && span == o.span && shifted == o.shifted;
+    }
+  };
+  Grid make_grid(const std::vector<Vec3>& inside, const Box& box) const;
+  void make_stencils(const Grid& grid, const Box& box);
   bool is_excluded(std::int32_t i, std::int32_t j) const;
 
   double cutoff_, skin_;
-  std::vector<std::array<std::int32_t, 2>> excluded_;
-  std::vector<std::size_t> excluded_offsets_;  // by first index, rebuilt with the list
+  std::vector<std::array<std::int32_t, 2>> excluded_;  // sorted, i < j
+  std::vector<std::size_t> excluded_offsets_;          // by first index
+
+  // Per cell, the neighbouring cells to scan and their periodic shift codes; kept while
+  // the grid is unchanged (always, for a fixed periodic box).
+  Grid stencil_grid_;
+  std::vector<std::size_t> stencil_offsets_;
+  std::vector<std::int32_t> stencil_cells_;
+  std::vector<std::uint8_t> stencil_codes_;
+
   std::vector<std::int32_t> neighbors_;
   std::vector<std::size_t> offsets_;
   std::vector<std::uint8_t> image_codes_;
