@@ -6,7 +6,9 @@
 
 namespace deli {
 
-void ForceField::add(std::unique_ptr<ForceTerm> term) { terms_.push_back(std::move(term)); }
+void ForceField::add(std::unique_ptr<ForceTerm> term) {
+  terms_.push_back(std::move(term));
+}
 
 double ForceField::neighbor_cutoff() const {
   double cutoff = 0.0;

@@ -15,7 +15,7 @@ struct ForceEvaluation {
   std::vector<double> energies;
   double potential = 0.0;
   bool tallied = false;  // energies and virial filled in (else forces only)
-  SymTensor virial;  // sum over interactions of r_ij (x) f_ij
+  SymTensor virial;      // sum over interactions of r_ij (x) f_ij
 };
 
 // The potential: a list of terms sharing one neighbour list.

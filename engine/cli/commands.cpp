@@ -19,10 +19,11 @@ namespace {
 void minimize_if_asked(RunInput& input) {
   if (input.minimize.max_steps == 0) return;
   const MinimizeResult r = quickmin(input.system, *input.force_field, input.skin, input.minimize);
-  std::printf("minimize (quickmin): %lld steps, energy %.10g -> %.10g, largest force component "
-              "%.3g (%s)\n",
-              static_cast<long long>(r.steps), r.initial_energy, r.final_energy, r.max_force,
-              r.converged ? "converged" : "max_steps reached");
+  std::printf(
+      "minimize (quickmin): %lld steps, energy %.10g -> %.10g, largest force component "
+      "%.3g (%s)\n",
+      static_cast<long long>(r.steps), r.initial_energy, r.final_energy, r.max_force,
+      r.converged ? "converged" : "max_steps reached");
 }
 
 std::string style_for(const System& system) {
@@ -60,10 +61,11 @@ int command_run(const std::vector<std::string>& args) {
   }
   const RunStatistics stats =
       run(input.system, integrator, input.steps, input.thermo.every, observers);
-  std::printf("loop time %.3f s for %lld steps of %zu atoms: %.4g atom-steps/s, %lld neighbour "
-              "list builds\n",
-              stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
-              stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
+  std::printf(
+      "loop time %.3f s for %lld steps of %zu atoms: %.4g atom-steps/s, %lld neighbour "
+      "list builds\n",
+      stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
+      stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
   return 0;
 }
 

@@ -14,7 +14,8 @@ constexpr const char* kUsage =
     "\n"
     "commands:\n"
     "  run [INPUT]               run a simulation (no INPUT: the default input,\n"
-    "                            " DELI_DEFAULT_INPUT ")\n"
+    "                            " DELI_DEFAULT_INPUT
+    ")\n"
     "  write-data INPUT FILE     write the system INPUT builds as a LAMMPS data file\n"
     "\n"
     "options:\n"

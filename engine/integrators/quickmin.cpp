@@ -39,7 +39,8 @@ MinimizeResult quickmin(System& system, const ForceField& force_field, double sk
     // the box in one step.
     double vmax = 0.0;
     for (const Vec3& vi : v) vmax = std::max(vmax, norm(vi));
-    const double step_scale = vmax * dt > settings.max_displacement ? settings.max_displacement / (vmax * dt) : 1.0;
+    const double step_scale =
+        vmax * dt > settings.max_displacement ? settings.max_displacement / (vmax * dt) : 1.0;
     for (std::size_t i = 0; i < p.size(); ++i) p.position[i] += v[i] * (dt * step_scale);
     engine.compute(system, false);
   }

@@ -5,7 +5,9 @@ namespace deli {
 VelocityVerlet::VelocityVerlet(const ForceField& force_field, double skin, double timestep)
     : engine_(force_field, skin), dt_(timestep) {}
 
-void VelocityVerlet::setup(System& system) { engine_.compute(system); }
+void VelocityVerlet::setup(System& system) {
+  engine_.compute(system);
+}
 
 void VelocityVerlet::half_kick(Particles& p) const {
   const std::vector<Vec3>& f = engine_.force();

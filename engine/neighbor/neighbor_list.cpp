@@ -8,7 +8,9 @@ namespace deli {
 
 namespace {
 // Image code of a shift of (kx, ky, kz) periods, each in -1..1.
-constexpr int code_of(int kx, int ky, int kz) { return (kx + 1) + 3 * (ky + 1) + 9 * (kz + 1); }
+constexpr int code_of(int kx, int ky, int kz) {
+  return (kx + 1) + 3 * (ky + 1) + 9 * (kz + 1);
+}
 constexpr int kNoShift = code_of(0, 0, 0);
 }  // namespace
 
@@ -103,7 +105,8 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
           }
           if (!inside_grid) continue;
           const int cell = (k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0];
-          around.emplace_back(cell, grid.shifted ? code_of(wraps[0], wraps[1], wraps[2]) : kNoShift);
+          around.emplace_back(cell,
+                              grid.shifted ? code_of(wraps[0], wraps[1], wraps[2]) : kNoShift);
         }
     if (!grid.shifted) {
       // Several offsets can land on one cell: keep each once.
@@ -154,8 +157,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     for (int a = 0; a < 3; ++a) {
       // Non-negative by construction (wrapped, or above the open-axis minimum): truncation
       // is the floor.
-      k[a] = std::clamp(static_cast<int>((inside[i][a] - grid.origin[a]) * grid.inverse_width[a]), 0,
-                        grid.count[a] - 1);
+      k[a] = std::clamp(static_cast<int>((inside[i][a] - grid.origin[a]) * grid.inverse_width[a]),
+                        0, grid.count[a] - 1);
     }
     cell_of[i] = (k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0];
     ++cell_start[cell_of[i] + 1];

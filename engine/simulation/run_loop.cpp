@@ -35,7 +35,8 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     for (Observer* o : observers) o->on_finish(system);
     throw;
   }
-  stats.loop_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.loop_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.neighbor_builds = integrator.forces().neighbors().builds() - builds_before;
   for (Observer* o : observers) o->on_finish(system);
   return stats;

@@ -17,7 +17,8 @@ Vec3 total_momentum(const Particles& p) {
 }
 
 ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation) {
-  if (!evaluation.tallied) throw std::logic_error("thermo asked of a force evaluation without energies");
+  if (!evaluation.tallied)
+    throw std::logic_error("thermo asked of a force evaluation without energies");
   ThermoSample s;
   s.step = system.step;
   s.time = system.time;

@@ -36,7 +36,8 @@ namespace {
 // Hash grid of placed beads for the min-distance test during chain growth.
 class OccupancyGrid {
  public:
-  OccupancyGrid(const Box& box, double min_distance) : box_(box), min2_(min_distance * min_distance) {
+  OccupancyGrid(const Box& box, double min_distance)
+      : box_(box), min2_(min_distance * min_distance) {
     for (int a = 0; a < 3; ++a) {
       count_[a] = std::max(1, static_cast<int>(box.length()[a] / min_distance));
     }

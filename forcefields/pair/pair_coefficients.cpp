@@ -17,7 +17,9 @@ void PairCoefficients::set(int a, int b, double epsilon, double sigma,
   given_[a * type_count_ + b] = given_[b * type_count_ + a] = true;
 }
 
-bool PairCoefficients::is_set(int a, int b) const { return given_[a * type_count_ + b]; }
+bool PairCoefficients::is_set(int a, int b) const {
+  return given_[a * type_count_ + b];
+}
 
 std::vector<int> PairCoefficients::resolve(Mixing mixing) {
   std::vector<int> missing;

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <numbers>
+#include <sstream>
 
 #include "bonded/bond_force.hpp"
 #include "bonded/bond_styles.hpp"
@@ -27,7 +27,8 @@ std::array<bool, 3> read_boundary(TomlTable& t) {
   std::array<bool, 3> periodic{true, true, true};
   if (!t.has("boundary")) return periodic;
   const std::string b = t.string("boundary");
-  if (b.size() != 3) t.fail("expected three letters, p (periodic) or f (open), e.g. \"ppf\"", "boundary");
+  if (b.size() != 3)
+    t.fail("expected three letters, p (periodic) or f (open), e.g. \"ppf\"", "boundary");
   for (int a = 0; a < 3; ++a) {
     if (b[a] != 'p' && b[a] != 'f') {
       t.fail(std::string("letter '") + b[a] + "' is neither p (periodic) nor f (open)", "boundary");
@@ -39,7 +40,8 @@ std::array<bool, 3> read_boundary(TomlTable& t) {
 
 double positive(TomlTable& t, const std::string& key, std::optional<double> fallback = {}) {
   const double v = t.number(key, fallback);
-  if (!(v > 0.0) || !std::isfinite(v)) t.fail("must be a positive number, found " + std::to_string(v), key);
+  if (!(v > 0.0) || !std::isfinite(v))
+    t.fail("must be a positive number, found " + std::to_string(v), key);
   return v;
 }
 
@@ -62,7 +64,8 @@ System read_system(TomlTable& t, const fs::path& input_dir) {
     if (data.is_relative()) data = input_dir / data;
     LammpsDataOptions options;
     options.periodic = periodic;
-    options.atom_style = t.choice("atom_style", {"", "atomic", "bond", "angle", "molecular", "full"}, "");
+    options.atom_style =
+        t.choice("atom_style", {"", "atomic", "bond", "angle", "molecular", "full"}, "");
     if (!fs::exists(data)) t.fail("file " + data.string() + " does not exist", "data");
     system = read_lammps_data(data.string(), options).system;
   } else if (lattice) {
@@ -71,7 +74,8 @@ System read_system(TomlTable& t, const fs::path& input_dir) {
     f.density = positive(*lattice, "density");
     const auto cells = lattice->numbers("cells", 3);
     for (int a = 0; a < 3; ++a) {
-      if (cells[a] < 1 || cells[a] != std::floor(cells[a])) lattice->fail("cells must be positive integers", "cells");
+      if (cells[a] < 1 || cells[a] != std::floor(cells[a]))
+        lattice->fail("cells must be positive integers", "cells");
       f.cells[a] = static_cast<int>(cells[a]);
     }
     f.mass = positive(*lattice, "mass", 1.0);
@@ -106,7 +110,8 @@ void read_velocities(TomlTable& root, System& system) {
   assign_maxwell_boltzmann(system.particles, temperature, static_cast<std::uint64_t>(seed));
 }
 
-int type_index(TomlTable& t, const std::string& key, double value, int count, const std::string& what) {
+int type_index(TomlTable& t, const std::string& key, double value, int count,
+               const std::string& what) {
   if (value != std::floor(value) || value < 1 || value > count) {
     t.fail(what + " type " + std::to_string(value) + " does not exist: the system has " +
                std::to_string(count) + " " + what + " type(s), numbered from 1",
@@ -115,7 +120,8 @@ int type_index(TomlTable& t, const std::string& key, double value, int count, co
   return static_cast<int>(value) - 1;
 }
 
-std::vector<ScaledPair> scaled_special_pairs(const System& system, const std::array<double, 3>& factors) {
+std::vector<ScaledPair> scaled_special_pairs(const System& system,
+                                             const std::array<double, 3>& factors) {
   std::vector<ScaledPair> scaled;
   const SpecialPairs special = find_special_pairs(system.topology, system.particles.size());
   for (int s = 0; s < 3; ++s) {
@@ -133,7 +139,9 @@ void read_pair(TomlTable& t, const System& system, ForceField& ff) {
   const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
   const bool shift = wca ? true : t.boolean("shift", false);
   const Mixing mixing =
-      t.choice("mixing", {"arithmetic", "geometric"}, "arithmetic") == "arithmetic" ? Mixing::arithmetic : Mixing::geometric;
+      t.choice("mixing", {"arithmetic", "geometric"}, "arithmetic") == "arithmetic"
+          ? Mixing::arithmetic
+          : Mixing::geometric;
   PairCoefficients coeffs(types, global_cutoff);
   for (TomlTable& c : t.tables("coeffs")) {
     const auto pair = c.numbers("types", 2);
@@ -199,8 +207,9 @@ void read_bond(std::optional<TomlTable> t, const System& system, ForceField& ff)
   const int types = system.topology.bond_types;
   if (!t) {
     if (!system.topology.bonds.empty()) {
-      throw InputError("the system has bonds but the input has no [forcefield.bond] table; "
-                       "add one with style = \"harmonic\" or \"fene\" and its coeffs");
+      throw InputError(
+          "the system has bonds but the input has no [forcefield.bond] table; "
+          "add one with style = \"harmonic\" or \"fene\" and its coeffs");
     }
     return;
   }
@@ -212,7 +221,8 @@ void read_bond(std::optional<TomlTable> t, const System& system, ForceField& ff)
     ff.add(std::make_unique<BondForce<HarmonicBond>>("bond", std::move(params)));
   } else {
     auto params = by_type<FeneBond>(*t, types, "bond", [](TomlTable& c) {
-      return FeneBond::Params{c.number("k"), positive(c, "r0"), c.number("epsilon"), positive(c, "sigma")};
+      return FeneBond::Params{c.number("k"), positive(c, "r0"), c.number("epsilon"),
+                              positive(c, "sigma")};
     });
     ff.add(std::make_unique<BondForce<FeneBond>>("bond", std::move(params)));
   }
@@ -222,8 +232,9 @@ void read_bond(std::optional<TomlTable> t, const System& system, ForceField& ff)
 void read_angle(std::optional<TomlTable> t, const System& system, ForceField& ff) {
   if (!t) {
     if (!system.topology.angles.empty()) {
-      throw InputError("the system has angles but the input has no [forcefield.angle] table; "
-                       "add one with style = \"harmonic\" and its coeffs");
+      throw InputError(
+          "the system has angles but the input has no [forcefield.angle] table; "
+          "add one with style = \"harmonic\" and its coeffs");
     }
     return;
   }
@@ -286,8 +297,8 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   try {
     doc = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
-    throw InputError(located(path, static_cast<long>(e.source().begin.line),
-                             std::string(e.description())));
+    throw InputError(
+        located(path, static_cast<long>(e.source().begin.line), std::string(e.description())));
   }
   RunInput input;
   input.path = path;

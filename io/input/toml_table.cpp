@@ -7,13 +7,20 @@ namespace deli {
 namespace {
 std::string type_name(const toml::node& node) {
   switch (node.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date or time";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    default:
+      return "a date or time";
   }
 }
 }  // namespace
@@ -21,7 +28,9 @@ std::string type_name(const toml::node& node) {
 TomlTable::TomlTable(const toml::table& table, std::string file, std::string path)
     : table_(&table), file_(std::move(file)), path_(std::move(path)) {}
 
-long TomlTable::line() const { return static_cast<long>(table_->source().begin.line); }
+long TomlTable::line() const {
+  return static_cast<long>(table_->source().begin.line);
+}
 
 bool TomlTable::has(const std::string& key) const {
   used_.insert(key);
@@ -35,9 +44,11 @@ std::string TomlTable::key_path(const std::string& key) const {
 void TomlTable::fail(const std::string& message, const std::string& key) const {
   long where = line();
   if (!key.empty()) {
-    if (const toml::node* node = table_->get(key)) where = static_cast<long>(node->source().begin.line);
+    if (const toml::node* node = table_->get(key))
+      where = static_cast<long>(node->source().begin.line);
   }
-  const std::string subject = key.empty() ? (path_.empty() ? "" : "[" + path_ + "]: ") : "'" + key_path(key) + "': ";
+  const std::string subject =
+      key.empty() ? (path_.empty() ? "" : "[" + path_ + "]: ") : "'" + key_path(key) + "': ";
   throw InputError(located(file_, where, subject + message));
 }
 
@@ -58,7 +69,8 @@ double TomlTable::number(const std::string& key, std::optional<double> fallback)
   used_.insert(key);
   if (!table_->contains(key) && fallback) return *fallback;
   const toml::node& node = require(key);
-  if (auto v = node.value<double>(); v && (node.is_floating_point() || node.is_integer())) return *v;
+  if (auto v = node.value<double>(); v && (node.is_floating_point() || node.is_integer()))
+    return *v;
   fail("expected a number, found " + type_name(node), key);
 }
 
@@ -137,7 +149,8 @@ std::vector<TomlTable> TomlTable::tables(const std::string& key) {
   for (std::size_t k = 0; k < array->size(); ++k) {
     const toml::node& element = *array->get(k);
     if (!element.is_table()) fail("element " + std::to_string(k + 1) + " is not a table", key);
-    result.emplace_back(*element.as_table(), file_, key_path(key) + "[" + std::to_string(k + 1) + "]");
+    result.emplace_back(*element.as_table(), file_,
+                        key_path(key) + "[" + std::to_string(k + 1) + "]");
   }
   return result;
 }

@@ -19,8 +19,10 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
 }
 
 ThermoCsv::ThermoCsv(const std::string& path) : path_(path), out_(path) {
-  if (!out_) throw InputError(path + ": cannot open the thermo file for writing; check the "
-                              "directory exists and is writable");
+  if (!out_)
+    throw InputError(path +
+                     ": cannot open the thermo file for writing; check the "
+                     "directory exists and is writable");
   out_.precision(17);
 }
 
@@ -31,9 +33,9 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
     out_ << '\n';
     header_written_ = true;
   }
-  out_ << s.step << ',' << s.time << ',' << s.kinetic << ',' << s.potential << ',' << s.total
-       << ',' << s.temperature << ',' << s.pressure << ',' << s.momentum.x << ','
-       << s.momentum.y << ',' << s.momentum.z;
+  out_ << s.step << ',' << s.time << ',' << s.kinetic << ',' << s.potential << ',' << s.total << ','
+       << s.temperature << ',' << s.pressure << ',' << s.momentum.x << ',' << s.momentum.y << ','
+       << s.momentum.z;
   for (double e : s.term_energies) out_ << ',' << e;
   out_ << '\n';
   out_.flush();

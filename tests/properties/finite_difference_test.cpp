@@ -18,14 +18,17 @@ struct Case {
   std::string name;
   std::string toml;
 };
-void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.name;
+}
 
 std::string chains_input(const std::string& boundary, const std::string& forcefield,
                          bool angles = true) {
   return "[system]\nboundary = \"" + boundary +
          "\"\n[system.chains]\ncount = 12\nlength = 8\ndensity = 0.55\nbond_length = 0.97\n"
-         "min_distance = 0.85\nangles = " + std::string(angles ? "true" : "false") + "\nseed = 7\n" +
-         forcefield + "[integrator]\ntimestep = 0.005\n[run]\nsteps = 0\n";
+         "min_distance = 0.85\nangles = " +
+         std::string(angles ? "true" : "false") + "\nseed = 7\n" + forcefield +
+         "[integrator]\ntimestep = 0.005\n[run]\nsteps = 0\n";
 }
 
 const std::string kPairLj =
@@ -48,7 +51,8 @@ std::vector<Case> cases() {
   return {
       {"lj_harmonic_angle_periodic", chains_input("ppp", "[forcefield]\n" + kPairLj + kBondedTail)},
       {"lj_harmonic_angle_open", chains_input("fff", "[forcefield]\n" + kPairLj + kBondedTail)},
-      {"lj_shifted_mixed_boundary", chains_input("ppf", "[forcefield]\n" + lj_shifted + kBondedTail)},
+      {"lj_shifted_mixed_boundary",
+       chains_input("ppf", "[forcefield]\n" + lj_shifted + kBondedTail)},
       {"wca_fene_kremer_grest", chains_input("ppp", "[forcefield]\n" + wca + kFeneTail, false)},
       {"lj_special_scaled",
        chains_input("ppp", "[forcefield]\n[forcefield.special_bonds]\nlj = [0.0, 0.5, 0.8]\n" +
@@ -95,7 +99,8 @@ TEST_P(FiniteDifference, VirialIsMinusVolumeDerivative) {
     return evaluate(copy).evaluation.potential;
   };
   const double h = 1e-6;
-  const double dlns = (energy_scaled(1 + h) - energy_scaled(1 - h)) / (std::log(1 + h) - std::log(1 - h));
+  const double dlns =
+      (energy_scaled(1 + h) - energy_scaled(1 - h)) / (std::log(1 + h) - std::log(1 - h));
   EXPECT_NEAR(-dlns, w, 1e-6 * std::max(1.0, std::abs(w)));
 }
 

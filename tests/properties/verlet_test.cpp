@@ -35,7 +35,9 @@ EnergyRecord record_energy(RunInput input, double dt, double equilibration, doub
   verlet.setup(s);
   for (int n = 0; n < std::lround(equilibration / dt); ++n) verlet.step(s, true);
   const double atoms = static_cast<double>(s.particles.size());
-  auto energy = [&] { return (kinetic_energy(s.particles) + verlet.forces().last().potential) / atoms; };
+  auto energy = [&] {
+    return (kinetic_energy(s.particles) + verlet.forces().last().potential) / atoms;
+  };
   const double e0 = energy();
   EnergyRecord r;
   double st = 0, se = 0, stt = 0, ste = 0;

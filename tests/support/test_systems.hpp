@@ -23,11 +23,13 @@ inline Evaluated evaluate(const RunInput& input, double skin = 0.5) {
   list.set_exclusions({});
   Evaluated out;
   // Exclusions come from the topology exactly as the run does it.
-  const SpecialPairs special = find_special_pairs(input.system.topology, input.system.particles.size());
+  const SpecialPairs special =
+      find_special_pairs(input.system.topology, input.system.particles.size());
   std::vector<std::array<std::int32_t, 2>> excluded;
   for (int s = 0; s < 3; ++s) {
     if (input.force_field->special_lj[s] == 1.0) continue;
-    excluded.insert(excluded.end(), special.by_separation[s].begin(), special.by_separation[s].end());
+    excluded.insert(excluded.end(), special.by_separation[s].begin(),
+                    special.by_separation[s].end());
   }
   list.set_exclusions(excluded);
   list.build(input.system.particles.position, input.system.box);

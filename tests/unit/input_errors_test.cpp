@@ -52,17 +52,19 @@ TEST(InputErrors, ValidInputLoads) {
 }
 
 TEST(InputErrors, UnknownKeySuggestsTheClosest) {
-  EXPECT_THAT(error_of(replaced(kValid, "style", "styel")),
-              AllOf(HasSubstr("case.toml:7:"), HasSubstr("missing required key 'forcefield.pair.style'"),
-                    HasSubstr("found 'styel'")));
+  EXPECT_THAT(
+      error_of(replaced(kValid, "style", "styel")),
+      AllOf(HasSubstr("case.toml:7:"), HasSubstr("missing required key 'forcefield.pair.style'"),
+            HasSubstr("found 'styel'")));
   EXPECT_THAT(error_of(replaced(kValid, "[run]\n", "[run]\nstesp = 3\n")),
               AllOf(HasSubstr("case.toml:16:"), HasSubstr("unknown key 'run.stesp'"),
                     HasSubstr("did you mean 'steps'?")));
 }
 
 TEST(InputErrors, MissingRequiredKeyNamesIt) {
-  EXPECT_THAT(error_of(replaced(kValid, "timestep = 0.005", "")),
-              AllOf(HasSubstr("case.toml:12:"), HasSubstr("missing required key 'integrator.timestep'")));
+  EXPECT_THAT(
+      error_of(replaced(kValid, "timestep = 0.005", "")),
+      AllOf(HasSubstr("case.toml:12:"), HasSubstr("missing required key 'integrator.timestep'")));
 }
 
 TEST(InputErrors, WrongTypeSaysWhatWasFound) {
@@ -87,9 +89,10 @@ TEST(InputErrors, TomlSyntaxErrorHasItsLine) {
 }
 
 TEST(InputErrors, MissingLikePairCoefficients) {
-  EXPECT_THAT(error_of(replaced(kValid, "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]",
-                                "coeffs = []")),
-              AllOf(HasSubstr("no coefficients for atom type 1 with itself"), HasSubstr("case.toml:10:")));
+  EXPECT_THAT(
+      error_of(replaced(kValid, "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]",
+                        "coeffs = []")),
+      AllOf(HasSubstr("no coefficients for atom type 1 with itself"), HasSubstr("case.toml:10:")));
 }
 
 TEST(InputErrors, PairTypeOutOfRange) {
@@ -98,8 +101,9 @@ TEST(InputErrors, PairTypeOutOfRange) {
 }
 
 TEST(InputErrors, MissingDataFileNamed) {
-  EXPECT_THAT(error_of(replaced(kValid, "[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]",
-                                "data = \"no_such.data\"")),
+  EXPECT_THAT(error_of(replaced(
+                  kValid, "[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]",
+                  "data = \"no_such.data\"")),
               AllOf(HasSubstr("no_such.data does not exist"), HasSubstr("case.toml:2:")));
 }
 
@@ -114,8 +118,9 @@ TEST(InputErrors, BoxSmallerThanTwiceTheCutoff) {
 }
 
 TEST(InputErrors, BondsWithoutBondStyle) {
-  const std::string chains = replaced(kValid, "[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]",
-                                      "[system.chains]\ncount = 4\nlength = 10\ndensity = 0.3\nseed = 3");
+  const std::string chains =
+      replaced(kValid, "[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]",
+               "[system.chains]\ncount = 4\nlength = 10\ndensity = 0.3\nseed = 3");
   EXPECT_THAT(error_of(chains), HasSubstr("no [forcefield.bond] table"));
 }
 

@@ -1,12 +1,12 @@
 // The Verlet list holds exactly the pairs an O(N^2) minimum-image search finds, across
 // periodic boundaries, in boxes down to twice the cutoff, and after particles move.
+#include "neighbor/neighbor_list.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 #include <set>
-
-#include "neighbor/neighbor_list.hpp"
 
 namespace deli {
 namespace {
@@ -55,7 +55,9 @@ struct BoxCase {
   std::array<bool, 3> periodic;
   std::size_t n;
 };
-void PrintTo(const BoxCase& c, std::ostream* os) { *os << c.name; }
+void PrintTo(const BoxCase& c, std::ostream* os) {
+  *os << c.name;
+}
 
 class NeighborListMatchesBruteForce : public ::testing::TestWithParam<BoxCase> {};
 
