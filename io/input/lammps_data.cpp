@@ -100,12 +100,6 @@ bool parse_int(std::string_view s, std::int64_t& value) {
   return !s.empty() && ec == std::errc() && ptr == end;
 }
 
-std::string format_double(double v) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", v);
-  return buffer;
-}
-
 struct Count {
   std::int64_t value = 0;
   long line = 0;  // 0 when the header does not mention it
