@@ -6,15 +6,12 @@
 #include <numbers>
 #include <sstream>
 
-#include "bonded/bond_force.hpp"
 #include "bonded/bond_styles.hpp"
 #include "bonded/harmonic_angle.hpp"
 #include "core/error.hpp"
 #include "input/lammps_data.hpp"
 #include "input/toml_table.hpp"
-#include "pair/lennard_jones.hpp"
 #include "pair/pair_coefficients.hpp"
-#include "pair/pair_force.hpp"
 #include "system/builders.hpp"
 
 namespace deli {
@@ -120,20 +117,12 @@ int type_index(TomlTable& t, const std::string& key, double value, int count,
   return static_cast<int>(value) - 1;
 }
 
-std::vector<ScaledPair> scaled_special_pairs(const System& system,
-                                             const std::array<double, 3>& factors) {
-  std::vector<ScaledPair> scaled;
-  const SpecialPairs special = find_special_pairs(system.topology, system.particles.size());
-  for (int s = 0; s < 3; ++s) {
-    if (factors[s] == 0.0 || factors[s] == 1.0) continue;
-    for (const auto& [i, j] : special.by_separation[s]) scaled.push_back({i, j, factors[s]});
-  }
-  return scaled;
-}
-
-void read_pair(TomlTable& t, const System& system, ForceField& ff) {
+std::optional<PairSpec> read_pair(TomlTable& t, const System& system) {
   const std::string style = t.choice("style", {"lj/cut", "wca", "none"});
-  if (style == "none") return t.finish();
+  if (style == "none") {
+    t.finish();
+    return std::nullopt;
+  }
   const int types = static_cast<int>(system.atom_types.size());
   const bool wca = style == "wca";
   const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
@@ -168,17 +157,11 @@ void read_pair(TomlTable& t, const System& system, ForceField& ff) {
            "coeffs");
   }
   t.finish();
-  std::vector<LennardJones::Params> table;
-  double max_cutoff = 0.0;
-  for (int a = 0; a < types; ++a) {
-    for (int b = 0; b < types; ++b) {
-      const PairCoefficient& c = coeffs.at(a, b);
-      table.push_back(LennardJones::make(c.epsilon, c.sigma, c.cutoff, shift));
-      max_cutoff = std::max(max_cutoff, c.cutoff);
-    }
-  }
-  ff.add(std::make_unique<PairForce<LennardJones>>("pair", types, std::move(table), max_cutoff,
-                                                   scaled_special_pairs(system, ff.special_lj)));
+  PairSpec spec;
+  spec.style = wca ? PairSpec::Style::wca : PairSpec::Style::lj_cut;
+  spec.shift = shift;
+  spec.coefficients = std::move(coeffs);
+  return spec;
 }
 
 template <class Style>
@@ -203,7 +186,7 @@ std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::
   return params;
 }
 
-void read_bond(std::optional<TomlTable> t, const System& system, ForceField& ff) {
+std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& system) {
   const int types = system.topology.bond_types;
   if (!t) {
     if (!system.topology.bonds.empty()) {
@@ -211,62 +194,64 @@ void read_bond(std::optional<TomlTable> t, const System& system, ForceField& ff)
           "the system has bonds but the input has no [forcefield.bond] table; "
           "add one with style = \"harmonic\" or \"fene\" and its coeffs");
     }
-    return;
+    return std::nullopt;
   }
+  BondSpec spec;
   const std::string style = t->choice("style", {"harmonic", "fene"});
   if (style == "harmonic") {
-    auto params = by_type<HarmonicBond>(*t, types, "bond", [](TomlTable& c) {
+    spec.style = BondSpec::Style::harmonic;
+    spec.harmonic = by_type<HarmonicBond>(*t, types, "bond", [](TomlTable& c) {
       return HarmonicBond::Params{c.number("k"), positive(c, "r0")};
     });
-    ff.add(std::make_unique<BondForce<HarmonicBond>>("bond", std::move(params)));
   } else {
-    auto params = by_type<FeneBond>(*t, types, "bond", [](TomlTable& c) {
+    spec.style = BondSpec::Style::fene;
+    spec.fene = by_type<FeneBond>(*t, types, "bond", [](TomlTable& c) {
       return FeneBond::Params{c.number("k"), positive(c, "r0"), c.number("epsilon"),
                               positive(c, "sigma")};
     });
-    ff.add(std::make_unique<BondForce<FeneBond>>("bond", std::move(params)));
   }
   t->finish();
+  return spec;
 }
 
-void read_angle(std::optional<TomlTable> t, const System& system, ForceField& ff) {
+std::optional<AngleSpec> read_angle(std::optional<TomlTable> t, const System& system) {
   if (!t) {
     if (!system.topology.angles.empty()) {
       throw InputError(
           "the system has angles but the input has no [forcefield.angle] table; "
           "add one with style = \"harmonic\" and its coeffs");
     }
-    return;
+    return std::nullopt;
   }
   t->choice("style", {"harmonic"});
-  auto params = by_type<HarmonicAngle>(*t, system.topology.angle_types, "angle", [](TomlTable& c) {
-    return HarmonicAngle::Params{c.number("k"), c.number("theta0") * std::numbers::pi / 180.0};
-  });
+  AngleSpec spec;
+  spec.harmonic =
+      by_type<HarmonicAngle>(*t, system.topology.angle_types, "angle", [](TomlTable& c) {
+        return HarmonicAngle::Params{c.number("k"), c.number("theta0") * std::numbers::pi / 180.0};
+      });
   t->finish();
-  ff.add(std::make_unique<HarmonicAngle>(std::move(params)));
+  return spec;
 }
 
-std::unique_ptr<ForceField> read_force_field(TomlTable& root, const System& system) {
-  auto ff = std::make_unique<ForceField>();
+ForceFieldSpec read_force_field(TomlTable& root, const System& system) {
+  ForceFieldSpec spec;
   auto t = root.table("forcefield");
   if (!t) root.fail("missing the [forcefield] table");
   if (auto special = t->table("special_bonds")) {
     const auto lj = special->numbers("lj", 3);
     for (int s = 0; s < 3; ++s) {
       if (lj[s] < 0 || lj[s] > 1) special->fail("factors must lie in [0, 1]", "lj");
-      ff->special_lj[s] = lj[s];
+      spec.special_lj[s] = lj[s];
     }
     special->finish();
-  } else {
-    ff->special_lj = {0.0, 0.0, 0.0};  // LAMMPS' default
   }
   auto pair = t->table("pair");
   if (!pair) t->fail("missing [forcefield.pair] (style = \"none\" for no pair interactions)");
-  read_pair(*pair, system, *ff);
-  read_bond(t->table("bond"), system, *ff);
-  read_angle(t->table("angle"), system, *ff);
+  spec.pair = read_pair(*pair, system);
+  spec.bond = read_bond(t->table("bond"), system);
+  spec.angle = read_angle(t->table("angle"), system);
   t->finish();
-  return ff;
+  return spec;
 }
 
 void check_box_fits_cutoff(const RunInput& input, const TomlTable& root) {
@@ -310,7 +295,8 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   input.system = read_system(*system, dir);
   system->finish();
   read_velocities(root, input.system);
-  input.force_field = read_force_field(root, input.system);
+  input.force_field_spec = read_force_field(root, input.system);
+  input.force_field = build_force_field(input.force_field_spec, input.system);
 
   if (auto n = root.table("neighbor")) {
     input.skin = n->number("skin", 0.3);

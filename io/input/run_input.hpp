@@ -5,6 +5,7 @@
 #include <string>
 
 #include "force_field.hpp"
+#include "force_field_spec.hpp"
 #include "integrators/quickmin.hpp"
 #include "system/system.hpp"
 
@@ -19,7 +20,8 @@ struct ThermoOutputSpec {
 struct RunInput {
   std::string path;
   System system;
-  std::unique_ptr<ForceField> force_field;
+  ForceFieldSpec force_field_spec;
+  std::unique_ptr<ForceField> force_field;  // built from force_field_spec
   std::string integrator = "verlet";
   double timestep = 0.005;
   double skin = 0.3;

@@ -1,0 +1,61 @@
+#include "force_field_spec.hpp"
+
+#include <algorithm>
+
+#include "bonded/bond_force.hpp"
+#include "pair/lennard_jones.hpp"
+#include "pair/pair_force.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+double PairSpec::max_cutoff() const {
+  double cutoff = 0.0;
+  const int n = coefficients.type_count();
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) cutoff = std::max(cutoff, coefficients.at(a, b).cutoff);
+  }
+  return cutoff;
+}
+
+namespace {
+std::vector<ScaledPair> scaled_special_pairs(const System& system,
+                                             const std::array<double, 3>& factors) {
+  std::vector<ScaledPair> scaled;
+  const SpecialPairs special = find_special_pairs(system.topology, system.particles.size());
+  for (int s = 0; s < 3; ++s) {
+    if (factors[s] == 0.0 || factors[s] == 1.0) continue;
+    for (const auto& [i, j] : special.by_separation[s]) scaled.push_back({i, j, factors[s]});
+  }
+  return scaled;
+}
+}  // namespace
+
+std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const System& system) {
+  auto ff = std::make_unique<ForceField>();
+  ff->special_lj = spec.special_lj;
+  if (spec.pair) {
+    const PairCoefficients& c = spec.pair->coefficients;
+    std::vector<LennardJones::Params> table;
+    for (int a = 0; a < c.type_count(); ++a) {
+      for (int b = 0; b < c.type_count(); ++b) {
+        const PairCoefficient& p = c.at(a, b);
+        table.push_back(LennardJones::make(p.epsilon, p.sigma, p.cutoff, spec.pair->shift));
+      }
+    }
+    ff->add(std::make_unique<PairForce<LennardJones>>(
+        "pair", c.type_count(), std::move(table), spec.pair->max_cutoff(),
+        scaled_special_pairs(system, spec.special_lj)));
+  }
+  if (spec.bond) {
+    if (spec.bond->style == BondSpec::Style::harmonic) {
+      ff->add(std::make_unique<BondForce<HarmonicBond>>("bond", spec.bond->harmonic));
+    } else {
+      ff->add(std::make_unique<BondForce<FeneBond>>("bond", spec.bond->fene));
+    }
+  }
+  if (spec.angle) ff->add(std::make_unique<HarmonicAngle>(spec.angle->harmonic));
+  return ff;
+}
+
+}  // namespace deli

@@ -1,0 +1,49 @@
+#pragma once
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bonded/bond_styles.hpp"
+#include "bonded/harmonic_angle.hpp"
+#include "force_field.hpp"
+#include "pair/pair_coefficients.hpp"
+
+namespace deli {
+
+struct System;
+
+// The force field as the user specified it, fully resolved (mixing applied, every type
+// covered): what deli builds its force terms from, and what the OpenMM and LAMMPS
+// bridges translate, so that all three engines see the same model.
+struct PairSpec {
+  enum class Style { lj_cut, wca };
+  Style style = Style::lj_cut;
+  bool shift = false;
+  PairCoefficients coefficients{1, 0.0};  // per type pair, cutoffs included
+  double max_cutoff() const;
+};
+
+struct BondSpec {
+  enum class Style { harmonic, fene };
+  Style style = Style::harmonic;
+  std::vector<HarmonicBond::Params> harmonic;  // by bond type
+  std::vector<FeneBond::Params> fene;
+};
+
+struct AngleSpec {
+  std::vector<HarmonicAngle::Params> harmonic;  // by angle type; theta0 in radians
+};
+
+struct ForceFieldSpec {
+  std::array<double, 3> special_lj{0.0, 0.0, 0.0};  // LAMMPS special_bonds lj 1-2 1-3 1-4
+  std::optional<PairSpec> pair;
+  std::optional<BondSpec> bond;
+  std::optional<AngleSpec> angle;
+};
+
+std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const System& system);
+
+}  // namespace deli
