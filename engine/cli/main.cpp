@@ -16,6 +16,9 @@ constexpr const char* kUsage =
     "  run [INPUT]               run a simulation (no INPUT: the default input,\n"
     "                            " DELI_DEFAULT_INPUT
     ")\n"
+    "  validate INPUT [--engine openmm|lammps|all] [--platform reference|cpu] [--steps N]\n"
+    "                            compare energies, forces, virial and an N-step (100)\n"
+    "                            NVE trajectory with OpenMM and LAMMPS in-process\n"
     "  write-data INPUT FILE     write the system INPUT builds as a LAMMPS data file\n"
     "\n"
     "options:\n"
@@ -38,6 +41,7 @@ int main(int argc, char** argv) {
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     if (args[0] == "run") return deli::command_run(rest);
     if (args[0] == "write-data") return deli::command_write_data(rest);
+    if (args[0] == "validate") return deli::command_validate(rest);
     std::fprintf(stderr, "deli: unknown command '%s'; run 'deli --help' for the commands\n",
                  args[0].c_str());
     return 2;

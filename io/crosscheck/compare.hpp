@@ -1,0 +1,48 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "crosscheck/evaluation.hpp"
+
+namespace deli {
+
+// How closely another engine must agree with deli. Relative differences are taken
+// against the larger magnitude of the two values.
+struct Tolerances {
+  double energy_relative;  // each term and the total
+  double force_absolute;   // every force component, epsilon/sigma
+  double virial_relative;
+  double position_absolute;  // after the trajectory, sigma
+};
+
+// OpenMM's Reference platform and LAMMPS compute in double precision: they agree with each
+// other to about 1e-14 in energy and 1e-12 in forces, and deli must do as well. The virial
+// is a sum of terms about ten times its size and of both signs, and LAMMPS hands it over
+// as a pressure (divided, then multiplied back by 3V): 1e-10. OpenMM has no virial: it is
+// a central difference of the energy under scaling (error about 1e-9 in double, 1e-4 in
+// single precision). The CPU platform computes forces in single precision.
+Tolerances double_precision_tolerances(bool numeric_virial);
+Tolerances single_precision_tolerances();
+
+struct Check {
+  std::string engine, quantity;
+  double deli_value = 0, other_value = 0;  // for energies and the virial
+  double difference = 0;                   // relative or absolute, as `tolerance`
+  double tolerance = 0;
+  std::string where;  // atom id, for forces and positions
+  bool within() const { return difference <= tolerance; }
+};
+
+double relative_difference(double a, double b);
+
+// Term by term (matched by name), total, largest force component difference, virial.
+std::vector<Check> compare_evaluations(const EngineEvaluation& deli, const EngineEvaluation& other,
+                                       const Tolerances& tolerances,
+                                       const std::vector<std::int64_t>& ids);
+Check compare_positions(const std::string& engine, const std::vector<Vec3>& deli,
+                        const std::vector<Vec3>& other, const Tolerances& tolerances,
+                        const std::vector<std::int64_t>& ids, int steps);
+
+}  // namespace deli

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/vec3.hpp"
+
+namespace deli {
+
+// One engine's energies, forces and virial for the same configuration, forces indexed
+// like deli's particles. Energy terms are named as deli names them (pair, bond, angle).
+struct EngineEvaluation {
+  std::string engine;
+  std::vector<std::string> term_names;
+  std::vector<double> term_energies;
+  double potential = 0.0;
+  std::vector<Vec3> force;
+  std::optional<double> virial;  // trace of sum r_ij (x) f_ij
+};
+
+// A model the other engine cannot express (e.g. OpenMM with mixed periodicity).
+class UnsupportedModel : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace deli

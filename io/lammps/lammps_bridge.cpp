@@ -1,0 +1,147 @@
+#include "lammps/lammps_bridge.hpp"
+
+#include <library.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+#include <unordered_map>
+
+#include "input/lammps_data.hpp"
+
+namespace deli {
+
+namespace {
+std::string number(double v) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  return buffer;
+}
+}  // namespace
+
+LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin) {
+  has_bonds_ = !system.topology.bonds.empty();
+  has_angles_ = !system.topology.angles.empty();
+  const std::string style = has_angles_ ? "angle" : has_bonds_ ? "bond" : "atomic";
+  data_path_ = (std::filesystem::temp_directory_path() /
+                ("deli-validate-" + std::to_string(getpid()) + ".data"))
+                   .string();
+  write_lammps_data(system, data_path_, style, "deli validate");
+  ids_ = system.particles.id;
+
+  const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
+  lammps_ = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
+
+  std::string boundary;
+  for (int a = 0; a < 3; ++a) boundary += system.box.periodic(a) ? "p " : "s ";
+  command("units lj");
+  command("atom_style " + style);
+  command("atom_modify map array");
+  command("boundary " + boundary);
+  command("read_data " + data_path_);
+  command("neighbor " + number(skin) + " bin");
+  command("neigh_modify delay 0 every 1 check yes");
+  command("special_bonds lj " + number(spec.special_lj[0]) + " " + number(spec.special_lj[1]) +
+          " " + number(spec.special_lj[2]));
+  if (spec.pair) {
+    const PairCoefficients& c = spec.pair->coefficients;
+    command("pair_style lj/cut " + number(spec.pair->max_cutoff()));
+    for (int a = 0; a < c.type_count(); ++a) {
+      for (int b = a; b < c.type_count(); ++b) {
+        const PairCoefficient& p = c.at(a, b);
+        command("pair_coeff " + std::to_string(a + 1) + " " + std::to_string(b + 1) + " " +
+                number(p.epsilon) + " " + number(p.sigma) + " " + number(p.cutoff));
+      }
+    }
+    command(std::string("pair_modify shift ") + (spec.pair->shift ? "yes" : "no"));
+  } else {
+    command("pair_style zero 1.0");
+    command("pair_coeff * *");
+  }
+  if (spec.bond) {
+    if (spec.bond->style == BondSpec::Style::harmonic) {
+      command("bond_style harmonic");
+      for (std::size_t t = 0; t < spec.bond->harmonic.size(); ++t) {
+        const HarmonicBond::Params& p = spec.bond->harmonic[t];
+        command("bond_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " + number(p.r0));
+      }
+    } else {
+      command("bond_style fene");
+      for (std::size_t t = 0; t < spec.bond->fene.size(); ++t) {
+        const FeneBond::Params& p = spec.bond->fene[t];
+        command("bond_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " + number(p.r0) +
+                " " + number(p.epsilon) + " " + number(p.sigma));
+      }
+    }
+  }
+  if (spec.angle) {
+    command("angle_style harmonic");
+    for (std::size_t t = 0; t < spec.angle->harmonic.size(); ++t) {
+      const HarmonicAngle::Params& p = spec.angle->harmonic[t];
+      command("angle_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " +
+              number(p.theta0 * 180.0 / std::numbers::pi));
+    }
+  }
+  command("compute deli_virial all pressure NULL virial");
+  command("compute deli_unwrapped all property/atom xu yu zu");
+  command("thermo_style custom step pe evdwl ebond eangle press vol c_deli_virial");
+  command("thermo_modify norm no");
+}
+
+LammpsBridge::~LammpsBridge() {
+  if (lammps_) lammps_close(lammps_);
+  std::error_code ignored;
+  std::filesystem::remove(data_path_, ignored);
+}
+
+void LammpsBridge::command(const std::string& line) { lammps_command(lammps_, line.c_str()); }
+
+// A per-atom vector quantity, reordered from LAMMPS' local order to deli's indices.
+std::vector<Vec3> LammpsBridge::per_atom(const char* name, bool is_compute) {
+  const int n = lammps_extract_setting(lammps_, "nlocal");
+  const auto* tag = static_cast<const int*>(lammps_extract_atom(lammps_, "id"));
+  double** values = is_compute ? static_cast<double**>(lammps_extract_compute(
+                                     lammps_, name, LMP_STYLE_ATOM, LMP_TYPE_ARRAY))
+                               : static_cast<double**>(lammps_extract_atom(lammps_, name));
+  std::unordered_map<std::int64_t, Vec3> by_id;
+  for (int k = 0; k < n; ++k) by_id[tag[k]] = {values[k][0], values[k][1], values[k][2]};
+  std::vector<Vec3> out;
+  out.reserve(ids_.size());
+  for (std::int64_t id : ids_) out.push_back(by_id.at(id));
+  return out;
+}
+
+EngineEvaluation LammpsBridge::evaluate() {
+  command("run 0");
+  EngineEvaluation e;
+  e.engine = name();
+  e.term_names.push_back("pair");
+  e.term_energies.push_back(lammps_get_thermo(lammps_, "evdwl"));
+  if (has_bonds_) {
+    e.term_names.push_back("bond");
+    e.term_energies.push_back(lammps_get_thermo(lammps_, "ebond"));
+  }
+  if (has_angles_) {
+    e.term_names.push_back("angle");
+    e.term_energies.push_back(lammps_get_thermo(lammps_, "eangle"));
+  }
+  e.potential = lammps_get_thermo(lammps_, "pe");
+  // The virial pressure is W / (3 V) in LAMMPS' own (shrink-wrapped, if open) volume.
+  const double* virial_pressure = static_cast<const double*>(
+      lammps_extract_compute(lammps_, "deli_virial", LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR));
+  e.virial = *virial_pressure * 3.0 * lammps_get_thermo(lammps_, "vol");
+  e.force = per_atom("f", false);
+  return e;
+}
+
+std::vector<Vec3> LammpsBridge::run_nve(int steps, double dt) {
+  command("timestep " + number(dt));
+  command("fix deli_nve all nve");
+  command("run " + std::to_string(steps));
+  command("unfix deli_nve");
+  return per_atom("deli_unwrapped", true);
+}
+
+}  // namespace deli

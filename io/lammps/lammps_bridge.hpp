@@ -1,0 +1,42 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "crosscheck/evaluation.hpp"
+#include "force_field_spec.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// The same model in LAMMPS (`units lj`), through its C library in this process: the
+// system goes through a LAMMPS data file written by deli, the force field as LAMMPS
+// commands (lj/cut with every type pair given explicitly, pair_modify shift,
+// special_bonds lj, bond_style harmonic or fene, angle_style harmonic). Open axes are
+// shrink-wrapped (boundary s). Debian's LAMMPS is built without exceptions: any LAMMPS
+// error ends the process, so only models deli has already evaluated without error may be
+// handed over (the validate command evaluates deli first).
+class LammpsBridge {
+ public:
+  LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin);
+  ~LammpsBridge();
+  LammpsBridge(const LammpsBridge&) = delete;
+  LammpsBridge& operator=(const LammpsBridge&) = delete;
+
+  std::string name() const { return "LAMMPS"; }
+  // At the positions the bridge was built with.
+  EngineEvaluation evaluate();
+  // Unwrapped positions after `steps` of fix nve from the data file's state.
+  std::vector<Vec3> run_nve(int steps, double dt);
+
+ private:
+  void command(const std::string& line);
+  std::vector<Vec3> per_atom(const char* compute_or_name, bool is_compute);
+
+  void* lammps_ = nullptr;
+  std::string data_path_;
+  std::vector<std::int64_t> ids_;  // deli index -> atom id
+  bool has_bonds_ = false, has_angles_ = false;
+};
+
+}  // namespace deli

@@ -1,0 +1,39 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "crosscheck/evaluation.hpp"
+#include "force_field_spec.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// The same model in OpenMM, in this process: sigma = 1 nm, epsilon = 1 kJ/mol, m = 1 amu,
+// so tau = 1 ps and every number carries over unchanged. Pairs go through a
+// CustomNonbondedForce with per-type-pair tables (explicit and mixed coefficients, per
+// pair cutoffs, optional shift; no switching, no long-range correction), excluded exactly
+// where deli excludes them; harmonic bonds and angles through OpenMM's own forces (with
+// OpenMM's k = 2 K), FENE through a CustomBondForce.
+class OpenMMBridge {
+ public:
+  enum class Platform { reference, cpu };
+  // Throws UnsupportedModel for what OpenMM cannot express (mixed periodicity).
+  OpenMMBridge(const System& system, const ForceFieldSpec& spec, Platform platform);
+  ~OpenMMBridge();
+
+  std::string name() const;
+  EngineEvaluation evaluate(const std::vector<Vec3>& position);
+  // Positions after `steps` of NVE from (x, v) with VerletIntegrator. OpenMM's integrator
+  // is leapfrog: it is given v(-dt/2) = v - dt/2 F/m, after which its positions are those
+  // of velocity Verlet.
+  std::vector<Vec3> run_nve(const std::vector<Vec3>& position, const std::vector<Vec3>& velocity,
+                            int steps, double dt);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace deli
