@@ -46,8 +46,10 @@ ValidateOptions parse_options(const std::vector<std::string>& args, std::string&
       throw InputError("deli validate takes one INPUT; see deli --help");
     }
   }
-  if (input.empty()) throw InputError("usage: deli validate INPUT [--engine openmm|lammps|all] "
-                                      "[--platform reference|cpu] [--steps N]");
+  if (input.empty())
+    throw InputError(
+        "usage: deli validate INPUT [--engine openmm|lammps|all] "
+        "[--platform reference|cpu] [--steps N]");
   return options;
 }
 
@@ -70,8 +72,8 @@ int command_validate(const std::vector<std::string>& args) {
   const ValidateOptions options = parse_options(args, path);
   const RunInput input = load_run_input(path);
   const System& s = input.system;
-  std::printf("deli validate %s: %zu atoms, %zu bonds, %zu angles, boundary %c%c%c\n",
-              path.c_str(), s.particles.size(), s.topology.bonds.size(), s.topology.angles.size(),
+  std::printf("deli validate %s: %zu atoms, %zu bonds, %zu angles, boundary %c%c%c\n", path.c_str(),
+              s.particles.size(), s.topology.bonds.size(), s.topology.angles.size(),
               s.box.periodic(0) ? 'p' : 'f', s.box.periodic(1) ? 'p' : 'f',
               s.box.periodic(2) ? 'p' : 'f');
   const ValidationReport report = validate(input, options);
@@ -89,7 +91,8 @@ int command_validate(const std::vector<std::string>& args) {
     std::printf("\n");
   };
   for (std::size_t t = 0; t < report.deli.term_names.size(); ++t) {
-    row(report.deli.term_names[t], report.deli.term_energies[t], "energy " + report.deli.term_names[t]);
+    row(report.deli.term_names[t], report.deli.term_energies[t],
+        "energy " + report.deli.term_names[t]);
   }
   row("total", report.deli.potential, "energy total");
   if (report.deli.virial) {
@@ -110,8 +113,9 @@ int command_validate(const std::vector<std::string>& args) {
   const Check* worst = report.worst();
   if (report.passed()) {
     std::printf("\nagreement: every check within tolerance");
-    if (worst) std::printf(" (closest: %s %s at %.2g of its tolerance)", worst->engine.c_str(),
-                           worst->quantity.c_str(), worst->difference / worst->tolerance);
+    if (worst)
+      std::printf(" (closest: %s %s at %.2g of its tolerance)", worst->engine.c_str(),
+                  worst->quantity.c_str(), worst->difference / worst->tolerance);
     std::printf("\n");
     return 0;
   }

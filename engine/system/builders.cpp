@@ -14,7 +14,9 @@ System build_fcc(const FccLattice& lattice) {
   const auto [nx, ny, nz] = lattice.cells;
   System system;
   system.box = Box({0, 0, 0}, {nx * a, ny * a, nz * a}, {true, true, true});
-  system.atom_types = {AtomType{lattice.mass, 0.5}};
+  system.atom_types.clear();
+  for (double m : lattice.masses) system.atom_types.push_back(AtomType{m, 0.5});
+  const auto types = lattice.masses.size();
   const Vec3 basis[4] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
   Particles& p = system.particles;
   p.resize(static_cast<std::size_t>(4 * nx * ny * nz));
@@ -24,7 +26,8 @@ System build_fcc(const FccLattice& lattice) {
       for (int i = 0; i < nx; ++i)
         for (const Vec3& b : basis) {
           p.position[n] = Vec3{(i + b.x) * a, (j + b.y) * a, (k + b.z) * a};
-          p.mass[n] = lattice.mass;
+          p.type[n] = static_cast<int>(n % types);
+          p.mass[n] = lattice.masses[n % types];
           p.id[n] = static_cast<std::int64_t>(n + 1);
           ++n;
         }

@@ -6,12 +6,12 @@
 
 namespace deli {
 
-// Face-centred cubic lattice of identical atoms (type 0) filling a periodic cubic box of
-// cells^3 unit cells at the given number density.
+// Face-centred cubic lattice filling a periodic box of cells unit cells at the given number
+// density. Sites take the types 0, 1, ... in turn, with masses[type].
 struct FccLattice {
   double density = 0.8442;
   std::array<int, 3> cells{10, 10, 10};
-  double mass = 1.0;
+  std::vector<double> masses{1.0};  // one per type
 };
 System build_fcc(const FccLattice& lattice);
 

@@ -42,7 +42,8 @@ std::vector<Vec3> deli_trajectory(const RunInput& input, System system, int step
   for (int n = 0; n < steps; ++n) verlet.step(system, false);
   std::vector<Vec3> unwrapped;
   for (std::size_t i = 0; i < system.particles.size(); ++i) {
-    unwrapped.push_back(system.box.unwrapped(system.particles.position[i], system.particles.image[i]));
+    unwrapped.push_back(
+        system.box.unwrapped(system.particles.position[i], system.particles.image[i]));
   }
   return unwrapped;
 }
@@ -69,18 +70,18 @@ ValidationReport validate(const RunInput& input, const ValidateOptions& options)
 
   if (options.openmm) {
     try {
-      OpenMMBridge openmm(input.system, input.force_field_spec,
-                          options.openmm_cpu ? OpenMMBridge::Platform::cpu
-                                             : OpenMMBridge::Platform::reference);
-      const Tolerances tol = options.openmm_cpu ? single_precision_tolerances()
-                                                : double_precision_tolerances(true);
+      OpenMMBridge openmm(
+          input.system, input.force_field_spec,
+          options.openmm_cpu ? OpenMMBridge::Platform::cpu : OpenMMBridge::Platform::reference);
+      const Tolerances tol =
+          options.openmm_cpu ? single_precision_tolerances() : double_precision_tolerances(true);
       const std::vector<Vec3> x0 = unwrapped_start(input.system);
       report.others.push_back(openmm.evaluate(x0));
       const auto checks = compare_evaluations(report.deli, report.others.back(), tol, ids);
       report.checks.insert(report.checks.end(), checks.begin(), checks.end());
       if (options.trajectory_steps > 0) {
-        const auto x = openmm.run_nve(x0, input.system.particles.velocity,
-                                      options.trajectory_steps, input.timestep);
+        const auto x = openmm.run_nve(x0, input.system.particles.velocity, options.trajectory_steps,
+                                      input.timestep);
         report.checks.push_back(compare_positions(openmm.name(), deli_positions, x, tol, ids,
                                                   options.trajectory_steps));
       }

@@ -75,7 +75,18 @@ System read_system(TomlTable& t, const fs::path& input_dir) {
         lattice->fail("cells must be positive integers", "cells");
       f.cells[a] = static_cast<int>(cells[a]);
     }
-    f.mass = positive(*lattice, "mass", 1.0);
+    if (lattice->has("masses")) {
+      const auto count = lattice->integer("types", 1);
+      if (count < 1) lattice->fail("must be at least 1", "types");
+      f.masses = lattice->numbers("masses", static_cast<std::size_t>(count));
+      for (double m : f.masses) {
+        if (!(m > 0)) lattice->fail("masses must be positive", "masses");
+      }
+    } else {
+      const auto count = lattice->integer("types", 1);
+      if (count < 1) lattice->fail("must be at least 1", "types");
+      f.masses.assign(static_cast<std::size_t>(count), positive(*lattice, "mass", 1.0));
+    }
     lattice->finish();
     system = build_fcc(f);
     set_box_periodicity(system, periodic);

@@ -3,6 +3,7 @@
 #include <library.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -28,7 +29,19 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   data_path_ = (std::filesystem::temp_directory_path() /
                 ("deli-validate-" + std::to_string(getpid()) + ".data"))
                    .string();
-  write_lammps_data(system, data_path_, style, "deli validate");
+  // read_data drops atoms outside the box even along shrink-wrapped axes (a LAMMPS error,
+  // which ends the process): open axes get bounds around every atom.
+  System copy = system;
+  Vec3 lo = system.box.lo(), hi = system.box.hi();
+  for (const Vec3& x : system.particles.position) {
+    for (int a = 0; a < 3; ++a) {
+      if (system.box.periodic(a)) continue;
+      lo[a] = std::min(lo[a], x[a] - 1.0);
+      hi[a] = std::max(hi[a], x[a] + 1.0);
+    }
+  }
+  copy.box = Box(lo, hi, system.box.periodic());
+  write_lammps_data(copy, data_path_, style, "deli validate");
   ids_ = system.particles.id;
 
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
@@ -96,7 +109,9 @@ LammpsBridge::~LammpsBridge() {
   std::filesystem::remove(data_path_, ignored);
 }
 
-void LammpsBridge::command(const std::string& line) { lammps_command(lammps_, line.c_str()); }
+void LammpsBridge::command(const std::string& line) {
+  lammps_command(lammps_, line.c_str());
+}
 
 // A per-atom vector quantity, reordered from LAMMPS' local order to deli's indices.
 std::vector<Vec3> LammpsBridge::per_atom(const char* name, bool is_compute) {

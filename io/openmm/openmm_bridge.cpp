@@ -25,8 +25,7 @@ std::vector<Vec3> from_openmm(const std::vector<OpenMM::Vec3>& v) {
 // Force groups, one per deli term, so that each term's energy can be read alone.
 constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup = 3;
 
-const char* kLennardJones =
-    "4*eps*((sig/r)^12 - (sig/r)^6) - shift";
+const char* kLennardJones = "4*eps*((sig/r)^12 - (sig/r)^6) - shift";
 
 }  // namespace
 
@@ -47,7 +46,8 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
   Impl& m = *impl_;
   const auto& periodic = sys.box.periodic();
   if (periodic[0] != periodic[1] || periodic[1] != periodic[2]) {
-    throw UnsupportedModel("OpenMM boxes are periodic along all axes or none; this system mixes both");
+    throw UnsupportedModel(
+        "OpenMM boxes are periodic along all axes or none; this system mixes both");
   }
   m.periodic = periodic[0];
   m.box_length = sys.box.length();
@@ -92,8 +92,8 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     pair->setForceGroup(kPairGroup);
 
     // Special pairs: excluded from the nonbonded force; scaled ones come back as bonds.
-    auto* scaled = new OpenMM::CustomBondForce(
-        std::string("f*step(cut - r)*(") + kLennardJones + ")");
+    auto* scaled =
+        new OpenMM::CustomBondForce(std::string("f*step(cut - r)*(") + kLennardJones + ")");
     for (const char* p : {"f", "eps", "sig", "cut", "shift"}) scaled->addPerBondParameter(p);
     scaled->setUsesPeriodicBoundaryConditions(m.periodic);
     scaled->setForceGroup(kScaledPairGroup);
@@ -166,13 +166,14 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
   try {
     chosen = &OpenMM::Platform::getPlatformByName(name);
   } catch (const OpenMM::OpenMMException&) {
-    throw UnsupportedModel("OpenMM's " + name + " platform is not available (install libopenmm-plugins)");
+    throw UnsupportedModel("OpenMM's " + name +
+                           " platform is not available (install libopenmm-plugins)");
   }
   m.platform_name = name;
   m.integrator = std::make_unique<OpenMM::VerletIntegrator>(0.001);
   if (platform == Platform::cpu) {
-    m.context = std::make_unique<OpenMM::Context>(m.system, *m.integrator, *chosen,
-                                                  std::map<std::string, std::string>{{"Threads", "1"}});
+    m.context = std::make_unique<OpenMM::Context>(
+        m.system, *m.integrator, *chosen, std::map<std::string, std::string>{{"Threads", "1"}});
   } else {
     m.context = std::make_unique<OpenMM::Context>(m.system, *m.integrator, *chosen);
   }
@@ -180,7 +181,9 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
 
 OpenMMBridge::~OpenMMBridge() = default;
 
-std::string OpenMMBridge::name() const { return "OpenMM " + impl_->platform_name; }
+std::string OpenMMBridge::name() const {
+  return "OpenMM " + impl_->platform_name;
+}
 
 EngineEvaluation OpenMMBridge::evaluate(const std::vector<Vec3>& position) {
   Impl& m = *impl_;

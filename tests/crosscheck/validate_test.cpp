@@ -1,0 +1,138 @@
+// deli against OpenMM (Reference platform) and LAMMPS, in-process, on every kind of model
+// deli runs: energies term by term, forces, virial and a 100-step NVE trajectory must agree
+// to the tolerances of io/crosscheck/compare.hpp (energy 1e-12 relative per term, forces
+// 1e-10 per component).
+#include "crosscheck/validate.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+
+#include "integrators/velocity_verlet.hpp"
+
+namespace deli {
+namespace {
+
+const std::string kSource = DELI_SOURCE_DIR;
+
+struct Model {
+  std::string name;
+  std::string input;
+  int melt_steps = 0;  // deli steps before comparing: a disordered configuration
+};
+void PrintTo(const Model& m, std::ostream* os) {
+  *os << m.name;
+}
+
+RunInput load(const Model& m) {
+  RunInput input = load_run_input(kSource + "/" + m.input);
+  if (m.melt_steps > 0) {
+    VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
+    verlet.setup(input.system);
+    for (int n = 0; n < m.melt_steps; ++n) verlet.step(input.system, false);
+  }
+  return input;
+}
+
+void expect_agreement(const ValidationReport& report) {
+  for (const Check& c : report.checks) {
+    std::printf("  %-18s %-30s %10.3e (tolerance %.0e) %s\n", c.engine.c_str(), c.quantity.c_str(),
+                c.difference, c.tolerance, c.where.c_str());
+    EXPECT_TRUE(c.within()) << c.engine << " " << c.quantity << ": " << c.difference << " > "
+                            << c.tolerance << " " << c.where;
+  }
+}
+
+class AgreesWithOpenMMAndLammps : public ::testing::TestWithParam<Model> {};
+
+TEST_P(AgreesWithOpenMMAndLammps, EnergiesForcesVirialTrajectory) {
+  const RunInput input = load(GetParam());
+  const ValidationReport report = validate(input, ValidateOptions{});
+  EXPECT_TRUE(report.skipped.empty()) << report.skipped.front();
+  ASSERT_EQ(report.others.size(), 2u);
+  // Every term deli has, each engine has too.
+  for (const EngineEvaluation& other : report.others) {
+    EXPECT_EQ(other.term_names, report.deli.term_names) << other.engine;
+  }
+  expect_agreement(report);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Models, AgreesWithOpenMMAndLammps,
+    ::testing::Values(
+        Model{"lj_liquid_fcc", "inputs/lj_liquid/lj_4000.toml"},
+        Model{"lj_liquid_disordered", "inputs/lj_liquid/lj_4000.toml", 400},
+        Model{"kremer_grest_fene_wca", "inputs/lj_chains/melt.toml"},
+        Model{"chains_harmonic_angles_scaled_13",
+              "tests/crosscheck/inputs/chains_harmonic_angles.toml", 100},
+        Model{"mixture_explicit_pairs", "tests/crosscheck/inputs/mixture_explicit.toml"},
+        Model{"mixture_lorentz_berthelot", "tests/crosscheck/inputs/mixture_mixed.toml"},
+        Model{"open_cluster", "tests/crosscheck/inputs/open_cluster.toml", 100}),
+    [](const auto& info) { return info.param.name; });
+
+// The CPU platform computes in single precision: looser, separately reported agreement.
+TEST(OpenMMCpuPlatform, AgreesToSinglePrecision) {
+  const RunInput input = load({"lj", "inputs/lj_liquid/lj_4000.toml"});
+  ValidateOptions options;
+  options.lammps = false;
+  options.openmm_cpu = true;
+  const ValidationReport report = validate(input, options);
+  ASSERT_EQ(report.others.size(), 1u);
+  EXPECT_EQ(report.others[0].engine, "OpenMM CPU");
+  expect_agreement(report);
+}
+
+// The comparison can fail: a deli force field that is not the one the bridges are given
+// (epsilon 1.0 against 1.0 + 1e-9) is caught and named.
+TEST(Validate, DisagreementIsCaughtAndNamed) {
+  RunInput input = load({"cluster", "tests/crosscheck/inputs/open_cluster.toml"});
+  input.force_field_spec.pair->coefficients.set(0, 0, 1.0 + 1e-9, 1.0, 3.0);
+  ValidateOptions options;
+  options.trajectory_steps = 0;
+  const ValidationReport report = validate(input, options);
+  EXPECT_FALSE(report.passed());
+  ASSERT_NE(report.worst(), nullptr);
+  EXPECT_THAT(report.worst()->quantity, ::testing::HasSubstr("energy"));
+}
+
+int run_status(const std::string& arguments, std::string& output) {
+  const std::string command = std::string(DELI_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int raw = pclose(pipe);
+  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+}
+
+// LAMMPS (built without exceptions) ends the process on an error: a model deli refuses
+// must never reach it. A FENE bond beyond R0 is refused by deli with its own message.
+TEST(Validate, ModelDeliRefusesNeverReachesLammps) {
+  std::string output;
+  const int status =
+      run_status("validate " + kSource + "/tests/crosscheck/inputs/broken_fene.toml", output);
+  EXPECT_EQ(status, 1);
+  EXPECT_THAT(output, ::testing::HasSubstr("deli: simulation stopped"));
+  EXPECT_THAT(output, ::testing::HasSubstr("atoms 1 and 2 is stretched to r = 1.6"));
+}
+
+TEST(Validate, CommandLineReportsAgreement) {
+  std::string output;
+  const int status = run_status(
+      "validate " + kSource + "/tests/crosscheck/inputs/open_cluster.toml --steps 20", output);
+  EXPECT_EQ(status, 0) << output;
+  EXPECT_THAT(output, ::testing::HasSubstr("OpenMM Reference"));
+  EXPECT_THAT(output, ::testing::HasSubstr("LAMMPS"));
+  EXPECT_THAT(output, ::testing::HasSubstr("agreement: every check within tolerance"));
+}
+
+TEST(Validate, CommandLineRejectsUnknownEngine) {
+  std::string output;
+  EXPECT_EQ(run_status("validate x.toml --engine gromacs", output), 1);
+  EXPECT_THAT(output, ::testing::HasSubstr("expected openmm, lammps or all"));
+}
+
+}  // namespace
+}  // namespace deli
