@@ -97,11 +97,17 @@ int command_validate(const std::vector<std::string>& args) {
   row("total", report.deli.potential, "energy total");
   if (report.deli.virial) {
     row("virial W", *report.deli.virial, "virial W");
-    const double volume = s.box.volume();
-    const double pressure =
-        (2.0 * kinetic_energy(s.particles) + *report.deli.virial) / (3.0 * volume);
-    std::printf("%-14s %24.15g  (deli: (2K + W) / 3V, box volume %g)\n", "pressure", pressure,
-                volume);
+    // Pressure (2K + W) / 3V from each engine's virial, with deli's kinetic energy and box.
+    const double two_k = 2.0 * kinetic_energy(s.particles), volume3 = 3.0 * s.box.volume();
+    std::printf("%-14s %24.15g", "pressure", (two_k + *report.deli.virial) / volume3);
+    for (const EngineEvaluation& e : report.others) {
+      if (e.virial) {
+        std::printf(" %24.15g", (two_k + *e.virial) / volume3);
+      } else {
+        std::printf(" %24s", "-");
+      }
+    }
+    std::printf("\n");
   }
 
   std::printf("\n%-18s %-34s %12s %10s  %-6s %s\n", "engine", "check", "difference", "tolerance",
