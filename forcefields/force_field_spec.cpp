@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "bonded/bond_force.hpp"
+#include "external/gravity.hpp"
 #include "pair/lennard_jones.hpp"
 #include "pair/pair_force.hpp"
 #include "system/system.hpp"
@@ -55,6 +56,7 @@ std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const 
     }
   }
   if (spec.angle) ff->add(std::make_unique<HarmonicAngle>(spec.angle->harmonic));
+  if (spec.gravity) ff->add(std::make_unique<Gravity>(*spec.gravity));
   return ff;
 }
 

@@ -42,6 +42,7 @@ struct ForceFieldSpec {
   std::optional<PairSpec> pair;
   std::optional<BondSpec> bond;
   std::optional<AngleSpec> angle;
+  std::optional<Vec3> gravity;  // uniform field, force per unit mass
 };
 
 std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const System& system);

@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "input/lammps_data.hpp"
 #include "input/run_input.hpp"
+#include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
@@ -46,7 +47,13 @@ int command_run(const std::vector<std::string>& args) {
               static_cast<long long>(input.steps));
 
   minimize_if_asked(input);
-  VelocityVerlet integrator(*input.force_field, input.skin, input.timestep);
+  std::unique_ptr<Integrator> integrator;
+  if (input.integrator == "gvi") {
+    integrator = std::make_unique<Gvi>(*input.force_field, input.constraints, input.skin,
+                                       input.timestep, input.reflection, input.system.particles);
+  } else {
+    integrator = std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
+  }
   ThermoTable table(stdout);
   std::vector<Observer*> observers{&table};
   std::unique_ptr<ThermoCsv> csv;
@@ -60,7 +67,7 @@ int command_run(const std::vector<std::string>& args) {
     observers.insert(observers.begin(), progress.get());
   }
   const RunStatistics stats =
-      run(input.system, integrator, input.steps, input.thermo.every, observers);
+      run(input.system, *integrator, input.steps, input.thermo.every, observers);
   std::printf(
       "loop time %.3f s for %lld steps of %zu atoms: %.4g atom-steps/s, %lld neighbour "
       "list builds\n",

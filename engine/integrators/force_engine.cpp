@@ -1,20 +1,27 @@
 #include "integrators/force_engine.hpp"
 
+#include <algorithm>
+
 namespace deli {
 
-ForceEngine::ForceEngine(const ForceField& force_field, double skin)
-    : force_field_(force_field), neighbors_(force_field.neighbor_cutoff(), skin) {}
+ForceEngine::ForceEngine(const ForceField& force_field, double skin, double minimum_cutoff)
+    : force_field_(force_field),
+      neighbors_(std::max(force_field.neighbor_cutoff(), minimum_cutoff), skin) {}
+
+bool ForceEngine::ensure_neighbors(System& system, bool force) {
+  Particles& p = system.particles;
+  if (!force && !neighbors_.needs_rebuild(p.position)) return false;
+  if (neighbors_.builds() == 0) {
+    const SpecialPairs special = find_special_pairs(system.topology, p.size());
+    neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
+  }
+  for (std::size_t i = 0; i < p.size(); ++i) system.box.wrap(p.position[i], p.image[i]);
+  neighbors_.build(p.position, system.box);
+  return true;
+}
 
 const ForceEvaluation& ForceEngine::compute(System& system, bool tally) {
-  Particles& p = system.particles;
-  if (neighbors_.needs_rebuild(p.position)) {
-    if (neighbors_.builds() == 0) {
-      const SpecialPairs special = find_special_pairs(system.topology, p.size());
-      neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
-    }
-    for (std::size_t i = 0; i < p.size(); ++i) system.box.wrap(p.position[i], p.image[i]);
-    neighbors_.build(p.position, system.box);
-  }
+  ensure_neighbors(system);
   last_ = force_field_.compute(system, neighbors_, force_, tally);
   return last_;
 }

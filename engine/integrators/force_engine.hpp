@@ -12,12 +12,20 @@ namespace deli {
 // what every integrator calls once per force evaluation.
 class ForceEngine {
  public:
-  ForceEngine(const ForceField& force_field, double skin);
+  // The neighbour list reaches at least `minimum_cutoff` (hard-sphere contacts) beyond the
+  // force field's own cutoff.
+  ForceEngine(const ForceField& force_field, double skin, double minimum_cutoff = 0.0);
 
   // Rebuilds the neighbour list when needed (wrapping positions into the box first, the
   // only time they are wrapped) and computes forces and energies.
   // Energies and virial only when `tally` (thermo steps).
   const ForceEvaluation& compute(System& system, bool tally = true);
+
+  // Rebuilds the neighbour list (wrapping positions) if the particles have moved too far,
+  // or always when `force`.
+  bool ensure_neighbors(System& system, bool force = false);
+  // Whether the current list also holds every pair within reach at positions x.
+  bool neighbors_cover(const std::vector<Vec3>& x) const { return !neighbors_.needs_rebuild(x); }
 
   const std::vector<Vec3>& force() const { return force_; }
   const ForceEvaluation& last() const { return last_; }

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "integrators/force_engine.hpp"
 
@@ -17,6 +19,8 @@ class Integrator {
   virtual void setup(System& system) = 0;
   virtual void step(System& system, bool tally = true) = 0;
   virtual const ForceEngine& forces() const = 0;
+  // Named figures accumulated since the last call (constraint statistics), for thermo.
+  virtual std::vector<std::pair<std::string, double>> take_statistics() { return {}; }
 };
 
 }  // namespace deli

@@ -14,7 +14,8 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   integrator.setup(system);
   for (Observer* o : observers) o->on_start(system, steps);
   auto sample = [&] {
-    const ThermoSample s = measure_thermo(system, integrator.forces().last());
+    ThermoSample s = measure_thermo(system, integrator.forces().last());
+    s.integrator = integrator.take_statistics();
     for (Observer* o : observers) o->on_thermo(s);
   };
   sample();

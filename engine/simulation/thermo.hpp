@@ -19,6 +19,8 @@ struct ThermoSample {
   Vec3 momentum;
   std::vector<std::string> term_names;
   std::vector<double> term_energies;
+  // Integrator figures since the previous sample (constraint statistics for GVI).
+  std::vector<std::pair<std::string, double>> integrator;
 };
 
 ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation);

@@ -9,6 +9,7 @@
 #include "bonded/bond_styles.hpp"
 #include "bonded/harmonic_angle.hpp"
 #include "core/error.hpp"
+#include "input/constraints_input.hpp"
 #include "input/lammps_data.hpp"
 #include "input/toml_table.hpp"
 #include "pair/pair_coefficients.hpp"
@@ -197,8 +198,13 @@ std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::
   return params;
 }
 
-std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& system) {
+std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& system,
+                                  bool rigid_bonds) {
   const int types = system.topology.bond_types;
+  if (rigid_bonds) {
+    if (t) t->fail("bonds are rigid rods ([constraints] bonds = \"rigid\"): remove this table");
+    return std::nullopt;
+  }
   if (!t) {
     if (!system.topology.bonds.empty()) {
       throw InputError(
@@ -244,7 +250,7 @@ std::optional<AngleSpec> read_angle(std::optional<TomlTable> t, const System& sy
   return spec;
 }
 
-ForceFieldSpec read_force_field(TomlTable& root, const System& system) {
+ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigid_bonds) {
   ForceFieldSpec spec;
   auto t = root.table("forcefield");
   if (!t) root.fail("missing the [forcefield] table");
@@ -259,8 +265,15 @@ ForceFieldSpec read_force_field(TomlTable& root, const System& system) {
   auto pair = t->table("pair");
   if (!pair) t->fail("missing [forcefield.pair] (style = \"none\" for no pair interactions)");
   spec.pair = read_pair(*pair, system);
-  spec.bond = read_bond(t->table("bond"), system);
+  spec.bond = read_bond(t->table("bond"), system, rigid_bonds);
   spec.angle = read_angle(t->table("angle"), system);
+  if (auto external = t->table("external")) {
+    if (external->has("gravity")) {
+      const auto g = external->numbers("gravity", 3);
+      spec.gravity = Vec3{g[0], g[1], g[2]};
+    }
+    external->finish();
+  }
   t->finish();
   return spec;
 }
@@ -274,6 +287,20 @@ void check_box_fits_cutoff(const RunInput& input, const TomlTable& root) {
       root.fail("the periodic box is " + std::to_string(length) + " long along " +
                 std::string(1, "xyz"[a]) + ", less than twice the pair cutoff (" +
                 std::to_string(cutoff) + "): make the box larger or the cutoff shorter");
+    }
+  }
+}
+
+// Hard spheres must not overlap even where special_bonds takes a pair out of the force
+// field's neighbour list (1-3, 1-4 neighbours): those pairs are checked on their own.
+void add_excluded_contacts(RunInput& input) {
+  if (!input.constraints.hard_spheres) return;
+  const SpecialPairs special =
+      find_special_pairs(input.system.topology, input.system.particles.size());
+  for (int s = 1; s < 3; ++s) {
+    if (input.force_field_spec.special_lj[s] == 1.0) continue;
+    for (const auto& pair : special.by_separation[s]) {
+      input.constraints.always_checked_pairs.push_back(pair);
     }
   }
 }
@@ -306,7 +333,9 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   input.system = read_system(*system, dir);
   system->finish();
   read_velocities(root, input.system);
-  input.force_field_spec = read_force_field(root, input.system);
+  bool rigid_bonds = false;
+  input.constraints = read_constraints(root.table("constraints"), input.system, rigid_bonds);
+  input.force_field_spec = read_force_field(root, input.system, rigid_bonds);
   input.force_field = build_force_field(input.force_field_spec, input.system);
 
   if (auto n = root.table("neighbor")) {
@@ -324,7 +353,19 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   auto integrator = root.table("integrator");
   if (!integrator) root.fail("missing the [integrator] table (type = \"verlet\", timestep = ...)");
-  input.integrator = integrator->choice("type", {"verlet"}, "verlet");
+  input.integrator = integrator->choice("type", {"verlet", "gvi"}, "verlet");
+  if (input.integrator == "gvi") {
+    integrator->choice("lagrangian", {"verlet"}, "verlet");
+    if (auto r = integrator->table("reflection")) {
+      input.reflection = r->choice("operator", {"generalized", "moreau"}, "generalized") == "moreau"
+                             ? ReflectionOperator::moreau
+                             : ReflectionOperator::generalized;
+      r->choice("energy", {"hamiltonian"}, "hamiltonian");
+      r->finish();
+    }
+  } else if (!input.constraints.empty()) {
+    integrator->fail("the input has [constraints]: they need type = \"gvi\"", "type");
+  }
   input.timestep = positive(*integrator, "timestep");
   integrator->finish();
 
@@ -345,6 +386,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   root.finish();
   check_box_fits_cutoff(input, root);
+  add_excluded_contacts(input);
   return input;
 }
 

@@ -4,9 +4,11 @@
 #include <memory>
 #include <string>
 
+#include "constraints/constraint_set.hpp"
 #include "force_field.hpp"
 #include "force_field_spec.hpp"
 #include "integrators/quickmin.hpp"
+#include "integrators/reflection.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -28,6 +30,8 @@ struct RunInput {
   std::int64_t steps = 0;
   ThermoOutputSpec thermo;
   MinimizeSettings minimize;  // max_steps 0: none
+  ConstraintSet constraints;
+  ReflectionOperator reflection = ReflectionOperator::generalized;
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.

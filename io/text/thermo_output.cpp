@@ -6,15 +6,29 @@
 
 namespace deli {
 
+// The terminal shows the integrator figures a reader checks first; the CSV has them all.
+bool ThermoTable::shown(const std::string& name) {
+  return name == "min_gap" || name == "max_rod_violation" || name == "reflected" ||
+         name == "penetrating_steps";
+}
+
 void ThermoTable::on_thermo(const ThermoSample& s) {
   if (!header_written_) {
-    std::fprintf(out_, "%10s %12s %14s %14s %14s %12s %12s %10s\n", "step", "time", "kinetic",
+    std::fprintf(out_, "%10s %12s %14s %14s %14s %12s %12s %10s", "step", "time", "kinetic",
                  "potential", "total", "temperature", "pressure", "|momentum|");
+    for (const auto& [name, value] : s.integrator) {
+      if (shown(name)) std::fprintf(out_, " %12s", name.c_str());
+    }
+    std::fprintf(out_, "\n");
     header_written_ = true;
   }
-  std::fprintf(out_, "%10lld %12.6g %14.8g %14.8g %14.8g %12.6g %12.6g %10.3g\n",
+  std::fprintf(out_, "%10lld %12.6g %14.8g %14.8g %14.8g %12.6g %12.6g %10.3g",
                static_cast<long long>(s.step), s.time, s.kinetic, s.potential, s.total,
                s.temperature, s.pressure, norm(s.momentum));
+  for (const auto& [name, value] : s.integrator) {
+    if (shown(name)) std::fprintf(out_, " %12.4g", value);
+  }
+  std::fprintf(out_, "\n");
   std::fflush(out_);
 }
 
@@ -30,6 +44,7 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
   if (!header_written_) {
     out_ << "step,time,kinetic,potential,total,temperature,pressure,px,py,pz";
     for (const std::string& name : s.term_names) out_ << ",e_" << name;
+    for (const auto& [name, value] : s.integrator) out_ << ',' << name;
     out_ << '\n';
     header_written_ = true;
   }
@@ -37,6 +52,7 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
        << s.temperature << ',' << s.pressure << ',' << s.momentum.x << ',' << s.momentum.y << ','
        << s.momentum.z;
   for (double e : s.term_energies) out_ << ',' << e;
+  for (const auto& [name, value] : s.integrator) out_ << ',' << value;
   out_ << '\n';
   out_.flush();
 }

@@ -16,6 +16,7 @@ class ThermoTable final : public Observer {
   void on_thermo(const ThermoSample& s) override;
 
  private:
+  static bool shown(const std::string& name);
   std::FILE* out_;
   bool header_written_ = false;
 };

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstdint>
+
+#include "core/vec3.hpp"
+#include "system/box.hpp"
+
+namespace deli {
+
+// The contract every constraint meets (Chrono/Siconos style): a kind, one or two
+// particles, a gap (residual) and its gradient. Every deli constraint's gradient is +u on
+// particle i and, for two-particle kinds, -u on particle j, so a row is (i, j, u).
+enum class ConstraintKind : std::uint8_t {
+  rod,            // equality: |x_i - x_j| - length = 0
+  anchor,         // equality: |x_i - point| - length = 0 (pendulum string)
+  sphere_pair,    // inequality: |x_i - x_j| - (r_i + r_j) >= 0
+  plane,          // inequality: n . (x_i - point) - r_i >= 0
+  inside_sphere,  // inequality: R - r_i - |x_i - c| >= 0
+  outside_sphere  // inequality: |x_i - c| - R - r_i >= 0
+};
+
+constexpr bool is_equality(ConstraintKind k) {
+  return k == ConstraintKind::rod || k == ConstraintKind::anchor;
+}
+constexpr bool is_pair(ConstraintKind k) {
+  return k == ConstraintKind::rod || k == ConstraintKind::sphere_pair;
+}
+const char* kind_name(ConstraintKind k);
+
+struct Constraint {
+  ConstraintKind kind;
+  std::int32_t i = -1, j = -1;  // j = -1 for one-particle kinds
+  double length = 0;            // rod/anchor length, contact distance, R + r or R - r, r
+  Vec3 point;                   // anchor point, plane point, sphere centre
+  Vec3 normal;                  // plane unit normal
+};
+
+// Gap and gradient block u (on particle i; -u on j) at positions x.
+struct ConstraintValue {
+  double gap;
+  Vec3 u;
+};
+
+ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box);
+
+}  // namespace deli

@@ -1,0 +1,99 @@
+#include "constraints/constraint_set.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace deli {
+
+double ConstraintSet::contact_reach(const Particles& particles) const {
+  if (!hard_spheres) return 0.0;
+  double r = 0.0;
+  for (double radius : particles.radius) r = std::max(r, radius);
+  return 2.0 * r;
+}
+
+Constraint ConstraintSet::wall_row(const Wall& wall, std::int32_t i, double radius) const {
+  Constraint c;
+  c.kind = wall.kind;
+  c.i = i;
+  c.point = wall.point;
+  c.normal = wall.normal;
+  switch (wall.kind) {
+    case ConstraintKind::plane:
+      c.length = radius;
+      break;
+    case ConstraintKind::inside_sphere:
+      c.length = wall.radius - radius;
+      break;
+    default:
+      c.length = wall.radius + radius;
+      break;
+  }
+  return c;
+}
+
+namespace {
+// Visits every hard-sphere pair of the neighbour list that is not bonded, and every
+// (particle, wall) row.
+template <class Visit>
+void for_each_inequality(const ConstraintSet& set, const Particles& particles,
+                         const NeighborList& list, Visit&& visit) {
+  if (set.hard_spheres) {
+    for (const auto& [a, b] : set.always_checked_pairs) {
+      Constraint c;
+      c.kind = ConstraintKind::sphere_pair;
+      c.i = a;
+      c.j = b;
+      c.length = particles.radius[a] + particles.radius[b];
+      visit(c);
+    }
+    const auto& offsets = list.offsets();
+    const auto& neighbors = list.neighbors();
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
+        const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
+        if (std::binary_search(set.unconstrained_pairs.begin(), set.unconstrained_pairs.end(),
+                               std::array<std::int32_t, 2>{a, b})) {
+          continue;
+        }
+        Constraint c;
+        c.kind = ConstraintKind::sphere_pair;
+        c.i = a;
+        c.j = b;
+        c.length = particles.radius[a] + particles.radius[b];
+        visit(c);
+      }
+    }
+  }
+  for (const Wall& wall : set.walls) {
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      visit(set.wall_row(wall, static_cast<std::int32_t>(i), particles.radius[i]));
+    }
+  }
+}
+}  // namespace
+
+std::vector<Constraint> ConstraintSet::active_inequalities(const Particles& particles,
+                                                           const Vec3* q, const Vec3* predicted,
+                                                           const NeighborList& list,
+                                                           const Box& box) const {
+  std::vector<Constraint> active;
+  for_each_inequality(*this, particles, list, [&](const Constraint& c) {
+    if (evaluate(c, q, box).gap <= tolerances.gap || evaluate(c, predicted, box).gap <= 0.0) {
+      active.push_back(c);
+    }
+  });
+  return active;
+}
+
+double ConstraintSet::minimum_gap(const Particles& particles, const Vec3* x,
+                                  const NeighborList& list, const Box& box) const {
+  double smallest = std::numeric_limits<double>::infinity();
+  for_each_inequality(*this, particles, list, [&](const Constraint& c) {
+    smallest = std::min(smallest, evaluate(c, x, box).gap);
+  });
+  return smallest;
+}
+
+}  // namespace deli

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "constraints/constraint.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "system/particles.hpp"
+
+namespace deli {
+
+// A wall every particle must stay clear of (by its radius): a plane (point, unit normal
+// pointing into the allowed side), or a sphere (centre `point`, `radius`) to stay inside
+// or outside of.
+struct Wall {
+  ConstraintKind kind;  // plane, inside_sphere or outside_sphere
+  Vec3 point;
+  Vec3 normal;
+  double radius = 0;
+};
+
+// The numbers the paper writes as "= 0": a constraint is active when |g| <= gap, and
+// tangent when |grad g . v| <= velocity (reduced units, sigma and sigma/tau).
+struct ConstraintTolerances {
+  double gap = 1e-10;
+  double velocity = 1e-10;
+  double solver = 1e-12;  // position update residual, sigma
+};
+
+// Every constraint of a system: the equalities (rods, anchor strings), fixed for the run,
+// and the inequalities found each step: hard-sphere pairs (all pairs not joined by a rod
+// or bond, candidates from the neighbour list) and walls.
+struct ConstraintSet {
+  std::vector<Constraint> equalities;
+  std::vector<Wall> walls;
+  bool hard_spheres = false;
+  std::vector<std::array<std::int32_t, 2>> unconstrained_pairs;  // sorted i < j: bonded pairs
+  // Pairs the force field's neighbour list leaves out (1-3 and 1-4 neighbours under
+  // special_bonds) that must still not overlap: checked every step.
+  std::vector<std::array<std::int32_t, 2>> always_checked_pairs;
+  ConstraintTolerances tolerances;
+
+  bool empty() const { return equalities.empty() && walls.empty() && !hard_spheres; }
+  // Largest contact distance r_i + r_j, for the neighbour list.
+  double contact_reach(const Particles& particles) const;
+
+  // The extended active set: inequality rows with g(predicted) <= 0 or g(q) <= tolerance.
+  std::vector<Constraint> active_inequalities(const Particles& particles, const Vec3* q,
+                                              const Vec3* predicted, const NeighborList& list,
+                                              const Box& box) const;
+  // The smallest inequality gap over every pair within reach and every wall (diagnostics).
+  double minimum_gap(const Particles& particles, const Vec3* x, const NeighborList& list,
+                     const Box& box) const;
+
+  Constraint wall_row(const Wall& wall, std::int32_t i, double radius) const;
+};
+
+}  // namespace deli

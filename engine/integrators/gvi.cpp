@@ -1,0 +1,270 @@
+#include "integrators/gvi.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "constraints/clusters.hpp"
+#include "core/error.hpp"
+#include "solvers/momentum_update.hpp"
+#include "solvers/position_update.hpp"
+
+namespace deli {
+
+Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, double skin, double timestep,
+         ReflectionOperator reflection, const Particles& particles)
+    : constraints_(std::move(constraints)),
+      engine_(force_field, skin, constraints_.contact_reach(particles)),
+      dt_(timestep),
+      reflection_(reflection) {}
+
+namespace {
+
+std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which) {
+  std::vector<Vec3> out;
+  out.reserve(which.size());
+  for (std::int32_t i : which) out.push_back(all[i]);
+  return out;
+}
+
+void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& which,
+             std::vector<Vec3>& all) {
+  for (std::size_t k = 0; k < which.size(); ++k) all[which[k]] = local[k];
+}
+
+std::string describe(const Constraint& c, const Particles& particles) {
+  std::string s = std::string(kind_name(c.kind)) + " on atom " + std::to_string(particles.id[c.i]);
+  if (c.j >= 0) s += " and atom " + std::to_string(particles.id[c.j]);
+  return s;
+}
+
+// Writes a failed cluster solve to a file that a test can load: rows, positions, masses.
+std::string dump_failed_problem(const System& system, const LocalCluster& cluster,
+                                const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
+                                const std::vector<bool>& equality, double h) {
+  const std::string path = "deli-failed-solve-step" + std::to_string(system.step) + ".txt";
+  std::ofstream out(path);
+  out.precision(17);
+  out << "# deli failed position update: step " << system.step << ", h " << h << "\n";
+  out << "particles " << cluster.size() << "\n";
+  for (std::size_t k = 0; k < cluster.size(); ++k) {
+    out << system.particles.id[cluster.particles[k]] << " " << 1.0 / cluster.inverse_mass[k] << " "
+        << q[k].x << " " << q[k].y << " " << q[k].z << " " << x0[k].x << " " << x0[k].y << " "
+        << x0[k].z << "\n";
+  }
+  out << "rows " << cluster.rows.size() << "\n";
+  for (std::size_t r = 0; r < cluster.rows.size(); ++r) {
+    const Constraint& c = cluster.rows[r];
+    out << kind_name(c.kind) << (equality[r] ? " equality " : " inequality ") << c.i << " " << c.j
+        << " " << c.length << " " << c.point.x << " " << c.point.y << " " << c.point.z << " "
+        << c.normal.x << " " << c.normal.y << " " << c.normal.z << "\n";
+  }
+  return path;
+}
+
+}  // namespace
+
+void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
+                          const std::vector<bool>& equality, const std::vector<Vec3>& q,
+                          std::vector<Vec3>& x) {
+  const Particles& particles = system.particles;
+  for (const Cluster& cluster : find_clusters(rows, particles.size())) {
+    const LocalCluster local = localize(cluster, rows, particles.mass);
+    std::vector<bool> local_equality;
+    for (std::int32_t r : cluster.rows) local_equality.push_back(equality[r]);
+    const std::vector<Vec3> q_local = gather(q, cluster.particles);
+    const std::vector<Vec3> x0_local = gather(x, cluster.particles);
+    const PositionUpdate solved = solve_position_update(
+        local, local_equality, q_local, x0_local, dt_, system.box, constraints_.tolerances.solver);
+    ++stats_.solves;
+    stats_.solver_iterations += solved.status.iterations;
+    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
+    if (!solved.status.converged) {
+      const std::string file =
+          dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
+      throw SimulationError(
+          "step " + std::to_string(system.step + 1) +
+          ": the position update did not converge for the cluster of " +
+          std::to_string(cluster.particles.size()) + " atoms from atom " +
+          std::to_string(particles.id[cluster.particles.front()]) + " (" +
+          std::to_string(cluster.rows.size()) +
+          " constraints, first: " + describe(rows[cluster.rows.front()], particles) +
+          "): residual " + std::to_string(solved.status.residual) + " after " +
+          std::to_string(solved.status.iterations) + " Newton iterations; the problem is in " +
+          file + "; reduce the timestep");
+    }
+    scatter(solved.x, cluster.particles, x);
+  }
+}
+
+void Gvi::project_momenta(System& system, const std::vector<Constraint>& rows,
+                          const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+  for (const Cluster& cluster : find_clusters(rows, system.particles.size())) {
+    const LocalCluster local = localize(cluster, rows, system.particles.mass);
+    std::vector<int> all(local.rows.size());
+    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+    std::vector<Vec3> p_local = gather(p, cluster.particles);
+    Eigen::VectorXd mu;
+    const SolverStatus status =
+        project_momentum(local, all, gather(x, cluster.particles), p_local, system.box, mu);
+    if (!status.converged) {
+      throw SimulationError("step " + std::to_string(system.step) +
+                            ": the momentum update failed for the cluster from atom " +
+                            std::to_string(system.particles.id[cluster.particles.front()]) +
+                            " (singular constraint matrix)");
+    }
+    scatter(p_local, cluster.particles, p);
+  }
+}
+
+void Gvi::setup(System& system) {
+  Particles& P = system.particles;
+  engine_.ensure_neighbors(system);
+  // Start on the manifold: positions onto the equality constraints (a position update from
+  // rest), then momenta tangent to it.
+  if (!constraints_.equalities.empty()) {
+    std::vector<Vec3> x = P.position;
+    solve_positions(system, constraints_.equalities,
+                    std::vector<bool>(constraints_.equalities.size(), true), P.position, x);
+    P.position = x;
+  }
+  const double gap =
+      constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
+  if (gap < -constraints_.tolerances.gap) {
+    throw SimulationError(
+        "the starting configuration overlaps: the smallest hard-sphere or wall "
+        "gap is " +
+        std::to_string(gap) + " sigma; start from a configuration without overlaps");
+  }
+  engine_.compute(system);
+  std::vector<Vec3> p(P.size());
+  for (std::size_t i = 0; i < P.size(); ++i) p[i] = P.velocity[i] * P.mass[i];
+  project_momenta(system, constraints_.equalities, P.position, p);
+  for (std::size_t i = 0; i < P.size(); ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
+}
+
+void Gvi::step(System& system, bool tally) {
+  Particles& P = system.particles;
+  const std::size_t n = P.size();
+  const double h = dt_;
+  std::vector<Vec3> p(n);
+  for (std::size_t i = 0; i < n; ++i) p[i] = P.velocity[i] * P.mass[i];
+
+  // The unconstrained forward step from (q, p): D1Ld(q, x) + p = 0.
+  auto unconstrained = [&](const std::vector<Vec3>& momenta) {
+    const std::vector<Vec3>& f = engine_.force();
+    std::vector<Vec3> x(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] = P.position[i] + (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    }
+    return x;
+  };
+  std::vector<Vec3> predicted = unconstrained(p);
+  if (!engine_.neighbors_cover(predicted)) {
+    engine_.ensure_neighbors(system, true);
+    predicted = unconstrained(p);
+    if (!engine_.neighbors_cover(predicted)) {
+      throw SimulationError("step " + std::to_string(system.step + 1) +
+                            ": a particle would move more than half the neighbour skin in one "
+                            "step; increase [neighbor] skin or reduce the timestep");
+    }
+  }
+  const std::vector<Vec3> q = P.position;
+
+  // Extended active set, then the generalized reflection of every cluster it touches.
+  const std::vector<Constraint> active = constraints_.active_inequalities(
+      P, q.data(), predicted.data(), engine_.neighbors(), system.box);
+  stats_.active += static_cast<std::int64_t>(active.size());
+  if (!active.empty()) {
+    std::vector<Constraint> rows = constraints_.equalities;
+    rows.insert(rows.end(), active.begin(), active.end());
+    const std::size_t first_inequality = constraints_.equalities.size();
+    for (const Cluster& cluster : find_clusters(rows, n)) {
+      if (cluster.rows.back() < static_cast<std::int32_t>(first_inequality)) continue;
+      const LocalCluster local = localize(cluster, rows, P.mass);
+      std::vector<bool> equality;
+      for (std::int32_t r : cluster.rows)
+        equality.push_back(r < static_cast<std::int32_t>(first_inequality));
+      std::vector<Vec3> p_local = gather(p, cluster.particles);
+      const ReflectionStats r = reflect(local, equality, gather(q, cluster.particles), p_local,
+                                        system.box, reflection_, constraints_.tolerances.velocity);
+      stats_.reflected += r.reflected;
+      stats_.stalled += r.capped ? 1 : 0;
+      scatter(p_local, cluster.particles, p);
+    }
+  }
+
+  // Smooth set: active at q and tangent to the momenta after reflection.
+  std::vector<Constraint> smooth;
+  for (const Constraint& c : active) {
+    const ConstraintValue v = evaluate(c, q.data(), system.box);
+    if (std::abs(v.gap) > constraints_.tolerances.gap) continue;
+    double normal_velocity = dot(v.u, p[c.i]) / P.mass[c.i];
+    if (c.j >= 0) normal_velocity -= dot(v.u, p[c.j]) / P.mass[c.j];
+    if (std::abs(normal_velocity) <= constraints_.tolerances.velocity) smooth.push_back(c);
+  }
+  stats_.smooth += static_cast<std::int64_t>(smooth.size());
+
+  // Position update.
+  std::vector<Vec3> x = unconstrained(p);
+  std::vector<Constraint> rows = constraints_.equalities;
+  rows.insert(rows.end(), smooth.begin(), smooth.end());
+  if (!rows.empty()) {
+    std::vector<bool> equality(rows.size(), false);
+    std::fill(equality.begin(),
+              equality.begin() + static_cast<std::ptrdiff_t>(constraints_.equalities.size()), true);
+    solve_positions(system, rows, equality, q, x);
+  }
+
+  // Momentum update: p = M (x - q) / h + h/2 F(x), then projected onto the equality rows and
+  // the smooth rows still active at x.
+  for (std::size_t i = 0; i < n; ++i) p[i] = (x[i] - q[i]) * (P.mass[i] / h);
+  P.position = x;
+  system.step += 1;
+  system.time += h;
+  engine_.compute(system, tally);
+  const std::vector<Vec3>& f = engine_.force();
+  for (std::size_t i = 0; i < n; ++i) p[i] += f[i] * (0.5 * h);
+  std::vector<Constraint> momentum_rows = constraints_.equalities;
+  for (const Constraint& c : smooth) {
+    if (std::abs(evaluate(c, P.position.data(), system.box).gap) <= constraints_.tolerances.gap) {
+      momentum_rows.push_back(c);
+    }
+  }
+  if (!momentum_rows.empty()) project_momenta(system, momentum_rows, P.position, p);
+  for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
+  ++stats_.steps;
+  record_geometry(system);
+}
+
+void Gvi::record_geometry(const System& system) {
+  const Particles& P = system.particles;
+  const double gap =
+      constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
+  stats_.min_gap = std::min(stats_.min_gap, gap);
+  if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
+  for (const Constraint& c : constraints_.equalities) {
+    const double violation = std::abs(evaluate(c, P.position.data(), system.box).gap) / c.length;
+    stats_.max_rod_violation = std::max(stats_.max_rod_violation, violation);
+  }
+}
+
+std::vector<std::pair<std::string, double>> Gvi::take_statistics() {
+  const GviStatistics s = stats_;
+  stats_ = GviStatistics{};
+  const double steps = std::max<double>(1.0, static_cast<double>(s.steps));
+  return {{"min_gap", std::isfinite(s.min_gap) ? s.min_gap : 0.0},
+          {"max_rod_violation", s.max_rod_violation},
+          {"active_per_step", static_cast<double>(s.active) / steps},
+          {"reflected", static_cast<double>(s.reflected)},
+          {"smooth_per_step", static_cast<double>(s.smooth) / steps},
+          {"stalled_reflections", static_cast<double>(s.stalled)},
+          {"penetrating_steps", static_cast<double>(s.penetrations)},
+          {"solver_iterations_mean",
+           s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)
+                        : 0.0},
+          {"solver_iterations_max", static_cast<double>(s.max_solver_iterations)}};
+}
+
+}  // namespace deli

@@ -1,0 +1,66 @@
+#include "integrators/reflection.hpp"
+
+#include "solvers/cluster_matrices.hpp"
+#include "solvers/nonnegative_qp.hpp"
+
+namespace deli {
+
+ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
+                        const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
+                        ReflectionOperator op, double tolerance, int max_iterations) {
+  std::vector<int> eq_rows, in_rows;
+  for (std::size_t k = 0; k < cluster.rows.size(); ++k) {
+    (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
+  }
+  ReflectionStats stats;
+  if (in_rows.empty()) return stats;
+  const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
+  Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, q, box);
+  if (!eq_rows.empty()) {
+    // N <- (I - F (F^T W F)^+ F^T W) G: normals in the rod manifold's cotangent space.
+    const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
+    const Eigen::MatrixXd WF = w.asDiagonal() * F;
+    const Eigen::MatrixXd FWF = F.transpose() * WF;
+    N -= F * FWF.completeOrthogonalDecomposition().solve(WF.transpose() * N);
+  }
+  const Eigen::VectorXd k_diag = 0.5 * w;  // K = M^-1 / 2 (E = H)
+  Eigen::VectorXd flat = flatten(p);
+  std::vector<bool> reflected(in_rows.size(), false);
+
+  for (int iteration = 0;; ++iteration) {
+    const Eigen::VectorXd normal_velocity = N.transpose() * (w.asDiagonal() * flat);
+    std::vector<int> set;
+    for (std::size_t k = 0; k < in_rows.size(); ++k) {
+      const bool approaching = normal_velocity(static_cast<Eigen::Index>(k)) < -tolerance;
+      if (op == ReflectionOperator::moreau ? true : approaching) set.push_back(static_cast<int>(k));
+    }
+    if (op == ReflectionOperator::generalized && set.empty()) break;
+    if (op == ReflectionOperator::moreau && iteration == 1) break;
+    if (iteration >= max_iterations) {
+      stats.capped = true;
+      break;
+    }
+    Eigen::MatrixXd NV(N.rows(), static_cast<Eigen::Index>(set.size()));
+    for (std::size_t k = 0; k < set.size(); ++k)
+      NV.col(static_cast<Eigen::Index>(k)) = N.col(set[k]);
+    const Eigen::MatrixXd KN = k_diag.asDiagonal() * NV;
+    const Eigen::MatrixXd Q = NV.transpose() * KN;
+    const Eigen::VectorXd c = 2.0 * (KN.transpose() * flat);
+    Eigen::VectorXd lambda;
+    solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    ++stats.iterations;
+    if (lambda.lpNorm<Eigen::Infinity>() == 0.0) {
+      stats.capped = true;  // approaching, yet no energy-preserving impulse: stalled
+      break;
+    }
+    flat += NV * lambda;
+    for (std::size_t k = 0; k < set.size(); ++k) {
+      if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[set[k]] = true;
+    }
+  }
+  for (bool r : reflected) stats.reflected += r ? 1 : 0;
+  p = unflatten(flat);
+  return stats;
+}
+
+}  // namespace deli

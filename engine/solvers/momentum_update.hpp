@@ -1,0 +1,19 @@
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "constraints/clusters.hpp"
+#include "solvers/solver_status.hpp"
+
+namespace deli {
+
+// GVI's momentum update on one cluster (RATTLE's velocity step plus the smooth contacts):
+// p <- p + C(x) mu with C(x)^T M^-1 p = 0 for the selected rows; one symmetric positive
+// (semi)definite solve. Returns the residual max |C^T M^-1 p| after the update; `mu`
+// receives the multipliers.
+SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int>& rows,
+                              const std::vector<Vec3>& x, std::vector<Vec3>& p, const Box& box,
+                              Eigen::VectorXd& mu);
+
+}  // namespace deli

@@ -1,0 +1,27 @@
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "constraints/clusters.hpp"
+#include "solvers/solver_status.hpp"
+
+namespace deli {
+
+// GVI's position update on one cluster: find multipliers z (impulses) with
+//   x = x0 + h M^-1 C(q) z,   f(x) = 0 (equality rows),   0 <= z_k _|_ g_k(x) >= 0 (the rest),
+// x0 being the unconstrained step. With only equality rows this is SHAKE's position step.
+// Semismooth Newton on the Fischer-Burmeister reformulation, with a backtracking line
+// search on the squared residual; converged when every equality residual and every
+// complementarity residual is below `tolerance` (sigma).
+struct PositionUpdate {
+  std::vector<Vec3> x;
+  Eigen::VectorXd z;
+  SolverStatus status;
+};
+PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vector<bool>& equality,
+                                     const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
+                                     double h, const Box& box, double tolerance,
+                                     int max_iterations = 50);
+
+}  // namespace deli
