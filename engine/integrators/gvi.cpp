@@ -13,11 +13,12 @@
 namespace deli {
 
 Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, double skin, double timestep,
-         ReflectionOperator reflection, const Particles& particles)
+         ReflectionOperator reflection, Feasibility feasibility, const Particles& particles)
     : constraints_(std::move(constraints)),
       engine_(force_field, skin, constraints_.contact_reach(particles)),
       dt_(timestep),
-      reflection_(reflection) {}
+      reflection_(reflection),
+      feasibility_(feasibility) {}
 
 namespace {
 
@@ -67,34 +68,36 @@ std::string dump_failed_problem(const System& system, const LocalCluster& cluste
 
 void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
                           const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                          std::vector<Vec3>& x) {
+                          std::vector<Vec3>& delta) {
   const Particles& particles = system.particles;
   for (const Cluster& cluster : find_clusters(rows, particles.size())) {
     const LocalCluster local = localize(cluster, rows, particles.mass);
     std::vector<bool> local_equality;
     for (std::int32_t r : cluster.rows) local_equality.push_back(equality[r]);
     const std::vector<Vec3> q_local = gather(q, cluster.particles);
-    const std::vector<Vec3> x0_local = gather(x, cluster.particles);
-    const PositionUpdate solved = solve_position_update(
-        local, local_equality, q_local, x0_local, dt_, system.box, constraints_.tolerances.solver);
+    std::vector<Vec3> x0_local = gather(delta, cluster.particles);
+    for (std::size_t k = 0; k < x0_local.size(); ++k) x0_local[k] += q_local[k];
+    const PositionUpdate solved = solve_position_update(local, local_equality, q_local, x0_local,
+                                                        dt_, system.box, constraints_.tolerances.solver);
     ++stats_.solves;
     stats_.solver_iterations += solved.status.iterations;
     stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
     if (!solved.status.converged) {
-      const std::string file =
-          dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
-      throw SimulationError(
-          "step " + std::to_string(system.step + 1) +
-          ": the position update did not converge for the cluster of " +
-          std::to_string(cluster.particles.size()) + " atoms from atom " +
-          std::to_string(particles.id[cluster.particles.front()]) + " (" +
-          std::to_string(cluster.rows.size()) +
-          " constraints, first: " + describe(rows[cluster.rows.front()], particles) +
-          "): residual " + std::to_string(solved.status.residual) + " after " +
-          std::to_string(solved.status.iterations) + " Newton iterations; the problem is in " +
-          file + "; reduce the timestep");
+      const std::string file = dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
+      throw SimulationError("step " + std::to_string(system.step + 1) +
+                            ": the position update did not converge for the cluster of " +
+                            std::to_string(cluster.particles.size()) + " atoms from atom " +
+                            std::to_string(particles.id[cluster.particles.front()]) + " (" +
+                            std::to_string(cluster.rows.size()) + " constraints, first: " +
+                            describe(rows[cluster.rows.front()], particles) + "): residual " +
+                            std::to_string(solved.status.residual) + " after " +
+                            std::to_string(solved.status.iterations) +
+                            " Newton iterations; the problem is in " + file +
+                            "; reduce the timestep");
     }
-    scatter(solved.x, cluster.particles, x);
+    for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
+      delta[cluster.particles[k]] += solved.correction[k];
+    }
   }
 }
 
@@ -124,18 +127,16 @@ void Gvi::setup(System& system) {
   // Start on the manifold: positions onto the equality constraints (a position update from
   // rest), then momenta tangent to it.
   if (!constraints_.equalities.empty()) {
-    std::vector<Vec3> x = P.position;
+    std::vector<Vec3> delta(P.size());
     solve_positions(system, constraints_.equalities,
-                    std::vector<bool>(constraints_.equalities.size(), true), P.position, x);
-    P.position = x;
+                    std::vector<bool>(constraints_.equalities.size(), true), P.position, delta);
+    for (std::size_t i = 0; i < P.size(); ++i) P.position[i] += delta[i];
   }
-  const double gap =
-      constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
+  const double gap = constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
   if (gap < -constraints_.tolerances.gap) {
-    throw SimulationError(
-        "the starting configuration overlaps: the smallest hard-sphere or wall "
-        "gap is " +
-        std::to_string(gap) + " sigma; start from a configuration without overlaps");
+    throw SimulationError("the starting configuration overlaps: the smallest hard-sphere or wall "
+                          "gap is " + std::to_string(gap) +
+                          " sigma; start from a configuration without overlaps");
   }
   engine_.compute(system);
   std::vector<Vec3> p(P.size());
@@ -144,26 +145,74 @@ void Gvi::setup(System& system) {
   for (std::size_t i = 0; i < P.size(); ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
 }
 
+namespace {
+
+bool same_row(const Constraint& a, const Constraint& b) {
+  return a.kind == b.kind && a.i == b.i && a.j == b.j && a.point.x == b.point.x &&
+         a.point.y == b.point.y && a.point.z == b.point.z && a.normal.x == b.normal.x &&
+         a.normal.y == b.normal.y && a.normal.z == b.normal.z && a.length == b.length;
+}
+
+bool contains(const std::vector<Constraint>& rows, const Constraint& c) {
+  for (const Constraint& r : rows) {
+    if (same_row(r, c)) return true;
+  }
+  return false;
+}
+
+double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec3>& p,
+                       const Particles& P) {
+  double v = dot(u, p[c.i]) / P.mass[c.i];
+  if (c.j >= 0) v -= dot(u, p[c.j]) / P.mass[c.j];
+  return v;
+}
+
+}  // namespace
+
+// Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
+// index `first_inequality`) that holds an inequality, at positions x.
+void Gvi::reflect_clusters(System& system, const std::vector<Constraint>& rows,
+                           std::size_t first_inequality, const std::vector<Vec3>& x,
+                           std::vector<Vec3>& p) {
+  const Particles& P = system.particles;
+  for (const Cluster& cluster : find_clusters(rows, P.size())) {
+    if (cluster.rows.back() < static_cast<std::int32_t>(first_inequality)) continue;
+    const LocalCluster local = localize(cluster, rows, P.mass);
+    std::vector<bool> equality;
+    for (std::int32_t r : cluster.rows) equality.push_back(r < static_cast<std::int32_t>(first_inequality));
+    std::vector<Vec3> p_local = gather(p, cluster.particles);
+    const ReflectionStats r = reflect(local, equality, gather(x, cluster.particles), p_local,
+                                      system.box, reflection_, constraints_.tolerances.velocity);
+    stats_.reflected += r.reflected;
+    stats_.stalled += r.capped ? 1 : 0;
+    scatter(p_local, cluster.particles, p);
+  }
+}
+
 void Gvi::step(System& system, bool tally) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
+  const ConstraintTolerances& tol = constraints_.tolerances;
   std::vector<Vec3> p(n);
   for (std::size_t i = 0; i < n; ++i) p[i] = P.velocity[i] * P.mass[i];
 
-  // The unconstrained forward step from (q, p): D1Ld(q, x) + p = 0.
-  auto unconstrained = [&](const std::vector<Vec3>& momenta) {
+  // Displacement of the unconstrained forward step from (q, p): D1Ld(q, q + d) + p = 0.
+  auto free_displacement = [&](const std::vector<Vec3>& momenta) {
     const std::vector<Vec3>& f = engine_.force();
+    std::vector<Vec3> d(n);
+    for (std::size_t i = 0; i < n; ++i) d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    return d;
+  };
+  auto moved = [&](const std::vector<Vec3>& d) {
     std::vector<Vec3> x(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      x[i] = P.position[i] + (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-    }
+    for (std::size_t i = 0; i < n; ++i) x[i] = P.position[i] + d[i];
     return x;
   };
-  std::vector<Vec3> predicted = unconstrained(p);
+  std::vector<Vec3> predicted = moved(free_displacement(p));
   if (!engine_.neighbors_cover(predicted)) {
     engine_.ensure_neighbors(system, true);
-    predicted = unconstrained(p);
+    predicted = moved(free_displacement(p));
     if (!engine_.neighbors_cover(predicted)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
                             ": a particle would move more than half the neighbour skin in one "
@@ -171,68 +220,89 @@ void Gvi::step(System& system, bool tally) {
     }
   }
   const std::vector<Vec3> q = P.position;
+  const NeighborList& list = engine_.neighbors();
 
-  // Extended active set, then the generalized reflection of every cluster it touches.
-  const std::vector<Constraint> active = constraints_.active_inequalities(
-      P, q.data(), predicted.data(), engine_.neighbors(), system.box);
-  stats_.active += static_cast<std::int64_t>(active.size());
-  if (!active.empty()) {
+  // Extended active set and reflection. A reflection can send a particle into a contact
+  // the first prediction did not see: predict again from the reflected momenta until the
+  // active set stops growing.
+  std::vector<Constraint> active;
+  for (int round = 0; round < 16; ++round) {
+    bool grew = false;
+    for (const Constraint& c : constraints_.active_inequalities(P, q.data(), predicted.data(), list, system.box)) {
+      if (!contains(active, c)) active.push_back(c), grew = true;
+    }
+    if (!grew) break;
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), active.begin(), active.end());
-    const std::size_t first_inequality = constraints_.equalities.size();
-    for (const Cluster& cluster : find_clusters(rows, n)) {
-      if (cluster.rows.back() < static_cast<std::int32_t>(first_inequality)) continue;
-      const LocalCluster local = localize(cluster, rows, P.mass);
-      std::vector<bool> equality;
-      for (std::int32_t r : cluster.rows)
-        equality.push_back(r < static_cast<std::int32_t>(first_inequality));
-      std::vector<Vec3> p_local = gather(p, cluster.particles);
-      const ReflectionStats r = reflect(local, equality, gather(q, cluster.particles), p_local,
-                                        system.box, reflection_, constraints_.tolerances.velocity);
-      stats_.reflected += r.reflected;
-      stats_.stalled += r.capped ? 1 : 0;
-      scatter(p_local, cluster.particles, p);
-    }
+    reflect_clusters(system, rows, constraints_.equalities.size(), q, p);
+    predicted = moved(free_displacement(p));
   }
+  stats_.active += static_cast<std::int64_t>(active.size());
 
   // Smooth set: active at q and tangent to the momenta after reflection.
   std::vector<Constraint> smooth;
   for (const Constraint& c : active) {
     const ConstraintValue v = evaluate(c, q.data(), system.box);
-    if (std::abs(v.gap) > constraints_.tolerances.gap) continue;
-    double normal_velocity = dot(v.u, p[c.i]) / P.mass[c.i];
-    if (c.j >= 0) normal_velocity -= dot(v.u, p[c.j]) / P.mass[c.j];
-    if (std::abs(normal_velocity) <= constraints_.tolerances.velocity) smooth.push_back(c);
+    if (std::abs(v.gap) > tol.gap) continue;
+    if (std::abs(normal_velocity(c, v.u, p, P)) <= tol.velocity) smooth.push_back(c);
   }
   stats_.smooth += static_cast<std::int64_t>(smooth.size());
 
-  // Position update.
-  std::vector<Vec3> x = unconstrained(p);
-  std::vector<Constraint> rows = constraints_.equalities;
-  rows.insert(rows.end(), smooth.begin(), smooth.end());
-  if (!rows.empty()) {
-    std::vector<bool> equality(rows.size(), false);
-    std::fill(equality.begin(),
-              equality.begin() + static_cast<std::ptrdiff_t>(constraints_.equalities.size()), true);
-    solve_positions(system, rows, equality, q, x);
+  // Position update, then the feasibility guard: inequality rows that would still end the
+  // step overlapped join the complementarity set and the step is solved again.
+  std::vector<Vec3> delta = free_displacement(p);
+  std::vector<Constraint> held = smooth;  // complementarity rows of the position update
+  std::vector<Constraint> landed;         // rows added by the guard this step
+  for (int round = 0;; ++round) {
+    std::vector<Vec3> d = delta;
+    std::vector<Constraint> rows = constraints_.equalities;
+    rows.insert(rows.end(), held.begin(), held.end());
+    if (!rows.empty()) {
+      std::vector<bool> equality(rows.size(), false);
+      std::fill_n(equality.begin(), constraints_.equalities.size(), true);
+      solve_positions(system, rows, equality, q, d);
+    }
+    const std::vector<Vec3> x = moved(d);
+    std::vector<Constraint> violated;
+    if (feasibility_ != Feasibility::none) {
+      for (const Constraint& c : constraints_.active_inequalities(P, q.data(), x.data(), list, system.box)) {
+        if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c)) violated.push_back(c);
+      }
+    }
+    if (violated.empty() || round == 8) {
+      delta = d;
+      break;
+    }
+    held.insert(held.end(), violated.begin(), violated.end());
+    landed.insert(landed.end(), violated.begin(), violated.end());
   }
+  stats_.fallbacks += static_cast<std::int64_t>(landed.size());
 
-  // Momentum update: p = M (x - q) / h + h/2 F(x), then projected onto the equality rows and
-  // the smooth rows still active at x.
-  for (std::size_t i = 0; i < n; ++i) p[i] = (x[i] - q[i]) * (P.mass[i] / h);
-  P.position = x;
+  // Momentum update: p = M d / h + h/2 F(x), projected onto the equality rows and the held
+  // rows still active at x (a landed row too, when the guard is inelastic).
+  for (std::size_t i = 0; i < n; ++i) {
+    P.position[i] = q[i] + delta[i];
+    p[i] = delta[i] * (P.mass[i] / h);
+  }
   system.step += 1;
   system.time += h;
   engine_.compute(system, tally);
   const std::vector<Vec3>& f = engine_.force();
   for (std::size_t i = 0; i < n; ++i) p[i] += f[i] * (0.5 * h);
   std::vector<Constraint> momentum_rows = constraints_.equalities;
-  for (const Constraint& c : smooth) {
-    if (std::abs(evaluate(c, P.position.data(), system.box).gap) <= constraints_.tolerances.gap) {
+  for (const Constraint& c : held) {
+    const bool elastic_landing = feasibility_ == Feasibility::reflect && contains(landed, c);
+    if (!elastic_landing && std::abs(evaluate(c, P.position.data(), system.box).gap) <= tol.gap) {
       momentum_rows.push_back(c);
     }
   }
   if (!momentum_rows.empty()) project_momenta(system, momentum_rows, P.position, p);
+  if (feasibility_ == Feasibility::reflect && !landed.empty()) {
+    // The landed rows now touch: reflect the momenta that still approach them, at x.
+    std::vector<Constraint> rows = constraints_.equalities;
+    rows.insert(rows.end(), landed.begin(), landed.end());
+    reflect_clusters(system, rows, constraints_.equalities.size(), P.position, p);
+  }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
   record_geometry(system);
@@ -261,6 +331,7 @@ std::vector<std::pair<std::string, double>> Gvi::take_statistics() {
           {"smooth_per_step", static_cast<double>(s.smooth) / steps},
           {"stalled_reflections", static_cast<double>(s.stalled)},
           {"penetrating_steps", static_cast<double>(s.penetrations)},
+          {"landings", static_cast<double>(s.fallbacks)},
           {"solver_iterations_mean",
            s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)
                         : 0.0},

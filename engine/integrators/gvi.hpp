@@ -15,7 +15,8 @@ struct GviStatistics {
   std::int64_t reflected = 0;     // rows that received a reflection impulse
   std::int64_t smooth = 0;        // rows in the smooth sets
   std::int64_t stalled = 0;       // reflections capped or stalled
-  std::int64_t penetrations = 0;  // inequality rows ending a step below -tolerance
+  std::int64_t penetrations = 0;  // steps ending with an inequality below -tolerance
+  std::int64_t fallbacks = 0;     // rows the feasibility guard landed
   std::int64_t solves = 0, solver_iterations = 0;
   int max_solver_iterations = 0;
   double min_gap = std::numeric_limits<double>::infinity();
@@ -27,10 +28,18 @@ struct GviStatistics {
 // reflection, smooth set, position update (a complementarity problem per cluster),
 // momentum update. With rods only it is RATTLE; with no constraints, velocity Verlet.
 // Choices the paper leaves open are documented in the README ("GVI").
+//
+// Feasibility guard (the paper lets a step end overlapped, e.g. a slow particle pulled into
+// a wall whose predicted overlap it does not approach fast enough to reflect): rows that
+// would end the step overlapped join the position update's complementarity set, which
+// lands them at contact; then `reflect` reflects the momenta still approaching them at the
+// end of the step (elastic), `inelastic` projects that approach away, `none` keeps the
+// literal algorithm (overlaps are only counted).
+enum class Feasibility { reflect, inelastic, none };
 class Gvi final : public Integrator {
  public:
   Gvi(const ForceField& force_field, ConstraintSet constraints, double skin, double timestep,
-      ReflectionOperator reflection, const Particles& particles);
+      ReflectionOperator reflection, Feasibility feasibility, const Particles& particles);
 
   std::string name() const override { return "gvi"; }
   double timestep() const override { return dt_; }
@@ -45,7 +54,10 @@ class Gvi final : public Integrator {
  private:
   void solve_positions(System& system, const std::vector<Constraint>& rows,
                        const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                       std::vector<Vec3>& x);
+                       std::vector<Vec3>& delta);
+  void reflect_clusters(System& system, const std::vector<Constraint>& rows,
+                        std::size_t first_inequality, const std::vector<Vec3>& x,
+                        std::vector<Vec3>& p);
   void project_momenta(System& system, const std::vector<Constraint>& rows,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p);
   void record_geometry(const System& system);
@@ -54,6 +66,7 @@ class Gvi final : public Integrator {
   ForceEngine engine_;
   double dt_;
   ReflectionOperator reflection_;
+  Feasibility feasibility_;
   GviStatistics stats_;
 };
 

@@ -76,6 +76,7 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
     }
   }
   out.x = std::move(x);
+  out.correction = unflatten(Wc * out.z);
   return out;
 }
 

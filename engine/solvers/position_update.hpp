@@ -16,6 +16,9 @@ namespace deli {
 // complementarity residual is below `tolerance` (sigma).
 struct PositionUpdate {
   std::vector<Vec3> x;
+  // x - x0 = h M^-1 C(q) z, computed as such: the momentum update uses it instead of the
+  // difference of positions, which would lose digits to cancellation.
+  std::vector<Vec3> correction;
   Eigen::VectorXd z;
   SolverStatus status;
 };

@@ -356,6 +356,11 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   input.integrator = integrator->choice("type", {"verlet", "gvi"}, "verlet");
   if (input.integrator == "gvi") {
     integrator->choice("lagrangian", {"verlet"}, "verlet");
+    const std::string guard =
+        integrator->choice("feasibility", {"reflect", "inelastic", "none"}, "reflect");
+    input.feasibility = guard == "reflect"     ? Feasibility::reflect
+                        : guard == "inelastic" ? Feasibility::inelastic
+                                               : Feasibility::none;
     if (auto r = integrator->table("reflection")) {
       input.reflection = r->choice("operator", {"generalized", "moreau"}, "generalized") == "moreau"
                              ? ReflectionOperator::moreau
