@@ -68,7 +68,7 @@ std::string dump_failed_problem(const System& system, const LocalCluster& cluste
 
 void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
                           const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                          std::vector<Vec3>& delta) {
+                          const std::vector<Vec3>& delta, std::vector<Vec3>& impulse) {
   const Particles& particles = system.particles;
   for (const Cluster& cluster : find_clusters(rows, particles.size())) {
     const LocalCluster local = localize(cluster, rows, particles.mass);
@@ -96,7 +96,7 @@ void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
                             "; reduce the timestep");
     }
     for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
-      delta[cluster.particles[k]] += solved.correction[k];
+      impulse[cluster.particles[k]] = solved.impulse[k];
     }
   }
 }
@@ -127,10 +127,11 @@ void Gvi::setup(System& system) {
   // Start on the manifold: positions onto the equality constraints (a position update from
   // rest), then momenta tangent to it.
   if (!constraints_.equalities.empty()) {
-    std::vector<Vec3> delta(P.size());
+    std::vector<Vec3> impulse(P.size());
     solve_positions(system, constraints_.equalities,
-                    std::vector<bool>(constraints_.equalities.size(), true), P.position, delta);
-    for (std::size_t i = 0; i < P.size(); ++i) P.position[i] += delta[i];
+                    std::vector<bool>(constraints_.equalities.size(), true), P.position,
+                    std::vector<Vec3>(P.size()), impulse);
+    for (std::size_t i = 0; i < P.size(); ++i) P.position[i] += impulse[i] * (dt_ / P.mass[i]);
   }
   const double gap = constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
   if (gap < -constraints_.tolerances.gap) {
@@ -250,39 +251,50 @@ void Gvi::step(System& system, bool tally) {
 
   // Position update, then the feasibility guard: inequality rows that would still end the
   // step overlapped join the complementarity set and the step is solved again.
-  std::vector<Vec3> delta = free_displacement(p);
+  // Momenta before the new forces: p + h/2 F(q) + impulse; positions q + h M^-1 that.
+  const std::vector<Vec3>& f_start = engine_.force();
+  std::vector<Vec3> half(n);
+  for (std::size_t i = 0; i < n; ++i) half[i] = p[i] + f_start[i] * (0.5 * h);
+  auto displaced = [&](const std::vector<Vec3>& impulse) {
+    std::vector<Vec3> x(n);
+    for (std::size_t i = 0; i < n; ++i) x[i] = q[i] + (half[i] + impulse[i]) * (h / P.mass[i]);
+    return x;
+  };
+  std::vector<Vec3> free(n);
+  for (std::size_t i = 0; i < n; ++i) free[i] = half[i] * (h / P.mass[i]);
+  std::vector<Vec3> impulse(n);
   std::vector<Constraint> held = smooth;  // complementarity rows of the position update
   std::vector<Constraint> landed;         // rows added by the guard this step
   for (int round = 0;; ++round) {
-    std::vector<Vec3> d = delta;
+    std::fill(impulse.begin(), impulse.end(), Vec3{});
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), held.begin(), held.end());
     if (!rows.empty()) {
       std::vector<bool> equality(rows.size(), false);
       std::fill_n(equality.begin(), constraints_.equalities.size(), true);
-      solve_positions(system, rows, equality, q, d);
+      solve_positions(system, rows, equality, q, free, impulse);
     }
-    const std::vector<Vec3> x = moved(d);
+    const std::vector<Vec3> x = displaced(impulse);
     std::vector<Constraint> violated;
     if (feasibility_ != Feasibility::none) {
       for (const Constraint& c : constraints_.active_inequalities(P, q.data(), x.data(), list, system.box)) {
         if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c)) violated.push_back(c);
       }
     }
-    if (violated.empty() || round == 8) {
-      delta = d;
-      break;
-    }
+    if (violated.empty() || round == 8) break;
     held.insert(held.end(), violated.begin(), violated.end());
     landed.insert(landed.end(), violated.begin(), violated.end());
   }
   stats_.fallbacks += static_cast<std::int64_t>(landed.size());
 
-  // Momentum update: p = M d / h + h/2 F(x), projected onto the equality rows and the held
-  // rows still active at x (a landed row too, when the guard is inelastic).
-  for (std::size_t i = 0; i < n; ++i) {
-    P.position[i] = q[i] + delta[i];
-    p[i] = delta[i] * (P.mass[i] / h);
+  // Momentum update: p + h/2 (F(q) + F(x)) + impulse, projected onto the equality rows and
+  // the held rows still active at x (a landed row too, when the guard is inelastic).
+  {
+    const std::vector<Vec3> x = displaced(impulse);
+    for (std::size_t i = 0; i < n; ++i) {
+      P.position[i] = x[i];
+      p[i] = half[i] + impulse[i];
+    }
   }
   system.step += 1;
   system.time += h;

@@ -54,7 +54,7 @@ class Gvi final : public Integrator {
  private:
   void solve_positions(System& system, const std::vector<Constraint>& rows,
                        const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                       std::vector<Vec3>& delta);
+                       const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p);

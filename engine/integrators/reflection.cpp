@@ -5,6 +5,24 @@
 
 namespace deli {
 
+Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector<bool>& equality,
+                                  const std::vector<Vec3>& x, const Box& box) {
+  std::vector<int> eq_rows, in_rows;
+  for (std::size_t k = 0; k < cluster.rows.size(); ++k) {
+    (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
+  }
+  Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, x, box);
+  if (!eq_rows.empty()) {
+    // N <- (I - F (F^T W F)^+ F^T W) G: normals in the rod manifold's cotangent space.
+    const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
+    const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, x, box);
+    const Eigen::MatrixXd WF = w.asDiagonal() * F;
+    const Eigen::MatrixXd FWF = F.transpose() * WF;
+    N -= F * FWF.completeOrthogonalDecomposition().solve(WF.transpose() * N);
+  }
+  return N;
+}
+
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
                         ReflectionOperator op, double tolerance, int max_iterations) {
@@ -15,14 +33,7 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
   ReflectionStats stats;
   if (in_rows.empty()) return stats;
   const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
-  Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, q, box);
-  if (!eq_rows.empty()) {
-    // N <- (I - F (F^T W F)^+ F^T W) G: normals in the rod manifold's cotangent space.
-    const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
-    const Eigen::MatrixXd WF = w.asDiagonal() * F;
-    const Eigen::MatrixXd FWF = F.transpose() * WF;
-    N -= F * FWF.completeOrthogonalDecomposition().solve(WF.transpose() * N);
-  }
+  const Eigen::MatrixXd N = projected_normals(cluster, equality, q, box);
   const Eigen::VectorXd k_diag = 0.5 * w;  // K = M^-1 / 2 (E = H)
   Eigen::VectorXd flat = flatten(p);
   std::vector<bool> reflected(in_rows.size(), false);

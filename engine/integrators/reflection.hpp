@@ -1,5 +1,6 @@
 #pragma once
 
+#include <Eigen/Dense>
 #include <vector>
 
 #include "constraints/clusters.hpp"
@@ -21,6 +22,11 @@ struct ReflectionStats {
 // |L^T (N lambda + 2 p)| over lambda >= 0 (K = L L^T), whose optimality conditions give
 // lambda^T N^T K (N lambda + 2 p) = 0: E conserved exactly whatever the number of rows.
 // Rows with normal velocity below -tolerance count as approaching.
+// The cluster's inequality normals at x projected onto the cotangent space of its equality
+// rows (columns in the order of the inequality rows), in the 3n local coordinates.
+Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector<bool>& equality,
+                                  const std::vector<Vec3>& x, const Box& box);
+
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
                         ReflectionOperator op, double tolerance, int max_iterations = 100);

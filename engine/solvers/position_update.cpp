@@ -21,7 +21,8 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
   for (Eigen::Index k = 0; k < m; ++k) all[k] = static_cast<int>(k);
   const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
   // Directions of the impulses: gradients at the start of the step, fixed.
-  const Eigen::MatrixXd Wc = w.asDiagonal() * gradient_matrix(cluster, all, q, box) * h;
+  const Eigen::MatrixXd Cq = gradient_matrix(cluster, all, q, box);
+  const Eigen::MatrixXd Wc = w.asDiagonal() * Cq * h;
   const Eigen::VectorXd x0_flat = flatten(x0);
 
   PositionUpdate out;
@@ -76,7 +77,7 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
     }
   }
   out.x = std::move(x);
-  out.correction = unflatten(Wc * out.z);
+  out.impulse = unflatten(Cq * out.z);
   return out;
 }
 

@@ -16,9 +16,10 @@ namespace deli {
 // complementarity residual is below `tolerance` (sigma).
 struct PositionUpdate {
   std::vector<Vec3> x;
-  // x - x0 = h M^-1 C(q) z, computed as such: the momentum update uses it instead of the
-  // difference of positions, which would lose digits to cancellation.
-  std::vector<Vec3> correction;
+  // C(q) z per particle: the constraint impulse. x - x0 = h M^-1 impulse; the momentum
+  // update adds the impulse itself rather than recovering it from positions, which would
+  // lose digits to cancellation and bias the momenta by rounding at every step.
+  std::vector<Vec3> impulse;
   Eigen::VectorXd z;
   SolverStatus status;
 };
