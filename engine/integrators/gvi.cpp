@@ -7,6 +7,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "solvers/cluster_matrices.hpp"
 #include "solvers/momentum_update.hpp"
 #include "solvers/position_update.hpp"
 
@@ -77,23 +78,24 @@ void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
     const std::vector<Vec3> q_local = gather(q, cluster.particles);
     std::vector<Vec3> x0_local = gather(delta, cluster.particles);
     for (std::size_t k = 0; k < x0_local.size(); ++k) x0_local[k] += q_local[k];
-    const PositionUpdate solved = solve_position_update(local, local_equality, q_local, x0_local,
-                                                        dt_, system.box, constraints_.tolerances.solver);
+    const PositionUpdate solved = solve_position_update(
+        local, local_equality, q_local, x0_local, dt_, system.box, constraints_.tolerances.solver);
     ++stats_.solves;
     stats_.solver_iterations += solved.status.iterations;
     stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
     if (!solved.status.converged) {
-      const std::string file = dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
-      throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": the position update did not converge for the cluster of " +
-                            std::to_string(cluster.particles.size()) + " atoms from atom " +
-                            std::to_string(particles.id[cluster.particles.front()]) + " (" +
-                            std::to_string(cluster.rows.size()) + " constraints, first: " +
-                            describe(rows[cluster.rows.front()], particles) + "): residual " +
-                            std::to_string(solved.status.residual) + " after " +
-                            std::to_string(solved.status.iterations) +
-                            " Newton iterations; the problem is in " + file +
-                            "; reduce the timestep");
+      const std::string file =
+          dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
+      throw SimulationError(
+          "step " + std::to_string(system.step + 1) +
+          ": the position update did not converge for the cluster of " +
+          std::to_string(cluster.particles.size()) + " atoms from atom " +
+          std::to_string(particles.id[cluster.particles.front()]) + " (" +
+          std::to_string(cluster.rows.size()) +
+          " constraints, first: " + describe(rows[cluster.rows.front()], particles) +
+          "): residual " + std::to_string(solved.status.residual) + " after " +
+          std::to_string(solved.status.iterations) + " Newton iterations; the problem is in " +
+          file + "; reduce the timestep");
     }
     for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
       impulse[cluster.particles[k]] = solved.impulse[k];
@@ -133,11 +135,13 @@ void Gvi::setup(System& system) {
                     std::vector<Vec3>(P.size()), impulse);
     for (std::size_t i = 0; i < P.size(); ++i) P.position[i] += impulse[i] * (dt_ / P.mass[i]);
   }
-  const double gap = constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
+  const double gap =
+      constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
   if (gap < -constraints_.tolerances.gap) {
-    throw SimulationError("the starting configuration overlaps: the smallest hard-sphere or wall "
-                          "gap is " + std::to_string(gap) +
-                          " sigma; start from a configuration without overlaps");
+    throw SimulationError(
+        "the starting configuration overlaps: the smallest hard-sphere or wall "
+        "gap is " +
+        std::to_string(gap) + " sigma; start from a configuration without overlaps");
   }
   engine_.compute(system);
   std::vector<Vec3> p(P.size());
@@ -180,7 +184,8 @@ void Gvi::reflect_clusters(System& system, const std::vector<Constraint>& rows,
     if (cluster.rows.back() < static_cast<std::int32_t>(first_inequality)) continue;
     const LocalCluster local = localize(cluster, rows, P.mass);
     std::vector<bool> equality;
-    for (std::int32_t r : cluster.rows) equality.push_back(r < static_cast<std::int32_t>(first_inequality));
+    for (std::int32_t r : cluster.rows)
+      equality.push_back(r < static_cast<std::int32_t>(first_inequality));
     std::vector<Vec3> p_local = gather(p, cluster.particles);
     const ReflectionStats r = reflect(local, equality, gather(x, cluster.particles), p_local,
                                       system.box, reflection_, constraints_.tolerances.velocity);
@@ -221,6 +226,7 @@ void Gvi::step(System& system, bool tally) {
     }
   }
   const std::vector<Vec3> q = P.position;
+  const std::vector<Vec3> p_start = p;
   const NeighborList& list = engine_.neighbors();
 
   // Extended active set and reflection. A reflection can send a particle into a contact
@@ -229,7 +235,8 @@ void Gvi::step(System& system, bool tally) {
   std::vector<Constraint> active;
   for (int round = 0; round < 16; ++round) {
     bool grew = false;
-    for (const Constraint& c : constraints_.active_inequalities(P, q.data(), predicted.data(), list, system.box)) {
+    for (const Constraint& c :
+         constraints_.active_inequalities(P, q.data(), predicted.data(), list, system.box)) {
       if (!contains(active, c)) active.push_back(c), grew = true;
     }
     if (!grew) break;
@@ -277,8 +284,10 @@ void Gvi::step(System& system, bool tally) {
     const std::vector<Vec3> x = displaced(impulse);
     std::vector<Constraint> violated;
     if (feasibility_ != Feasibility::none) {
-      for (const Constraint& c : constraints_.active_inequalities(P, q.data(), x.data(), list, system.box)) {
-        if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c)) violated.push_back(c);
+      for (const Constraint& c :
+           constraints_.active_inequalities(P, q.data(), x.data(), list, system.box)) {
+        if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c))
+          violated.push_back(c);
       }
     }
     if (violated.empty() || round == 8) break;
@@ -286,6 +295,16 @@ void Gvi::step(System& system, bool tally) {
     landed.insert(landed.end(), violated.begin(), violated.end());
   }
   stats_.fallbacks += static_cast<std::int64_t>(landed.size());
+
+  // The energy to restore after a landing: H at the start of the step (the list is valid
+  // at q, so this evaluation neither rebuilds nor wraps).
+  double target_energy = 0.0;
+  if (feasibility_ == Feasibility::restore && !landed.empty()) {
+    const double potential =
+        engine_.last().tallied ? engine_.last().potential : engine_.compute(system, true).potential;
+    target_energy = potential;
+    for (std::size_t i = 0; i < n; ++i) target_energy += 0.5 * norm2(p_start[i]) / P.mass[i];
+  }
 
   // Momentum update: p + h/2 (F(q) + F(x)) + impulse, projected onto the equality rows and
   // the held rows still active at x (a landed row too, when the guard is inelastic).
@@ -298,26 +317,72 @@ void Gvi::step(System& system, bool tally) {
   }
   system.step += 1;
   system.time += h;
-  engine_.compute(system, tally);
+  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && !landed.empty()));
   const std::vector<Vec3>& f = engine_.force();
   for (std::size_t i = 0; i < n; ++i) p[i] += f[i] * (0.5 * h);
   std::vector<Constraint> momentum_rows = constraints_.equalities;
   for (const Constraint& c : held) {
-    const bool elastic_landing = feasibility_ == Feasibility::reflect && contains(landed, c);
+    const bool elastic_landing =
+        (feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore) &&
+        contains(landed, c);
     if (!elastic_landing && std::abs(evaluate(c, P.position.data(), system.box).gap) <= tol.gap) {
       momentum_rows.push_back(c);
     }
   }
   if (!momentum_rows.empty()) project_momenta(system, momentum_rows, P.position, p);
-  if (feasibility_ == Feasibility::reflect && !landed.empty()) {
+  const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
+  if (elastic && !landed.empty()) {
     // The landed rows now touch: reflect the momenta that still approach them, at x.
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), landed.begin(), landed.end());
     reflect_clusters(system, rows, constraints_.equalities.size(), P.position, p);
   }
+  if (feasibility_ == Feasibility::restore && !landed.empty()) {
+    restore_energy(system, landed, target_energy, p);
+  }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
   record_geometry(system);
+}
+
+void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
+                         std::vector<Vec3>& p) {
+  const Particles& P = system.particles;
+  const std::size_t n = P.size();
+  // Direction: the sum of the landed rows' normals at x, projected onto the rod manifold's
+  // cotangent space so that the momenta stay tangent to it.
+  std::vector<Vec3> d(n);
+  std::vector<Constraint> rows = constraints_.equalities;
+  rows.insert(rows.end(), landed.begin(), landed.end());
+  const auto first_landed = static_cast<std::int32_t>(constraints_.equalities.size());
+  for (const Cluster& cluster : find_clusters(rows, n)) {
+    if (cluster.rows.back() < first_landed) continue;
+    const LocalCluster local = localize(cluster, rows, P.mass);
+    std::vector<bool> equality;
+    for (std::int32_t r : cluster.rows) equality.push_back(r < first_landed);
+    const Eigen::MatrixXd N =
+        projected_normals(local, equality, gather(P.position, cluster.particles), system.box);
+    const std::vector<Vec3> sum = unflatten(N.rowwise().sum());
+    for (std::size_t k = 0; k < cluster.particles.size(); ++k) d[cluster.particles[k]] += sum[k];
+  }
+  double kinetic = 0, a = 0, b = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    kinetic += 0.5 * norm2(p[i]) / P.mass[i];
+    a += norm2(d[i]) / P.mass[i];
+    b += dot(d[i], p[i]) / P.mass[i];
+  }
+  const double missing = target - (kinetic + engine_.last().potential);
+  if (!(a > 0)) return;
+  // K(p + alpha d) = K(p) + missing: a/2 alpha^2 + b alpha - missing = 0.
+  const double discriminant = b * b + 2.0 * a * missing;
+  double alpha;
+  if (discriminant >= 0) {
+    alpha = (-b + std::sqrt(discriminant)) / a;
+  } else {
+    alpha = -b / a;
+    ++stats_.deficits;
+  }
+  for (std::size_t i = 0; i < n; ++i) p[i] += d[i] * alpha;
 }
 
 void Gvi::record_geometry(const System& system) {
@@ -344,6 +409,7 @@ std::vector<std::pair<std::string, double>> Gvi::take_statistics() {
           {"stalled_reflections", static_cast<double>(s.stalled)},
           {"penetrating_steps", static_cast<double>(s.penetrations)},
           {"landings", static_cast<double>(s.fallbacks)},
+          {"landing_deficits", static_cast<double>(s.deficits)},
           {"solver_iterations_mean",
            s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)
                         : 0.0},

@@ -17,6 +17,7 @@ struct GviStatistics {
   std::int64_t stalled = 0;       // reflections capped or stalled
   std::int64_t penetrations = 0;  // steps ending with an inequality below -tolerance
   std::int64_t fallbacks = 0;     // rows the feasibility guard landed
+  std::int64_t deficits = 0;      // landings whose energy could not be restored
   std::int64_t solves = 0, solver_iterations = 0;
   int max_solver_iterations = 0;
   double min_gap = std::numeric_limits<double>::infinity();
@@ -35,7 +36,11 @@ struct GviStatistics {
 // lands them at contact; then `reflect` reflects the momenta still approaching them at the
 // end of the step (elastic), `inelastic` projects that approach away, `none` keeps the
 // literal algorithm (overlaps are only counted).
-enum class Feasibility { reflect, inelastic, none };
+// `restore` is `reflect` followed by an impulse along the landed rows' normals that brings
+// the energy H back to its value at the start of the step (the landing moved the particle
+// and changed its potential energy); where the normal motion cannot supply the difference
+// the normal velocity is zeroed and the event counted as a deficit.
+enum class Feasibility { restore, reflect, inelastic, none };
 class Gvi final : public Integrator {
  public:
   Gvi(const ForceField& force_field, ConstraintSet constraints, double skin, double timestep,
@@ -61,6 +66,8 @@ class Gvi final : public Integrator {
   void project_momenta(System& system, const std::vector<Constraint>& rows,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p);
   void record_geometry(const System& system);
+  void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
+                      std::vector<Vec3>& p);
 
   ConstraintSet constraints_;
   ForceEngine engine_;

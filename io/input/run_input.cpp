@@ -357,8 +357,9 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (input.integrator == "gvi") {
     integrator->choice("lagrangian", {"verlet"}, "verlet");
     const std::string guard =
-        integrator->choice("feasibility", {"reflect", "inelastic", "none"}, "reflect");
-    input.feasibility = guard == "reflect"     ? Feasibility::reflect
+        integrator->choice("feasibility", {"restore", "reflect", "inelastic", "none"}, "restore");
+    input.feasibility = guard == "restore"     ? Feasibility::restore
+                        : guard == "reflect"   ? Feasibility::reflect
                         : guard == "inelastic" ? Feasibility::inelastic
                                                : Feasibility::none;
     if (auto r = integrator->table("reflection")) {

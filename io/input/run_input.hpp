@@ -7,8 +7,8 @@
 #include "constraints/constraint_set.hpp"
 #include "force_field.hpp"
 #include "force_field_spec.hpp"
-#include "integrators/quickmin.hpp"
 #include "integrators/gvi.hpp"
+#include "integrators/quickmin.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -32,7 +32,7 @@ struct RunInput {
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
   ReflectionOperator reflection = ReflectionOperator::generalized;
-  Feasibility feasibility = Feasibility::reflect;
+  Feasibility feasibility = Feasibility::restore;
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.

@@ -1,11 +1,12 @@
 // GVI (Verlet) on the behaviours the paper claims and the GVI notes measured: bounces that
 // keep their energy, exchanges of velocity, resting and sliding contact, simultaneous
 // contacts, conservation of momenta.
+#include "integrators/gvi.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "integrators/gvi.hpp"
 #include "simulation/thermo.hpp"
 #include "support/atoms_input.hpp"
 
@@ -35,9 +36,7 @@ struct GviRun {
   }
   System& system() { return input.system; }
   Particles& particles() { return input.system.particles; }
-  double energy() {
-    return kinetic_energy(particles()) + gvi->forces().last().potential;
-  }
+  double energy() { return kinetic_energy(particles()) + gvi->forces().last().potential; }
   void step() { gvi->step(input.system, true); }
 };
 
@@ -56,10 +55,11 @@ Vec3 angular_momentum(const Particles& p, const Box& box, Vec3 about = {}) {
 TEST(Gvi, BallDropKeepsApexAndEnergy) {
   const double h = 0.01;
   GviRun run(input_with_atoms("ball", {{{0, 0, 1.5}, {0, 0, 0}}}, "fff", {-5, -5, 0}, {5, 5, 10},
-                           kNoPairs + "[forcefield.external]\ngravity = [0, 0, -9.8]\n"
-                                      "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
-                                      "walls = [{ type = \"plane\", normal = [0, 0, 1] }]\n" +
-                               with_timestep(h)));
+                              kNoPairs +
+                                  "[forcefield.external]\ngravity = [0, 0, -9.8]\n"
+                                  "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+                                  "walls = [{ type = \"plane\", normal = [0, 0, 1] }]\n" +
+                                  with_timestep(h)));
   const double e0 = run.energy();
   double worst_energy = 0, lowest_apex = 1e9, highest_apex = 0, previous_vz = 0;
   int bounces = 0;
@@ -84,10 +84,10 @@ TEST(Gvi, BallDropKeepsApexAndEnergy) {
 
 // Equal spheres head on: velocities exchange exactly (one reflection, normal along x).
 TEST(Gvi, HeadOnSpheresExchangeVelocities) {
-  GviRun run(input_with_atoms("headon", {{{-2, 0, 0}, {1.25, 0, 0}}, {{2, 0, 0}, {-0.5, 0, 0}}}, "fff",
-                           {-5, -5, -5}, {5, 5, 5},
-                           kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" +
-                               with_timestep(0.01)));
+  GviRun run(input_with_atoms(
+      "headon", {{{-2, 0, 0}, {1.25, 0, 0}}, {{2, 0, 0}, {-0.5, 0, 0}}}, "fff", {-5, -5, -5},
+      {5, 5, 5},
+      kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" + with_timestep(0.01)));
   for (int n = 0; n < 400; ++n) run.step();
   const Particles& p = run.particles();
   EXPECT_NEAR(p.velocity[0].x, -0.5, 1e-14);
@@ -98,11 +98,13 @@ TEST(Gvi, HeadOnSpheresExchangeVelocities) {
 
 // A sphere resting on a plane under gravity neither sinks nor bounces over 1e5 steps.
 TEST(Gvi, RestingContactStaysAtRest) {
-  GviRun run(input_with_atoms("rest", {{{0.3, -0.2, 0.5}, {0, 0, 0}}}, "fff", {-5, -5, 0}, {5, 5, 10},
-                           kNoPairs + "[forcefield.external]\ngravity = [0, 0, -9.8]\n"
-                                      "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
-                                      "walls = [{ type = \"plane\", normal = [0, 0, 1] }]\n" +
-                               with_timestep(0.1)));
+  GviRun run(input_with_atoms("rest", {{{0.3, -0.2, 0.5}, {0, 0, 0}}}, "fff", {-5, -5, 0},
+                              {5, 5, 10},
+                              kNoPairs +
+                                  "[forcefield.external]\ngravity = [0, 0, -9.8]\n"
+                                  "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+                                  "walls = [{ type = \"plane\", normal = [0, 0, 1] }]\n" +
+                                  with_timestep(0.1)));
   for (int n = 0; n < 100000; ++n) {
     run.step();
     const Particles& p = run.particles();
@@ -116,10 +118,11 @@ TEST(Gvi, RestingContactStaysAtRest) {
 TEST(Gvi, SlidesAlongTheInsideOfASphere) {
   const double R = 5.0, r = 0.5;
   GviRun run(input_with_atoms("slide", {{{R - r, 0, 0}, {0, 1.0, 0.3}}}, "fff", {-6, -6, -6},
-                           {6, 6, 6},
-                           kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
-                                      "walls = [{ type = \"inside_sphere\", radius = 5.0 }]\n" +
-                               with_timestep(0.05)));
+                              {6, 6, 6},
+                              kNoPairs +
+                                  "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+                                  "walls = [{ type = \"inside_sphere\", radius = 5.0 }]\n" +
+                                  with_timestep(0.05)));
   const Vec3 l0 = angular_momentum(run.particles(), run.system().box);
   const double speed0 = norm(run.particles().velocity[0]);
   for (int n = 0; n < 100000; ++n) {
@@ -132,17 +135,20 @@ TEST(Gvi, SlidesAlongTheInsideOfASphere) {
   EXPECT_LT(norm(angular_momentum(p, run.system().box) - l0), 1e-12 * norm(l0));
 }
 
-double kinetic(const Particles& p) { return kinetic_energy(p); }
+double kinetic(const Particles& p) {
+  return kinetic_energy(p);
+}
 
 // A sphere flying into the corner of two perpendicular planes meets both at once: one
 // reflection satisfies both jump conditions, and the energy is kept to rounding.
 TEST(Gvi, CornerOfTwoPlanes) {
   GviRun run(input_with_atoms("corner", {{{1.5, 1.5, 0}, {-1.0, -1.0, 0.2}}}, "fff", {0, 0, -5},
-                           {5, 5, 5},
-                           kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
-                                      "walls = [{ type = \"plane\", normal = [1, 0, 0] },\n"
-                                      "         { type = \"plane\", normal = [0, 1, 0] }]\n" +
-                               with_timestep(0.01)));
+                              {5, 5, 5},
+                              kNoPairs +
+                                  "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+                                  "walls = [{ type = \"plane\", normal = [1, 0, 0] },\n"
+                                  "         { type = \"plane\", normal = [0, 1, 0] }]\n" +
+                                  with_timestep(0.01)));
   const double k0 = kinetic(run.particles());
   for (int n = 0; n < 300; ++n) run.step();
   const Particles& p = run.particles();
@@ -164,9 +170,9 @@ TEST(Gvi, NarrowWedgeTerminatesAndKeepsEnergy) {
                 n1.x, n1.y, n2.x, n2.y);
   // Start on the wedge's bisector, inside, moving towards the apex.
   GviRun run(input_with_atoms("wedge", {{{6.0, 0.0, 0}, {-1.0, 0.05, 0}}}, "fff", {-10, -10, -10},
-                           {10, 10, 10},
-                           kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" + walls +
-                               with_timestep(0.01)));
+                              {10, 10, 10},
+                              kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" +
+                                  walls + with_timestep(0.01)));
   const double k0 = kinetic(run.particles());
   for (int n = 0; n < 2000; ++n) run.step();
   const auto stats = run.gvi->take_statistics();
@@ -181,10 +187,10 @@ TEST(Gvi, NarrowWedgeTerminatesAndKeepsEnergy) {
 // A sphere hitting two touching spheres in a line: one generalized reflection, momentum
 // and energy kept, every pair separating or tangent afterwards.
 TEST(Gvi, SphereHitsTwoTouchingSpheres) {
-  GviRun run(input_with_atoms("three", {{{-3, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 0, 0}}, {{1, 0, 0}, {0, 0, 0}}},
-                           "fff", {-5, -5, -5}, {5, 5, 5},
-                           kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" +
-                               with_timestep(0.01)));
+  GviRun run(input_with_atoms(
+      "three", {{{-3, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 0, 0}}, {{1, 0, 0}, {0, 0, 0}}}, "fff",
+      {-5, -5, -5}, {5, 5, 5},
+      kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" + with_timestep(0.01)));
   const double k0 = kinetic(run.particles());
   for (int n = 0; n < 300; ++n) run.step();
   const Particles& p = run.particles();
@@ -203,19 +209,22 @@ TEST(Gvi, SphereHitsTwoTouchingSpheres) {
 TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
   std::vector<Atom> atoms;
   for (int k = 0; k < 6; ++k) {
-    atoms.push_back({{-2.5 + k, 0.3 * (k % 2), 0}, {0.3 * std::sin(k), 0.5 * std::cos(3.0 * k), 0.2 * k - 0.5}});
+    atoms.push_back({{-2.5 + k, 0.3 * (k % 2), 0},
+                     {0.3 * std::sin(k), 0.5 * std::cos(3.0 * k), 0.2 * k - 0.5}});
   }
   std::string rods = "rods = [";
-  for (int k = 1; k < 6; ++k) rods += "{ atoms = [" + std::to_string(k) + ", " + std::to_string(k + 1) + "], length = 1.0 },";
+  for (int k = 1; k < 6; ++k)
+    rods += "{ atoms = [" + std::to_string(k) + ", " + std::to_string(k + 1) + "], length = 1.0 },";
   rods += "]\n";
   GviRun run(input_with_atoms("ljchain", atoms, "fff", {-6, -6, -6}, {6, 6, 6},
-                           "[forcefield.special_bonds]\nlj = [1.0, 1.0, 1.0]\n"
-                           "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 3.0\n"
-                           "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 0.6 }]\n"
-                           "[constraints]\n" + rods +
-                               "hard_spheres = { diameter = 0.6 }\n"
-                               "walls = [{ type = \"inside_sphere\", radius = 5.0 }]\n" +
-                               with_timestep(0.01)));
+                              "[forcefield.special_bonds]\nlj = [1.0, 1.0, 1.0]\n"
+                              "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 3.0\n"
+                              "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 0.6 }]\n"
+                              "[constraints]\n" +
+                                  rods +
+                                  "hard_spheres = { diameter = 0.6 }\n"
+                                  "walls = [{ type = \"inside_sphere\", radius = 5.0 }]\n" +
+                                  with_timestep(0.01)));
   const Vec3 l0 = angular_momentum(run.particles(), run.system().box);
   const double e0 = run.energy();
   double worst_e = 0;
@@ -230,7 +239,8 @@ TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
   }
   const Vec3 l = angular_momentum(run.particles(), run.system().box);
   EXPECT_LT(norm(l - l0), 1e-12 * std::max(1.0, norm(l0)));
-  std::printf("LJ chain: max |E - E0| = %.3e (E0 = %.4f), |dL| = %.3e\n", worst_e, e0, norm(l - l0));
+  std::printf("LJ chain: max |E - E0| = %.3e (E0 = %.4f), |dL| = %.3e\n", worst_e, e0,
+              norm(l - l0));
 }
 
 // Pair contacts exchange momentum only: a hard-sphere gas in a periodic box keeps its total
@@ -255,8 +265,63 @@ TEST(Gvi, HardSphereGasKeepsLinearMomentum) {
     if (name == "min_gap") EXPECT_GT(value, -1e-10);
   }
   EXPECT_GT(reflected, 100) << "the gas should collide";
-  EXPECT_LT(norm(total_momentum(run.particles()) - m0), 1e-12 * static_cast<double>(run.particles().size()));
+  EXPECT_LT(norm(total_momentum(run.particles()) - m0),
+            1e-12 * static_cast<double>(run.particles().size()));
   EXPECT_NEAR(kinetic(run.particles()), k0, 1e-10 * k0);
+}
+
+}  // namespace
+}  // namespace deli
+
+namespace deli {
+namespace {
+
+// The notes' slow landing: a ball released at rest 0.02 above a floor with h = 0.1, less
+// than g h^2 / 2: the predictor is below the floor but nothing approaches, so the literal
+// algorithm ends steps overlapped (and cycles through the floor). The default guard
+// ("restore") lands it at contact, bounces it and gives back the energy of the start of the
+// step: no overlap, energy exact, for 1e5 steps.
+double slow_landing(Feasibility guard, double& min_gap) {
+  RunInput input = testing::input_with_atoms(
+      "slow", {{{0, 0, 0.52}, {0, 0, 0}}}, "fff", {-5, -5, 0}, {5, 5, 10},
+      "[forcefield.pair]\nstyle = \"none\"\n[forcefield.external]\ngravity = [0, 0, -9.8]\n"
+      "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+      "walls = [{ type = \"plane\", normal = [0, 0, 1] }]\n"
+      "[integrator]\ntype = \"gvi\"\ntimestep = 0.1\n[run]\nsteps = 0\n");
+  Gvi gvi(*input.force_field, input.constraints, input.skin, input.timestep,
+          ReflectionOperator::generalized, guard, input.system.particles);
+  System& s = input.system;
+  gvi.setup(s);
+  const double e0 = kinetic_energy(s.particles) + gvi.forces().last().potential;
+  double worst = 0;
+  min_gap = 1e9;
+  for (int n = 0; n < 100000; ++n) {
+    gvi.step(s, true);
+    worst =
+        std::max(worst, std::abs(kinetic_energy(s.particles) + gvi.forces().last().potential - e0));
+    min_gap = std::min(min_gap, s.particles.position[0].z - 0.5);
+  }
+  return worst;
+}
+
+TEST(GviFeasibility, SlowLandingRestoreKeepsEnergyWithoutOverlap) {
+  double gap = 0;
+  const double error = slow_landing(Feasibility::restore, gap);
+  EXPECT_GT(gap, -1e-10);
+  EXPECT_LT(error, 1e-12);
+}
+
+TEST(GviFeasibility, SlowLandingLiteralAlgorithmOverlaps) {
+  double gap = 0;
+  slow_landing(Feasibility::none, gap);
+  EXPECT_LT(gap, -0.02) << "the literal algorithm is expected to end steps below the floor";
+}
+
+TEST(GviFeasibility, SlowLandingInelasticLosesEnergy) {
+  double gap = 0;
+  const double error = slow_landing(Feasibility::inelastic, gap);
+  EXPECT_GT(gap, -1e-10);
+  EXPECT_GT(error, 0.1);
 }
 
 }  // namespace

@@ -26,7 +26,8 @@ inline RunInput input_with_atoms(const std::string& name, const std::vector<Atom
     std::ofstream data(dir + "/" + name + ".data");
     data.precision(17);
     data << name << "\n\n" << atoms.size() << " atoms\n" << types << " atom types\n\n";
-    data << lo.x << " " << hi.x << " xlo xhi\n" << lo.y << " " << hi.y << " ylo yhi\n"
+    data << lo.x << " " << hi.x << " xlo xhi\n"
+         << lo.y << " " << hi.y << " ylo yhi\n"
          << lo.z << " " << hi.z << " zlo zhi\n\nMasses\n\n";
     for (int t = 1; t <= types; ++t) {
       double m = 1.0;
