@@ -76,7 +76,12 @@ int command_validate(const std::vector<std::string>& args) {
               s.particles.size(), s.topology.bonds.size(), s.topology.angles.size(),
               s.box.periodic(0) ? 'p' : 'f', s.box.periodic(1) ? 'p' : 'f',
               s.box.periodic(2) ? 'p' : 'f');
-  const ValidationReport report = validate(input, options);
+  ValidationReport report;
+  try {
+    report = validate(input, options);
+  } catch (const UnsupportedModel& e) {
+    throw InputError(path + ": " + e.what());
+  }
   for (const std::string& why : report.skipped) std::printf("skipped: %s\n", why.c_str());
 
   // Energies side by side, then every check with its difference and tolerance.
