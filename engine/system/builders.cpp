@@ -120,10 +120,13 @@ System build_random_chains(const RandomChains& chains) {
         for (int attempt = 0; attempt < chains.attempts_per_bead && !placed; ++attempt) {
           Vec3 x = b == 0 ? Vec3{side * uniform(rng), side * uniform(rng), side * uniform(rng)}
                           : p.position[n - 1] + random_unit_vector(rng) * chains.bond_length;
-          std::array<int, 3> image{};
+          // Chains stay continuous when unwrapped: a bead's image flags continue its
+          // predecessor's.
+          std::array<int, 3> image = b == 0 ? std::array<int, 3>{} : p.image[n - 1];
           system.box.wrap(x, image);
           if (!grid.is_free(p.position, x)) continue;
           p.position[n] = x;
+          p.image[n] = image;
           placed = true;
         }
         if (!placed) {

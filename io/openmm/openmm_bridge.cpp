@@ -41,7 +41,8 @@ struct OpenMMBridge::Impl {
   std::vector<int> term_groups;  // bitmask per term
 };
 
-OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platform platform)
+OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platform platform,
+                           const std::vector<Constraint>& rods, double constraint_tolerance)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   const auto& periodic = sys.box.periodic();
@@ -170,7 +171,9 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
                            " platform is not available (install libopenmm-plugins)");
   }
   m.platform_name = name;
+  for (const Constraint& rod : rods) m.system.addConstraint(rod.i, rod.j, rod.length);
   m.integrator = std::make_unique<OpenMM::VerletIntegrator>(0.001);
+  m.integrator->setConstraintTolerance(constraint_tolerance);
   if (platform == Platform::cpu) {
     m.context = std::make_unique<OpenMM::Context>(
         m.system, *m.integrator, *chosen, std::map<std::string, std::string>{{"Threads", "1"}});

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "constraints/constraint.hpp"
 #include "crosscheck/evaluation.hpp"
 #include "force_field_spec.hpp"
 #include "system/system.hpp"
@@ -20,7 +21,10 @@ class OpenMMBridge {
  public:
   enum class Platform { reference, cpu };
   // Throws UnsupportedModel for what OpenMM cannot express (mixed periodicity).
-  OpenMMBridge(const System& system, const ForceFieldSpec& spec, Platform platform);
+  // `rods` (optional) become OpenMM constraints, held to `constraint_tolerance` (relative):
+  // the RATTLE reference for GVI with rods only.
+  OpenMMBridge(const System& system, const ForceFieldSpec& spec, Platform platform,
+               const std::vector<Constraint>& rods = {}, double constraint_tolerance = 1e-12);
   ~OpenMMBridge();
 
   std::string name() const;
