@@ -11,6 +11,8 @@ ForceEngine::ForceEngine(const ForceField& force_field, double skin, double mini
 bool ForceEngine::ensure_neighbors(System& system, bool force) {
   Particles& p = system.particles;
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
+  // Nothing reads a list of zero reach: keep the first one.
+  if (neighbors_.cutoff() <= 0 && neighbors_.builds() > 0) return false;
   if (neighbors_.builds() == 0) {
     const SpecialPairs special = find_special_pairs(system.topology, p.size());
     neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));

@@ -216,7 +216,9 @@ void Gvi::step(System& system, bool tally) {
     return x;
   };
   std::vector<Vec3> predicted = moved(free_displacement(p));
-  if (!engine_.neighbors_cover(predicted)) {
+  // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
+  const bool pairs_matter = engine_.neighbors().cutoff() > 0;
+  if (pairs_matter && !engine_.neighbors_cover(predicted)) {
     engine_.ensure_neighbors(system, true);
     predicted = moved(free_displacement(p));
     if (!engine_.neighbors_cover(predicted)) {

@@ -87,6 +87,9 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
     if (c.kind == ConstraintKind::rod) set.unconstrained_pairs.push_back({c.i, c.j});
   }
 
+  // Without hard spheres, particles are points: walls and strings see their centres.
+  std::fill(p.radius.begin(), p.radius.end(), 0.0);
+  for (AtomType& type : system.atom_types) type.radius = 0.0;
   if (auto hs = t.table("hard_spheres")) {
     set.hard_spheres = true;
     const int types = static_cast<int>(system.atom_types.size());
