@@ -94,9 +94,16 @@ System build_random_chains(const RandomChains& chains) {
   const std::size_t total = static_cast<std::size_t>(chains.count) * chains.length;
   const double side = std::cbrt(static_cast<double>(total) / chains.density);
   System system;
-  system.box = Box({0, 0, 0}, {side, side, side}, {true, true, true});
+  system.box = Box({0, 0, 0}, {side, side, side}, chains.periodic);
   system.atom_types = {AtomType{chains.mass, 0.5}};
   system.topology.bond_types = chains.length > 1 ? 1 : 0;
+  auto inside_walls = [&](const Vec3& x) {
+    for (int a = 0; a < 3; ++a) {
+      if (chains.periodic[a]) continue;
+      if (x[a] < chains.wall_clearance || x[a] > side - chains.wall_clearance) return false;
+    }
+    return true;
+  };
   system.topology.angle_types = chains.angles && chains.length > 2 ? 1 : 0;
 
   Particles& p = system.particles;
@@ -124,7 +131,7 @@ System build_random_chains(const RandomChains& chains) {
           // predecessor's.
           std::array<int, 3> image = b == 0 ? std::array<int, 3>{} : p.image[n - 1];
           system.box.wrap(x, image);
-          if (!grid.is_free(p.position, x)) continue;
+          if (!inside_walls(x) || !grid.is_free(p.position, x)) continue;
           p.position[n] = x;
           p.image[n] = image;
           placed = true;

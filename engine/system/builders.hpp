@@ -28,6 +28,9 @@ struct RandomChains {
   bool angles = false;
   std::uint64_t seed = 1;
   int attempts_per_bead = 100;
+  // Along open axes beads stay within [lo + clearance, hi - clearance] (between walls).
+  std::array<bool, 3> periodic{true, true, true};
+  double wall_clearance = 0.0;
 };
 // Throws InputError when the walk cannot be grown (too dense, min_distance too large).
 System build_random_chains(const RandomChains& chains);

@@ -102,6 +102,9 @@ System read_system(TomlTable& t, const fs::path& input_dir) {
     c.mass = positive(*chains, "mass", 1.0);
     c.angles = chains->boolean("angles", false);
     c.seed = static_cast<std::uint64_t>(chains->integer("seed", 1));
+    c.periodic = periodic;
+    c.wall_clearance = chains->number("wall_clearance", 0.0);
+    if (c.wall_clearance < 0) chains->fail("must not be negative", "wall_clearance");
     chains->finish();
     system = build_random_chains(c);
     set_box_periodicity(system, periodic);
