@@ -16,6 +16,14 @@ double ForceField::neighbor_cutoff() const {
   return cutoff;
 }
 
+bool ForceField::pair_hessians(const System& system, const NeighborList& neighbors,
+                               const std::vector<char>& mask, std::vector<PairHessian>& out) const {
+  for (const auto& term : terms_) {
+    if (!term->pair_hessians(system, neighbors, mask, out)) return false;
+  }
+  return true;
+}
+
 ForceEvaluation ForceField::compute(const System& system, const NeighborList& neighbors,
                                     std::vector<Vec3>& force, bool tally) const {
   force.assign(system.particles.size(), Vec3{});

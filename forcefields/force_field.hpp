@@ -29,6 +29,11 @@ class ForceField {
   ForceEvaluation compute(const System& system, const NeighborList& neighbors,
                           std::vector<Vec3>& force, bool tally = true) const;
 
+  // Pair Hessian blocks of every term touching a masked particle (all with an empty mask);
+  // false when some term has no pairwise Hessian (angles).
+  bool pair_hessians(const System& system, const NeighborList& neighbors,
+                     const std::vector<char>& mask, std::vector<PairHessian>& out) const;
+
   // LAMMPS special_bonds lj factors for 1-2, 1-3, 1-4 neighbours.
   std::array<double, 3> special_lj{0.0, 0.0, 0.0};
 

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -9,6 +12,20 @@ namespace deli {
 
 struct System;
 class NeighborList;
+
+struct PairHessian {
+  std::int32_t a, b;
+  Eigen::Matrix3d block;
+};
+
+// The Hessian block of phi(|d|) for d = x_a - x_b, from phi'' and f_over_r = -phi'(r)/r:
+// phi'' d^ d^T - f_over_r (I - d^ d^T).
+inline Eigen::Matrix3d pair_hessian_block(const Vec3& d, double r2, double f_over_r,
+                                          double second_derivative) {
+  const Eigen::Vector3d u = Eigen::Vector3d(d.x, d.y, d.z) / std::sqrt(r2);
+  const Eigen::Matrix3d uu = u * u.transpose();
+  return second_derivative * uu - f_over_r * (Eigen::Matrix3d::Identity() - uu);
+}
 
 // One term of the potential energy (all pairs of one style, all bonds of one style...).
 // compute() adds its forces and, when `tally`, its virial, and returns its energy (0 when
@@ -22,6 +39,15 @@ class ForceTerm {
   virtual double neighbor_cutoff() const { return 0.0; }
   virtual double compute(const System& system, const NeighborList& neighbors,
                          std::vector<Vec3>& force, SymTensor& virial, bool tally) const = 0;
+
+  // The Hessian of a pairwise term is a sum of blocks: for a pair (a, b) with block B,
+  // (H v)_a += B (v_a - v_b) and (H v)_b += B (v_b - v_a). Appends the blocks of the pairs
+  // touching a particle with mask set (every pair when the mask is empty). Returns false
+  // for terms whose Hessian is not pairwise (angles): shadow energies are then unavailable.
+  virtual bool pair_hessians(const System&, const NeighborList&, const std::vector<char>& /*mask*/,
+                             std::vector<PairHessian>& /*out*/) const {
+    return false;
+  }
 };
 
 }  // namespace deli

@@ -21,6 +21,22 @@ class BondForce final : public ForceTerm {
 
   std::string name() const override { return name_; }
 
+  bool pair_hessians(const System& system, const NeighborList&, const std::vector<char>& mask,
+                     std::vector<PairHessian>& out) const override {
+    const std::vector<Vec3>& x = system.particles.position;
+    for (const Bond& b : system.topology.bonds) {
+      if (!mask.empty() && !mask[b.i] && !mask[b.j]) continue;
+      const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
+      const double r2 = norm2(d);
+      double f_over_r, e;
+      Evaluator::evaluate(by_type_[b.type], r2, f_over_r, e);
+      out.push_back({b.i, b.j,
+                     pair_hessian_block(d, r2, f_over_r,
+                                        Evaluator::second_derivative(by_type_[b.type], r2))});
+    }
+    return true;
+  }
+
   // Bonds are few: energy and virial are always tallied.
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
                  SymTensor& virial, bool /*tally*/) const override {

@@ -19,6 +19,7 @@ struct HarmonicBond {
     f_over_r = r > 0.0 ? -2.0 * p.k * dr / r : 0.0;
     return true;
   }
+  static double second_derivative(const Params& p, double /*r2*/) { return 2.0 * p.k; }
 };
 
 // Kremer-Grest FENE (LAMMPS bond_style fene): -K R0^2/2 ln(1 - (r/R0)^2), plus the WCA
@@ -41,6 +42,18 @@ struct FeneBond {
       energy += 4.0 * p.epsilon * sr6 * (sr6 - 1.0) + p.epsilon;
     }
     return true;
+  }
+  static double second_derivative(const Params& p, double r2) {
+    const double r0sq = p.r0 * p.r0;
+    const double log_arg = 1.0 - r2 / r0sq;
+    double d2 = p.k * (1.0 + r2 / r0sq) / (log_arg * log_arg);
+    const double sigma2 = p.sigma * p.sigma;
+    if (r2 < 1.2599210498948732 * sigma2) {
+      const double sr2 = sigma2 / r2;
+      const double sr6 = sr2 * sr2 * sr2;
+      d2 += 4.0 * p.epsilon * (156.0 * sr6 * sr6 - 42.0 * sr6) / r2;
+    }
+    return d2;
   }
 };
 

@@ -11,6 +11,11 @@ class Gravity final : public ForceTerm {
  public:
   explicit Gravity(Vec3 g) : g_(g) {}
   std::string name() const override { return "external"; }
+  // A uniform field has no curvature.
+  bool pair_hessians(const System&, const NeighborList&, const std::vector<char>&,
+                     std::vector<PairHessian>&) const override {
+    return true;
+  }
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force, SymTensor&,
                  bool) const override {
     const Particles& p = system.particles;

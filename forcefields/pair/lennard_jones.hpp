@@ -29,6 +29,13 @@ struct LennardJones {
     return p;
   }
 
+  // phi''(r) for r2 < cutoff2.
+  static double second_derivative(const Params& p, double r2) {
+    const double r2inv = 1.0 / r2;
+    const double r6inv = r2inv * r2inv * r2inv;
+    return r6inv * (13.0 * p.lj1 * r6inv - 7.0 * p.lj2) * r2inv;
+  }
+
   // For r2 < cutoff2: force divided by r (so F_i = d_ij * f_over_r) and energy.
   static void evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
     const double r2inv = 1.0 / r2;

@@ -37,6 +37,37 @@ class PairForce final : public ForceTerm {
   std::string name() const override { return name_; }
   double neighbor_cutoff() const override { return max_cutoff_; }
 
+  bool pair_hessians(const System& system, const NeighborList& neighbors,
+                     const std::vector<char>& mask, std::vector<PairHessian>& out) const override {
+    const std::vector<Vec3>& x = system.particles.position;
+    const std::vector<int>& type = system.particles.type;
+    auto add = [&](std::int32_t i, std::int32_t j, double factor) {
+      const Vec3 d = system.box.minimum_image(x[i] - x[j]);
+      const double r2 = norm2(d);
+      const Params& p = table_[static_cast<std::size_t>(type[i] * type_count_ + type[j])];
+      if (r2 >= p.cutoff2) return;
+      double f_over_r, e;
+      Evaluator::evaluate(p, r2, f_over_r, e);
+      out.push_back(
+          {i, j,
+           factor * pair_hessian_block(d, r2, f_over_r, Evaluator::second_derivative(p, r2))});
+    };
+    const auto& list = neighbors.neighbors();
+    const auto& offsets = neighbors.offsets();
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const std::int32_t j = list[k];
+        if (!mask.empty() && !mask[i] && !mask[j]) continue;
+        add(static_cast<std::int32_t>(i), j, 1.0);
+      }
+    }
+    for (const ScaledPair& s : scaled_pairs_) {
+      if (!mask.empty() && !mask[s.i] && !mask[s.j]) continue;
+      add(s.i, s.j, s.factor);
+    }
+    return true;
+  }
+
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
                  SymTensor& virial, bool tally) const override {
     const bool coded = !neighbors.image_codes().empty();

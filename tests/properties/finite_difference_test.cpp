@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "pair/lennard_jones.hpp"
 #include "pair/pair_coefficients.hpp"
@@ -133,6 +134,66 @@ TEST(PairMixing, LorentzBerthelotMatchesAnalyticEnergy) {
     LennardJones::evaluate(params, r * r, f_over_r, e);
     const double sr6 = std::pow(1.2 / r, 6);
     EXPECT_NEAR(e, 4 * std::sqrt(0.5) * (sr6 * sr6 - sr6), 1e-13);
+  }
+}
+
+}  // namespace
+}  // namespace deli
+
+namespace deli {
+namespace {
+
+// The pair Hessian blocks (used by shadow-energy reflections) against central differences
+// of the forces: H v = -(F(x + e v) - F(x - e v)) / (2 e).
+TEST(Hessian, PairBlocksMatchForceDifferences) {
+  const std::string pair =
+      "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\nshift = true\ncoeffs = [{types = "
+      "[1, 1], epsilon = 1.0, sigma = 1.0}]\n[forcefield.special_bonds]\nlj = [0.0, 0.5, 1.0]\n";
+  for (const std::string& bonds :
+       {std::string("[forcefield.bond]\nstyle = \"harmonic\"\ncoeffs = [{type = 1, k = 100.0, r0 = "
+                    "1.0}]\n"),
+        std::string("[forcefield.bond]\nstyle = \"fene\"\ncoeffs = [{type = 1, k = 30.0, r0 = 1.5, "
+                    "epsilon = 1.0, sigma = 1.0}]\n")}) {
+    RunInput input =
+        testing::input_from(chains_input("ppp", "[forcefield]\n" + pair + bonds, false));
+    const Particles& p = input.system.particles;
+    NeighborList list(input.force_field->neighbor_cutoff(), 0.5);
+    const SpecialPairs special = find_special_pairs(input.system.topology, p.size());
+    std::vector<std::array<std::int32_t, 2>> excluded(special.by_separation[0]);
+    excluded.insert(excluded.end(), special.by_separation[1].begin(),
+                    special.by_separation[1].end());
+    list.set_exclusions(excluded);
+    list.build(p.position, input.system.box);
+    std::vector<PairHessian> blocks;
+    ASSERT_TRUE(input.force_field->pair_hessians(input.system, list, {}, blocks));
+    std::mt19937_64 rng(4);
+    std::normal_distribution<double> normal;
+    std::vector<Vec3> v(p.size());
+    for (Vec3& vi : v) vi = {normal(rng), normal(rng), normal(rng)};
+    std::vector<Eigen::Vector3d> hv(p.size(), Eigen::Vector3d::Zero());
+    for (const PairHessian& b : blocks) {
+      const Eigen::Vector3d dv(v[b.a].x - v[b.b].x, v[b.a].y - v[b.b].y, v[b.a].z - v[b.b].z);
+      hv[b.a] += b.block * dv;
+      hv[b.b] -= b.block * dv;
+    }
+    auto forces_at = [&](double e) {
+      System moved = input.system;
+      for (std::size_t i = 0; i < p.size(); ++i) moved.particles.position[i] += v[i] * e;
+      std::vector<Vec3> f;
+      input.force_field->compute(moved, list, f);
+      return f;
+    };
+    const double e = 1e-6;
+    const auto up = forces_at(e), down = forces_at(-e);
+    double worst = 0, scale = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        const double numeric = -(up[i][a] - down[i][a]) / (2 * e);
+        worst = std::max(worst, std::abs(numeric - hv[i](a)));
+        scale = std::max(scale, std::abs(hv[i](a)));
+      }
+    }
+    EXPECT_LT(worst, 1e-6 * std::max(1.0, scale));
   }
 }
 
