@@ -49,9 +49,8 @@ int command_run(const std::vector<std::string>& args) {
   minimize_if_asked(input);
   std::unique_ptr<Integrator> integrator;
   if (input.integrator == "gvi") {
-    integrator =
-        std::make_unique<Gvi>(*input.force_field, input.constraints, input.skin, input.timestep,
-                              input.reflection, input.feasibility, input.system.particles);
+    integrator = std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi,
+                                       input.system.particles);
   } else {
     integrator = std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
   }

@@ -13,13 +13,14 @@
 
 namespace deli {
 
-Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, double skin, double timestep,
-         ReflectionOperator reflection, Feasibility feasibility, const Particles& particles)
+Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOptions& options,
+         const Particles& particles)
     : constraints_(std::move(constraints)),
-      engine_(force_field, skin, constraints_.contact_reach(particles)),
-      dt_(timestep),
-      reflection_(reflection),
-      feasibility_(feasibility) {}
+      engine_(force_field, options.skin, constraints_.contact_reach(particles)),
+      dt_(options.timestep),
+      reflection_(options.reflection),
+      energy_(options.energy),
+      feasibility_(options.feasibility) {}
 
 namespace {
 
@@ -174,6 +175,42 @@ double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec
 
 }  // namespace
 
+// The Hessian blocks of the potential touching a cluster, at the current positions (the
+// reflection's q), in the cluster's numbering.
+ShadowOperator Gvi::shadow_operator(const System& system, const Cluster& cluster,
+                                    const std::vector<Vec3>& p) const {
+  const Particles& P = system.particles;
+  std::vector<char> mask(P.size(), 0);
+  for (std::int32_t i : cluster.particles) mask[i] = 1;
+  std::vector<PairHessian> blocks;
+  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), mask, blocks)) {
+    throw SimulationError(
+        "shadow-Hamiltonian reflections need a pairwise Hessian, which "
+        "harmonic angles lack: use energy = \"hamiltonian\"");
+  }
+  ShadowOperator shadow;
+  shadow.h = dt_;
+  auto local = [&](std::int32_t g) {
+    const auto it = std::lower_bound(cluster.particles.begin(), cluster.particles.end(), g);
+    return it != cluster.particles.end() && *it == g
+               ? static_cast<std::int32_t>(it - cluster.particles.begin())
+               : std::int32_t{-1};
+  };
+  for (PairHessian b : blocks) {
+    std::int32_t a = local(b.a), c = local(b.b);
+    Vec3 outside_velocity;
+    if (a < 0) {  // keep the cluster's particle first: the block is symmetric in a, b
+      std::swap(a, c);
+      outside_velocity = p[b.a] * (1.0 / P.mass[b.a]);
+    } else if (c < 0) {
+      outside_velocity = p[b.b] * (1.0 / P.mass[b.b]);
+    }
+    shadow.blocks.push_back({a, c, b.block});
+    shadow.outside_velocity.push_back(outside_velocity);
+  }
+  return shadow;
+}
+
 // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
 // index `first_inequality`) that holds an inequality, at positions x.
 void Gvi::reflect_clusters(System& system, const std::vector<Constraint>& rows,
@@ -187,9 +224,13 @@ void Gvi::reflect_clusters(System& system, const std::vector<Constraint>& rows,
     for (std::int32_t r : cluster.rows)
       equality.push_back(r < static_cast<std::int32_t>(first_inequality));
     std::vector<Vec3> p_local = gather(p, cluster.particles);
+    ShadowOperator shadow;
+    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, p);
     const ReflectionStats r = reflect(local, equality, gather(x, cluster.particles), p_local,
-                                      system.box, reflection_, constraints_.tolerances.velocity);
+                                      system.box, reflection_, constraints_.tolerances.velocity,
+                                      energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
     stats_.reflected += r.reflected;
+    stats_.shadow_fallbacks += r.shadow_fallbacks;
     stats_.stalled += r.capped ? 1 : 0;
     scatter(p_local, cluster.particles, p);
   }
@@ -412,6 +453,7 @@ std::vector<std::pair<std::string, double>> Gvi::take_statistics() {
           {"penetrating_steps", static_cast<double>(s.penetrations)},
           {"landings", static_cast<double>(s.fallbacks)},
           {"landing_deficits", static_cast<double>(s.deficits)},
+          {"shadow_fallbacks", static_cast<double>(s.shadow_fallbacks)},
           {"solver_iterations_mean",
            s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)
                         : 0.0},

@@ -2,6 +2,7 @@
 
 #include <limits>
 
+#include "constraints/clusters.hpp"
 #include "constraints/constraint_set.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/reflection.hpp"
@@ -11,13 +12,14 @@ namespace deli {
 // Counters between two thermo samples.
 struct GviStatistics {
   std::int64_t steps = 0;
-  std::int64_t active = 0;        // rows in the extended active sets
-  std::int64_t reflected = 0;     // rows that received a reflection impulse
-  std::int64_t smooth = 0;        // rows in the smooth sets
-  std::int64_t stalled = 0;       // reflections capped or stalled
-  std::int64_t penetrations = 0;  // steps ending with an inequality below -tolerance
-  std::int64_t fallbacks = 0;     // rows the feasibility guard landed
-  std::int64_t deficits = 0;      // landings whose energy could not be restored
+  std::int64_t active = 0;            // rows in the extended active sets
+  std::int64_t reflected = 0;         // rows that received a reflection impulse
+  std::int64_t smooth = 0;            // rows in the smooth sets
+  std::int64_t stalled = 0;           // reflections capped or stalled
+  std::int64_t penetrations = 0;      // steps ending with an inequality below -tolerance
+  std::int64_t fallbacks = 0;         // rows the feasibility guard landed
+  std::int64_t deficits = 0;          // landings whose energy could not be restored
+  std::int64_t shadow_fallbacks = 0;  // shadow-H solves that fell back to H
   std::int64_t solves = 0, solver_iterations = 0;
   int max_solver_iterations = 0;
   double min_gap = std::numeric_limits<double>::infinity();
@@ -41,10 +43,18 @@ struct GviStatistics {
 // and changed its potential energy); where the normal motion cannot supply the difference
 // the normal velocity is zeroed and the event counted as a deficit.
 enum class Feasibility { restore, reflect, inelastic, none };
+struct GviOptions {
+  double timestep = 0.005;
+  double skin = 0.3;
+  ReflectionOperator reflection = ReflectionOperator::generalized;
+  ReflectionEnergy energy = ReflectionEnergy::hamiltonian;
+  Feasibility feasibility = Feasibility::restore;
+};
+
 class Gvi final : public Integrator {
  public:
-  Gvi(const ForceField& force_field, ConstraintSet constraints, double skin, double timestep,
-      ReflectionOperator reflection, Feasibility feasibility, const Particles& particles);
+  Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOptions& options,
+      const Particles& particles);
 
   std::string name() const override { return "gvi"; }
   double timestep() const override { return dt_; }
@@ -60,6 +70,8 @@ class Gvi final : public Integrator {
   void solve_positions(System& system, const std::vector<Constraint>& rows,
                        const std::vector<bool>& equality, const std::vector<Vec3>& q,
                        const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
+  ShadowOperator shadow_operator(const System& system, const Cluster& cluster,
+                                 const std::vector<Vec3>& p) const;
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p);
@@ -73,6 +85,7 @@ class Gvi final : public Integrator {
   ForceEngine engine_;
   double dt_;
   ReflectionOperator reflection_;
+  ReflectionEnergy energy_;
   Feasibility feasibility_;
   GviStatistics stats_;
 };

@@ -23,9 +23,27 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
   return N;
 }
 
+Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool with_outside) const {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
+  for (std::size_t k = 0; k < blocks.size(); ++k) {
+    const PairHessian& b = blocks[k];
+    Eigen::Vector3d dv = v.segment<3>(3 * b.a);
+    if (b.b >= 0) {
+      dv -= v.segment<3>(3 * b.b);
+    } else if (with_outside) {
+      dv -= Eigen::Vector3d(outside_velocity[k].x, outside_velocity[k].y, outside_velocity[k].z);
+    }
+    const Eigen::Vector3d f = b.block * dv;
+    out.segment<3>(3 * b.a) += f;
+    if (b.b >= 0) out.segment<3>(3 * b.b) -= f;
+  }
+  return out;
+}
+
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
-                        ReflectionOperator op, double tolerance, int max_iterations) {
+                        ReflectionOperator op, double tolerance, const ShadowOperator* shadow,
+                        int max_iterations) {
   std::vector<int> eq_rows, in_rows;
   for (std::size_t k = 0; k < cluster.rows.size(); ++k) {
     (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
@@ -52,13 +70,39 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       break;
     }
     Eigen::MatrixXd NV(N.rows(), static_cast<Eigen::Index>(set.size()));
-    for (std::size_t k = 0; k < set.size(); ++k)
+    for (std::size_t k = 0; k < set.size(); ++k) {
       NV.col(static_cast<Eigen::Index>(k)) = N.col(set[k]);
+    }
+    // E = H: K = M^-1 / 2, Q = N^T K N, c = 2 N^T K p.
     const Eigen::MatrixXd KN = k_diag.asDiagonal() * NV;
     const Eigen::MatrixXd Q = NV.transpose() * KN;
     const Eigen::VectorXd c = 2.0 * (KN.transpose() * flat);
     Eigen::VectorXd lambda;
-    solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    bool solved = false;
+    if (shadow) {
+      // K~ = K + h^2/12 W d2V W (W = M^-1): the Hessian acts on velocities.
+      const double s12 = shadow->h * shadow->h / 12.0;
+      const Eigen::MatrixXd WN = w.asDiagonal() * NV;
+      Eigen::MatrixXd HWN(WN.rows(), WN.cols());
+      for (Eigen::Index k = 0; k < WN.cols(); ++k) {
+        HWN.col(k) = shadow->hessian_times(WN.col(k), false);
+      }
+      const Eigen::MatrixXd Qs = Q + s12 * (WN.transpose() * HWN);
+      const Eigen::VectorXd Hv = shadow->hessian_times(w.asDiagonal() * flat, true);
+      const Eigen::VectorXd cs = c + 2.0 * s12 * (WN.transpose() * Hv);
+      const Eigen::LDLT<Eigen::MatrixXd> check(Qs);
+      const bool positive =
+          check.info() == Eigen::Success && check.isPositive() &&
+          check.vectorD().minCoeff() > 1e-14 * Qs.diagonal().cwiseAbs().maxCoeff();
+      if (positive) {
+        solve_nonnegative_qp(Qs, cs, lambda, 1e-14 * std::max(1.0, cs.lpNorm<Eigen::Infinity>()));
+        solved = lambda.lpNorm<Eigen::Infinity>() > 0.0;
+      }
+      if (!solved) ++stats.shadow_fallbacks;
+    }
+    if (!solved) {
+      solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    }
     ++stats.iterations;
     if (lambda.lpNorm<Eigen::Infinity>() == 0.0) {
       stats.capped = true;  // approaching, yet no energy-preserving impulse: stalled

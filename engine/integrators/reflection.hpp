@@ -4,15 +4,32 @@
 #include <vector>
 
 #include "constraints/clusters.hpp"
+#include "force_term.hpp"
 
 namespace deli {
 
 enum class ReflectionOperator { generalized, moreau };
+enum class ReflectionEnergy { hamiltonian, shadow };
+
+// Verlet's second-order shadow Hamiltonian restricted to one cluster:
+// H~ = H - h^2/24 dV^T M^-1 dV + h^2/12 v^T d2V v, quadratic in p with
+// K = M^-1/2 + h^2/12 M^-1 d2V M^-1. `blocks` are the pair Hessian blocks touching the
+// cluster in local indices (b = -1: a particle outside it, whose velocity is in
+// `outside_velocity` at the same position).
+struct ShadowOperator {
+  double h = 0;
+  std::vector<PairHessian> blocks;
+  std::vector<Vec3> outside_velocity;
+  // d2V v over the cluster's coordinates (3n); outside particles move with their own
+  // velocities when `with_outside`, else stand still.
+  Eigen::VectorXd hessian_times(const Eigen::VectorXd& v, bool with_outside) const;
+};
 
 struct ReflectionStats {
-  int iterations = 0;   // solves (Algorithm 2 loops; 1 for Moreau)
-  int reflected = 0;    // rows that received an impulse
-  bool capped = false;  // Algorithm 2 hit its iteration cap or stalled
+  int iterations = 0;        // solves (Algorithm 2 loops; 1 for Moreau)
+  int reflected = 0;         // rows that received an impulse
+  bool capped = false;       // Algorithm 2 hit its iteration cap or stalled
+  int shadow_fallbacks = 0;  // solves where the shadow energy had no reflection: H used
 };
 
 // Energy-preserving reflection of the momenta p of one cluster off its inequality rows
@@ -27,8 +44,12 @@ struct ReflectionStats {
 Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector<bool>& equality,
                                   const std::vector<Vec3>& x, const Box& box);
 
+// With `shadow`, E is Verlet's shadow Hamiltonian; a solve where it admits no reflection
+// (an approaching row with grad g^T K p >= 0, or K not positive on the normals) falls back
+// to E = H for that solve and is counted.
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
-                        ReflectionOperator op, double tolerance, int max_iterations = 100);
+                        ReflectionOperator op, double tolerance,
+                        const ShadowOperator* shadow = nullptr, int max_iterations = 100);
 
 }  // namespace deli

@@ -60,12 +60,14 @@ std::vector<Vec3> unwrapped_start(const System& system) {
 
 ValidationReport validate(const RunInput& input, const ValidateOptions& options) {
   if (input.force_field_spec.gravity) {
-    throw UnsupportedModel("deli validate compares force fields of pair, bond and angle terms; "
-                           "this input has an external field (gravity)");
+    throw UnsupportedModel(
+        "deli validate compares force fields of pair, bond and angle terms; "
+        "this input has an external field (gravity)");
   }
   if (!input.constraints.empty()) {
-    throw UnsupportedModel("deli validate compares unconstrained force fields; this input has "
-                           "[constraints] (remove them to validate its force field)");
+    throw UnsupportedModel(
+        "deli validate compares unconstrained force fields; this input has "
+        "[constraints] (remove them to validate its force field)");
   }
   ValidationReport report;
   System start = input.system;

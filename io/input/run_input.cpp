@@ -361,15 +361,18 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     integrator->choice("lagrangian", {"verlet"}, "verlet");
     const std::string guard =
         integrator->choice("feasibility", {"restore", "reflect", "inelastic", "none"}, "restore");
-    input.feasibility = guard == "restore"     ? Feasibility::restore
-                        : guard == "reflect"   ? Feasibility::reflect
-                        : guard == "inelastic" ? Feasibility::inelastic
-                                               : Feasibility::none;
+    input.gvi.feasibility = guard == "restore"     ? Feasibility::restore
+                            : guard == "reflect"   ? Feasibility::reflect
+                            : guard == "inelastic" ? Feasibility::inelastic
+                                                   : Feasibility::none;
     if (auto r = integrator->table("reflection")) {
-      input.reflection = r->choice("operator", {"generalized", "moreau"}, "generalized") == "moreau"
-                             ? ReflectionOperator::moreau
-                             : ReflectionOperator::generalized;
-      r->choice("energy", {"hamiltonian"}, "hamiltonian");
+      input.gvi.reflection =
+          r->choice("operator", {"generalized", "moreau"}, "generalized") == "moreau"
+              ? ReflectionOperator::moreau
+              : ReflectionOperator::generalized;
+      input.gvi.energy = r->choice("energy", {"hamiltonian", "shadow"}, "hamiltonian") == "shadow"
+                             ? ReflectionEnergy::shadow
+                             : ReflectionEnergy::hamiltonian;
       r->finish();
     }
   } else if (!input.constraints.empty()) {
@@ -395,6 +398,8 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   root.finish();
   check_box_fits_cutoff(input, root);
+  input.gvi.timestep = input.timestep;
+  input.gvi.skin = input.skin;
   add_excluded_contacts(input);
   return input;
 }

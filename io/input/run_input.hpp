@@ -31,8 +31,7 @@ struct RunInput {
   ThermoOutputSpec thermo;
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
-  ReflectionOperator reflection = ReflectionOperator::generalized;
-  Feasibility feasibility = Feasibility::restore;
+  GviOptions gvi;  // timestep and skin copied from above
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.

@@ -14,8 +14,7 @@ TEST(Rattle, RigidRodMeltMatchesOpenMMConstraints) {
   RunInput input =
       load_run_input(std::string(DELI_SOURCE_DIR) + "/tests/crosscheck/inputs/rigid_chains.toml");
   ASSERT_EQ(input.constraints.equalities.size(), 40u * 9u);
-  Gvi gvi(*input.force_field, input.constraints, input.skin, input.timestep,
-          ReflectionOperator::generalized, Feasibility::restore, input.system.particles);
+  Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
   System& s = input.system;
   gvi.setup(s);  // on the manifold: rods exact, velocities tangent
   std::vector<Vec3> x0, v0 = s.particles.velocity;
