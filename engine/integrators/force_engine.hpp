@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "force_field.hpp"
@@ -31,6 +32,8 @@ class ForceEngine {
   const ForceEvaluation& last() const { return last_; }
   const NeighborList& neighbors() const { return neighbors_; }
   const ForceField& force_field() const { return force_field_; }
+  // Verlet's modified energy at the last evaluation (which must have tallied energies).
+  std::optional<double> verlet_shadow_energy(const System& system, double h) const;
 
  private:
   const ForceField& force_field_;

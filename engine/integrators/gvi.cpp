@@ -68,10 +68,20 @@ std::string dump_failed_problem(const System& system, const LocalCluster& cluste
 
 }  // namespace
 
-void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
-                          const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                          const std::vector<Vec3>& delta, std::vector<Vec3>& impulse) {
+namespace {
+// r . J for an impulse z along a pair row's gradient at positions x: z |d|. One-particle
+// rows (walls, strings) act from outside the system and add nothing, as LAMMPS' walls.
+double pair_virial(const Constraint& c, double z, const Vec3* x, const Box& box) {
+  if (c.j < 0) return 0.0;
+  return z * norm(box.minimum_image(x[c.i] - x[c.j]));
+}
+}  // namespace
+
+double Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
+                            const std::vector<bool>& equality, const std::vector<Vec3>& q,
+                            const std::vector<Vec3>& delta, std::vector<Vec3>& impulse) {
   const Particles& particles = system.particles;
+  double virial = 0.0;
   for (const Cluster& cluster : find_clusters(rows, particles.size())) {
     const LocalCluster local = localize(cluster, rows, particles.mass);
     std::vector<bool> local_equality;
@@ -101,19 +111,29 @@ void Gvi::solve_positions(System& system, const std::vector<Constraint>& rows,
     for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
       impulse[cluster.particles[k]] = solved.impulse[k];
     }
+    for (std::size_t r = 0; r < local.rows.size(); ++r) {
+      virial += pair_virial(local.rows[r], solved.z(static_cast<Eigen::Index>(r)), q_local.data(),
+                            system.box);
+    }
   }
+  return virial;
 }
 
-void Gvi::project_momenta(System& system, const std::vector<Constraint>& rows,
-                          const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+double Gvi::project_momenta(System& system, const std::vector<Constraint>& rows,
+                            const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+  double virial = 0.0;
   for (const Cluster& cluster : find_clusters(rows, system.particles.size())) {
     const LocalCluster local = localize(cluster, rows, system.particles.mass);
     std::vector<int> all(local.rows.size());
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
     std::vector<Vec3> p_local = gather(p, cluster.particles);
+    const std::vector<Vec3> x_local = gather(x, cluster.particles);
     Eigen::VectorXd mu;
-    const SolverStatus status =
-        project_momentum(local, all, gather(x, cluster.particles), p_local, system.box, mu);
+    const SolverStatus status = project_momentum(local, all, x_local, p_local, system.box, mu);
+    for (std::size_t r = 0; r < local.rows.size(); ++r) {
+      virial +=
+          pair_virial(local.rows[r], mu(static_cast<Eigen::Index>(r)), x_local.data(), system.box);
+    }
     if (!status.converged) {
       throw SimulationError("step " + std::to_string(system.step) +
                             ": the momentum update failed for the cluster from atom " +
@@ -122,6 +142,7 @@ void Gvi::project_momenta(System& system, const std::vector<Constraint>& rows,
     }
     scatter(p_local, cluster.particles, p);
   }
+  return virial;
 }
 
 void Gvi::setup(System& system) {
@@ -226,9 +247,13 @@ void Gvi::reflect_clusters(System& system, const std::vector<Constraint>& rows,
     std::vector<Vec3> p_local = gather(p, cluster.particles);
     ShadowOperator shadow;
     if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, p);
-    const ReflectionStats r = reflect(local, equality, gather(x, cluster.particles), p_local,
-                                      system.box, reflection_, constraints_.tolerances.velocity,
+    const std::vector<Vec3> x_local = gather(x, cluster.particles);
+    const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
+                                      constraints_.tolerances.velocity,
                                       energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
+    for (std::size_t k = 0; k < local.rows.size(); ++k) {
+      step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
+    }
     stats_.reflected += r.reflected;
     stats_.shadow_fallbacks += r.shadow_fallbacks;
     stats_.stalled += r.capped ? 1 : 0;
@@ -243,6 +268,7 @@ void Gvi::step(System& system, bool tally) {
   const ConstraintTolerances& tol = constraints_.tolerances;
   std::vector<Vec3> p(n);
   for (std::size_t i = 0; i < n; ++i) p[i] = P.velocity[i] * P.mass[i];
+  step_virial_ = 0.0;
 
   // Displacement of the unconstrained forward step from (q, p): D1Ld(q, q + d) + p = 0.
   auto free_displacement = [&](const std::vector<Vec3>& momenta) {
@@ -313,6 +339,7 @@ void Gvi::step(System& system, bool tally) {
   std::vector<Vec3> free(n);
   for (std::size_t i = 0; i < n; ++i) free[i] = half[i] * (h / P.mass[i]);
   std::vector<Vec3> impulse(n);
+  double position_virial = 0.0;
   std::vector<Constraint> held = smooth;  // complementarity rows of the position update
   std::vector<Constraint> landed;         // rows added by the guard this step
   for (int round = 0;; ++round) {
@@ -322,7 +349,7 @@ void Gvi::step(System& system, bool tally) {
     if (!rows.empty()) {
       std::vector<bool> equality(rows.size(), false);
       std::fill_n(equality.begin(), constraints_.equalities.size(), true);
-      solve_positions(system, rows, equality, q, free, impulse);
+      position_virial = solve_positions(system, rows, equality, q, free, impulse);
     }
     const std::vector<Vec3> x = displaced(impulse);
     std::vector<Constraint> violated;
@@ -372,7 +399,10 @@ void Gvi::step(System& system, bool tally) {
       momentum_rows.push_back(c);
     }
   }
-  if (!momentum_rows.empty()) project_momenta(system, momentum_rows, P.position, p);
+  if (!momentum_rows.empty()) {
+    step_virial_ += project_momenta(system, momentum_rows, P.position, p);
+  }
+  step_virial_ += position_virial;
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   if (elastic && !landed.empty()) {
     // The landed rows now touch: reflect the momenta that still approach them, at x.
@@ -385,6 +415,7 @@ void Gvi::step(System& system, bool tally) {
   }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
+  virial_sum_ += step_virial_ / h;
   record_geometry(system);
 }
 
@@ -438,6 +469,12 @@ void Gvi::record_geometry(const System& system) {
     const double violation = std::abs(evaluate(c, P.position.data(), system.box).gap) / c.length;
     stats_.max_rod_violation = std::max(stats_.max_rod_violation, violation);
   }
+}
+
+double Gvi::take_constraint_virial() {
+  const double average = stats_.steps > 0 ? virial_sum_ / static_cast<double>(stats_.steps) : 0.0;
+  virial_sum_ = 0.0;
+  return average;
 }
 
 std::vector<std::pair<std::string, double>> Gvi::take_statistics() {

@@ -63,20 +63,24 @@ class Gvi final : public Integrator {
   void step(System& system, bool tally = true) override;
   const ForceEngine& forces() const override { return engine_; }
   std::vector<std::pair<std::string, double>> take_statistics() override;
+  double take_constraint_virial() override;
+  std::optional<double> shadow_energy(const System& system) const override {
+    return engine_.verlet_shadow_energy(system, dt_);
+  }
 
   const ConstraintSet& constraints() const { return constraints_; }
 
  private:
-  void solve_positions(System& system, const std::vector<Constraint>& rows,
-                       const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                       const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
+  double solve_positions(System& system, const std::vector<Constraint>& rows,
+                         const std::vector<bool>& equality, const std::vector<Vec3>& q,
+                         const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
   ShadowOperator shadow_operator(const System& system, const Cluster& cluster,
                                  const std::vector<Vec3>& p) const;
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p);
-  void project_momenta(System& system, const std::vector<Constraint>& rows,
-                       const std::vector<Vec3>& x, std::vector<Vec3>& p);
+  double project_momenta(System& system, const std::vector<Constraint>& rows,
+                         const std::vector<Vec3>& x, std::vector<Vec3>& p);
   void record_geometry(const System& system);
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
                       std::vector<Vec3>& p);
@@ -88,6 +92,8 @@ class Gvi final : public Integrator {
   ReflectionEnergy energy_;
   Feasibility feasibility_;
   GviStatistics stats_;
+  double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
+  double virial_sum_ = 0.0;   // sum over steps of step_virial_ / h since the last sample
 };
 
 }  // namespace deli

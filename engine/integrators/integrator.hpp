@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +22,12 @@ class Integrator {
   virtual const ForceEngine& forces() const = 0;
   // Named figures accumulated since the last call (constraint statistics), for thermo.
   virtual std::vector<std::pair<std::string, double>> take_statistics() { return {}; }
+  // The constraint impulses' virial, sum of r . J / h per step, averaged over the steps
+  // since the last call: impulses are instantaneous, a single step's would be noise.
+  virtual double take_constraint_virial() { return 0.0; }
+  // Verlet's modified energy H - h^2/24 F.M^-1.F + h^2/12 v.d2V.v (potential forces only),
+  // for Verlet-based integrators whose force field has pairwise Hessians.
+  virtual std::optional<double> shadow_energy(const System&) const { return std::nullopt; }
 };
 
 }  // namespace deli

@@ -52,6 +52,17 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
   if (in_rows.empty()) return stats;
   const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
   const Eigen::MatrixXd N = projected_normals(cluster, equality, q, box);
+  // N = G - F Y: the equality rows' share of an impulse N lambda is -Y lambda.
+  Eigen::MatrixXd Y;
+  if (!eq_rows.empty()) {
+    const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
+    const Eigen::MatrixXd WF = w.asDiagonal() * F;
+    Y = (F.transpose() * WF)
+            .completeOrthogonalDecomposition()
+            .solve(WF.transpose() * gradient_matrix(cluster, in_rows, q, box));
+  }
+  stats.row_impulse.assign(cluster.rows.size(), 0.0);
+  Eigen::VectorXd total_lambda = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(in_rows.size()));
   const Eigen::VectorXd k_diag = 0.5 * w;  // K = M^-1 / 2 (E = H)
   Eigen::VectorXd flat = flatten(p);
   std::vector<bool> reflected(in_rows.size(), false);
@@ -109,11 +120,21 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       break;
     }
     flat += NV * lambda;
+    for (std::size_t k = 0; k < set.size(); ++k)
+      total_lambda(set[k]) += lambda(static_cast<Eigen::Index>(k));
     for (std::size_t k = 0; k < set.size(); ++k) {
       if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[set[k]] = true;
     }
   }
   for (bool r : reflected) stats.reflected += r ? 1 : 0;
+  for (std::size_t k = 0; k < in_rows.size(); ++k)
+    stats.row_impulse[in_rows[k]] = total_lambda(static_cast<Eigen::Index>(k));
+  if (!eq_rows.empty()) {
+    const Eigen::VectorXd along_equalities = -(Y * total_lambda);
+    for (std::size_t k = 0; k < eq_rows.size(); ++k) {
+      stats.row_impulse[eq_rows[k]] = along_equalities(static_cast<Eigen::Index>(k));
+    }
+  }
   p = unflatten(flat);
   return stats;
 }

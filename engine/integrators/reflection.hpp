@@ -30,6 +30,9 @@ struct ReflectionStats {
   int reflected = 0;         // rows that received an impulse
   bool capped = false;       // Algorithm 2 hit its iteration cap or stalled
   int shadow_fallbacks = 0;  // solves where the shadow energy had no reflection: H used
+  // The impulse each local row applied, along its own gradient (equality rows carry the
+  // share of the projected normals that runs along them): for the constraint virial.
+  std::vector<double> row_impulse;
 };
 
 // Energy-preserving reflection of the momenta p of one cluster off its inequality rows

@@ -14,6 +14,9 @@ class VelocityVerlet final : public Integrator {
   void setup(System& system) override;
   void step(System& system, bool tally = true) override;
   const ForceEngine& forces() const override { return engine_; }
+  std::optional<double> shadow_energy(const System& system) const override {
+    return engine_.verlet_shadow_energy(system, dt_);
+  }
 
  private:
   void half_kick(Particles& p) const;

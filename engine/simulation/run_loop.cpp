@@ -15,7 +15,9 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   for (Observer* o : observers) o->on_start(system, steps);
   auto sample = [&] {
     ThermoSample s = measure_thermo(system, integrator.forces().last());
+    s.pressure += integrator.take_constraint_virial() / (3.0 * system.box.volume());
     s.integrator = integrator.take_statistics();
+    s.shadow_energy = integrator.shadow_energy(system);
     for (Observer* o : observers) o->on_thermo(s);
   };
   sample();

@@ -29,6 +29,13 @@ ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluat
   s.temperature = dof > 0 ? 2.0 * s.kinetic / dof : 0.0;
   s.pressure = (2.0 * s.kinetic + evaluation.virial.trace()) / (3.0 * system.box.volume());
   s.momentum = total_momentum(system.particles);
+  const Box& box = system.box;
+  if (!box.periodic(0) && !box.periodic(1) && !box.periodic(2)) {
+    Vec3 l;
+    const Particles& p = system.particles;
+    for (std::size_t i = 0; i < p.size(); ++i) l += cross(p.position[i], p.velocity[i] * p.mass[i]);
+    s.angular_momentum = l;
+  }
   s.term_names = evaluation.names;
   s.term_energies = evaluation.energies;
   return s;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@ struct ThermoSample {
   Vec3 momentum;
   std::vector<std::string> term_names;
   std::vector<double> term_energies;
+  // About the origin, where it is conserved: no periodic axis.
+  std::optional<Vec3> angular_momentum;
+  // Verlet's second-order modified energy, where the integrator and force field have one.
+  std::optional<double> shadow_energy;
   // Integrator figures since the previous sample (constraint statistics for GVI).
   std::vector<std::pair<std::string, double>> integrator;
 };

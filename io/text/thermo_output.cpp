@@ -44,6 +44,8 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
   if (!header_written_) {
     out_ << "step,time,kinetic,potential,total,temperature,pressure,px,py,pz";
     for (const std::string& name : s.term_names) out_ << ",e_" << name;
+    if (s.shadow_energy) out_ << ",shadow_energy";
+    if (s.angular_momentum) out_ << ",Lx,Ly,Lz";
     for (const auto& [name, value] : s.integrator) out_ << ',' << name;
     out_ << '\n';
     header_written_ = true;
@@ -52,6 +54,11 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
        << s.temperature << ',' << s.pressure << ',' << s.momentum.x << ',' << s.momentum.y << ','
        << s.momentum.z;
   for (double e : s.term_energies) out_ << ',' << e;
+  if (s.shadow_energy) out_ << ',' << *s.shadow_energy;
+  if (s.angular_momentum) {
+    out_ << ',' << s.angular_momentum->x << ',' << s.angular_momentum->y << ','
+         << s.angular_momentum->z;
+  }
   for (const auto& [name, value] : s.integrator) out_ << ',' << value;
   out_ << '\n';
   out_.flush();

@@ -1,0 +1,74 @@
+// Thermodynamic observables that need more than forces: the pressure of a hard-sphere
+// fluid comes entirely from collision impulses, and Verlet's shadow energy.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "integrators/gvi.hpp"
+#include "integrators/velocity_verlet.hpp"
+#include "simulation/run_loop.hpp"
+#include "support/test_systems.hpp"
+
+namespace deli {
+namespace {
+
+class Collect final : public Observer {
+ public:
+  void on_thermo(const ThermoSample& s) override { samples.push_back(s); }
+  std::vector<ThermoSample> samples;
+};
+
+// Hard spheres at packing fraction 0.262 (density 0.5, d = 1): the collision virial gives
+// the Carnahan-Starling compressibility factor Z = (1 + e + e^2 - e^3) / (1 - e)^3 = 3.262
+// (accurate to 0.1 % there). GVI's reflections act O(v h) before contact, which enlarges
+// the effective diameter; h = 0.002 keeps that below 0.5 % in Z.
+TEST(Pressure, HardSphereFluidFollowsCarnahanStarling) {
+  RunInput input = testing::input_from(
+      "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.5\ncells = [5, 5, 5]\n"
+      "[velocities]\ntemperature = 1.0\nseed = 12\n[forcefield.pair]\nstyle = \"none\"\n"
+      "[constraints]\nhard_spheres = { diameter = 1.0 }\n[neighbor]\nskin = 0.4\n"
+      "[integrator]\ntype = \"gvi\"\ntimestep = 0.002\n[run]\nsteps = 0\n");
+  Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+  Collect collect;
+  run(input.system, gvi, 4000, 0, {});  // melt the lattice
+  run(input.system, gvi, 20000, 1000, {&collect});
+  double z = 0;
+  int n = 0;
+  for (const ThermoSample& s : collect.samples) {
+    if (s.step == collect.samples.front().step) continue;  // the first has no steps behind it
+    z += s.pressure / (0.5 * s.temperature * (3.0 * 500 - 3.0) / (3.0 * 500));
+    ++n;
+  }
+  z /= n;
+  const double eta = M_PI / 6 * 0.5;
+  const double carnahan_starling = (1 + eta + eta * eta - eta * eta * eta) / std::pow(1 - eta, 3);
+  std::printf("hard spheres, eta %.4f: Z = %.4f, Carnahan-Starling %.4f\n", eta, z,
+              carnahan_starling);
+  EXPECT_NEAR(z, carnahan_starling, 0.03 * carnahan_starling);
+}
+
+// Verlet's modified energy is conserved to O(h^4): its fluctuation is far below that of H.
+TEST(ShadowEnergy, FluctuatesFarLessThanTheEnergy) {
+  RunInput input = testing::input_from(
+      "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [6, 6, 6]\n"
+      "[velocities]\ntemperature = 1.44\nseed = 1\n[forcefield.pair]\nstyle = \"lj/cut\"\n"
+      "cutoff = 2.5\nshift = true\ncoeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+      "[integrator]\ntimestep = 0.005\n[run]\nsteps = 0\n");
+  VelocityVerlet verlet(*input.force_field, input.skin, 0.005);
+  Collect collect;
+  run(input.system, verlet, 400, 0, {});
+  run(input.system, verlet, 2000, 1, {&collect});
+  auto spread = [&](auto value) {
+    double lo = 1e300, hi = -1e300;
+    for (const ThermoSample& s : collect.samples)
+      lo = std::min(lo, value(s)), hi = std::max(hi, value(s));
+    return hi - lo;
+  };
+  const double energy = spread([](const ThermoSample& s) { return s.total; });
+  const double shadow = spread([](const ThermoSample& s) { return *s.shadow_energy; });
+  std::printf("spread over 2000 steps: H %.3e, shadow %.3e\n", energy, shadow);
+  EXPECT_LT(shadow, 0.2 * energy);
+}
+
+}  // namespace
+}  // namespace deli
