@@ -4,6 +4,7 @@
 
 #include "bonded/bond_force.hpp"
 #include "external/gravity.hpp"
+#include "external/radial_potentials.hpp"
 #include "pair/lennard_jones.hpp"
 #include "pair/pair_force.hpp"
 #include "system/system.hpp"
@@ -57,6 +58,12 @@ std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const 
   }
   if (spec.angle) ff->add(std::make_unique<HarmonicAngle>(spec.angle->harmonic));
   if (spec.gravity) ff->add(std::make_unique<Gravity>(*spec.gravity));
+  for (const ForceFieldSpec::Radial& r : spec.radial) {
+    ff->add(std::make_unique<RadialPotential>(r.inverse_square
+                                                  ? RadialPotential::Kind::inverse_square
+                                                  : RadialPotential::Kind::polynomial,
+                                              r.center, r.coefficients));
+  }
   return ff;
 }
 

@@ -43,6 +43,12 @@ struct ForceFieldSpec {
   std::optional<BondSpec> bond;
   std::optional<AngleSpec> angle;
   std::optional<Vec3> gravity;  // uniform field, force per unit mass
+  struct Radial {
+    bool inverse_square = false;  // else polynomial in |x - c|^2
+    Vec3 center;
+    std::vector<double> coefficients;  // [A] or [a0, a1, ...]
+  };
+  std::vector<Radial> radial;
 };
 
 std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const System& system);

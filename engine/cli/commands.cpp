@@ -48,7 +48,7 @@ int command_run(const std::vector<std::string>& args) {
 
   minimize_if_asked(input);
   std::unique_ptr<Integrator> integrator;
-  if (input.integrator == "gvi") {
+  if (input.integrator != "verlet") {  // gvi, dsi, midpoint: one integrator, options
     integrator = std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi,
                                        input.system.particles);
   } else {

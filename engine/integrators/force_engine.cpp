@@ -28,6 +28,15 @@ const ForceEvaluation& ForceEngine::compute(System& system, bool tally) {
   return last_;
 }
 
+void ForceEngine::forces_at(System& system, const std::vector<Vec3>& x,
+                            std::vector<Vec3>& force) const {
+  std::vector<Vec3>& position = system.particles.position;
+  std::vector<Vec3> kept = x;
+  position.swap(kept);
+  force_field_.compute(system, neighbors_, force, false);
+  position.swap(kept);
+}
+
 std::optional<double> ForceEngine::verlet_shadow_energy(const System& system, double h) const {
   if (!last_.tallied) return std::nullopt;
   std::vector<PairHessian> blocks;

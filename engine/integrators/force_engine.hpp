@@ -22,6 +22,10 @@ class ForceEngine {
   // Energies and virial only when `tally` (thermo steps).
   const ForceEvaluation& compute(System& system, bool tally = true);
 
+  // Forces (only) at positions x instead of the system's, through the current neighbour
+  // list, which the caller has checked covers x.
+  void forces_at(System& system, const std::vector<Vec3>& x, std::vector<Vec3>& force) const;
+
   // Rebuilds the neighbour list (wrapping positions) if the particles have moved too far,
   // or always when `force`.
   bool ensure_neighbors(System& system, bool force = false);

@@ -20,7 +20,17 @@ Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOpti
       dt_(options.timestep),
       reflection_(options.reflection),
       energy_(options.energy),
-      feasibility_(options.feasibility) {}
+      feasibility_(options.feasibility),
+      lagrangian_(options.lagrangian),
+      reflections_(options.reflections) {}
+
+void Gvi::midpoint_failure(const System& system, double change) const {
+  throw SimulationError("step " + std::to_string(system.step + 1) +
+                        ": the implicit-midpoint iteration did not converge (last change " +
+                        std::to_string(change) +
+                        " sigma after 200 iterations); reduce the "
+                        "timestep");
+}
 
 namespace {
 
@@ -271,10 +281,27 @@ void Gvi::step(System& system, bool tally) {
   step_virial_ = 0.0;
 
   // Displacement of the unconstrained forward step from (q, p): D1Ld(q, q + d) + p = 0.
+  // Verlet: d = h M^-1 (p + h/2 F(q)). Midpoint: d = h M^-1 (p + h/2 F(q + d/2)), by fixed
+  // point from the Verlet guess.
   auto free_displacement = [&](const std::vector<Vec3>& momenta) {
     const std::vector<Vec3>& f = engine_.force();
     std::vector<Vec3> d(n);
     for (std::size_t i = 0; i < n; ++i) d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    if (lagrangian_ == Lagrangian::midpoint) {
+      std::vector<Vec3> mid(n), f_mid;
+      for (int k = 0;; ++k) {
+        for (std::size_t i = 0; i < n; ++i) mid[i] = P.position[i] + d[i] * 0.5;
+        engine_.forces_at(system, mid, f_mid);
+        double change = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+          const Vec3 next = (momenta[i] + f_mid[i] * (0.5 * h)) * (h / P.mass[i]);
+          change = std::max(change, norm(next - d[i]));
+          d[i] = next;
+        }
+        if (change <= constraints_.tolerances.solver) break;
+        if (k == 200) midpoint_failure(system, change);
+      }
+    }
     return d;
   };
   auto moved = [&](const std::vector<Vec3>& d) {
@@ -309,6 +336,7 @@ void Gvi::step(System& system, bool tally) {
       if (!contains(active, c)) active.push_back(c), grew = true;
     }
     if (!grew) break;
+    if (!reflections_) break;
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), active.begin(), active.end());
     reflect_clusters(system, rows, constraints_.equalities.size(), q, p);
@@ -327,30 +355,50 @@ void Gvi::step(System& system, bool tally) {
 
   // Position update, then the feasibility guard: inequality rows that would still end the
   // step overlapped join the complementarity set and the step is solved again.
-  // Momenta before the new forces: p + h/2 F(q) + impulse; positions q + h M^-1 that.
-  const std::vector<Vec3>& f_start = engine_.force();
-  std::vector<Vec3> half(n);
-  for (std::size_t i = 0; i < n; ++i) half[i] = p[i] + f_start[i] * (0.5 * h);
+  // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
+  // impulse), with F_start = F(q) (Verlet) or F at the step's midpoint (midpoint, by fixed
+  // point around the constrained solve).
+  std::vector<Vec3> half(n), f_mid;
   auto displaced = [&](const std::vector<Vec3>& impulse) {
     std::vector<Vec3> x(n);
     for (std::size_t i = 0; i < n; ++i) x[i] = q[i] + (half[i] + impulse[i]) * (h / P.mass[i]);
     return x;
   };
-  std::vector<Vec3> free(n);
-  for (std::size_t i = 0; i < n; ++i) free[i] = half[i] * (h / P.mass[i]);
   std::vector<Vec3> impulse(n);
   double position_virial = 0.0;
-  std::vector<Constraint> held = smooth;  // complementarity rows of the position update
-  std::vector<Constraint> landed;         // rows added by the guard this step
-  for (int round = 0;; ++round) {
-    std::fill(impulse.begin(), impulse.end(), Vec3{});
+  // DSI: no reflections; every row of the extended active set is a complementarity row.
+  std::vector<Constraint> held = reflections_ ? smooth : active;
+  std::vector<Constraint> landed;  // rows added by the guard this step
+  auto position_update = [&]() {
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), held.begin(), held.end());
-    if (!rows.empty()) {
-      std::vector<bool> equality(rows.size(), false);
-      std::fill_n(equality.begin(), constraints_.equalities.size(), true);
-      position_virial = solve_positions(system, rows, equality, q, free, impulse);
+    std::vector<bool> equality(rows.size(), false);
+    std::fill_n(equality.begin(), constraints_.equalities.size(), true);
+    const std::vector<Vec3>& f_start = engine_.force();
+    for (std::size_t i = 0; i < n; ++i) half[i] = p[i] + f_start[i] * (0.5 * h);
+    for (int k = 0;; ++k) {
+      std::vector<Vec3> free(n);
+      for (std::size_t i = 0; i < n; ++i) free[i] = half[i] * (h / P.mass[i]);
+      std::fill(impulse.begin(), impulse.end(), Vec3{});
+      if (!rows.empty())
+        position_virial = solve_positions(system, rows, equality, q, free, impulse);
+      if (lagrangian_ == Lagrangian::verlet) return;
+      const std::vector<Vec3> x = displaced(impulse);
+      std::vector<Vec3> mid(n);
+      for (std::size_t i = 0; i < n; ++i) mid[i] = (q[i] + x[i]) * 0.5;
+      engine_.forces_at(system, mid, f_mid);
+      double change = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 next = p[i] + f_mid[i] * (0.5 * h);
+        change = std::max(change, norm(next - half[i]) * h / P.mass[i]);
+        half[i] = next;
+      }
+      if (change <= constraints_.tolerances.solver && k > 0) return;
+      if (k == 200) midpoint_failure(system, change);
     }
+  };
+  for (int round = 0;; ++round) {
+    position_update();
     const std::vector<Vec3> x = displaced(impulse);
     std::vector<Constraint> violated;
     if (feasibility_ != Feasibility::none) {
@@ -388,7 +436,8 @@ void Gvi::step(System& system, bool tally) {
   system.step += 1;
   system.time += h;
   engine_.compute(system, tally || (feasibility_ == Feasibility::restore && !landed.empty()));
-  const std::vector<Vec3>& f = engine_.force();
+  // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
+  const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : f_mid;
   for (std::size_t i = 0; i < n; ++i) p[i] += f[i] * (0.5 * h);
   std::vector<Constraint> momentum_rows = constraints_.equalities;
   for (const Constraint& c : held) {

@@ -43,7 +43,13 @@ struct GviStatistics {
 // and changed its potential energy); where the normal motion cannot supply the difference
 // the normal velocity is zeroed and the event counted as a deficit.
 enum class Feasibility { restore, reflect, inelastic, none };
+enum class Lagrangian { verlet, midpoint };
+
 struct GviOptions {
+  Lagrangian lagrangian = Lagrangian::verlet;
+  // false: the Discrete-Smooth Integrator (no reflections; every row of the extended
+  // active set enters the position update's complementarity problem).
+  bool reflections = true;
   double timestep = 0.005;
   double skin = 0.3;
   ReflectionOperator reflection = ReflectionOperator::generalized;
@@ -56,7 +62,7 @@ class Gvi final : public Integrator {
   Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOptions& options,
       const Particles& particles);
 
-  std::string name() const override { return "gvi"; }
+  std::string name() const override { return reflections_ ? "gvi" : "dsi"; }
   double timestep() const override { return dt_; }
   // Puts the state on the constraint manifold (positions, then momenta) and computes forces.
   void setup(System& system) override;
@@ -65,6 +71,7 @@ class Gvi final : public Integrator {
   std::vector<std::pair<std::string, double>> take_statistics() override;
   double take_constraint_virial() override;
   std::optional<double> shadow_energy(const System& system) const override {
+    if (lagrangian_ != Lagrangian::verlet) return std::nullopt;
     return engine_.verlet_shadow_energy(system, dt_);
   }
 
@@ -82,6 +89,7 @@ class Gvi final : public Integrator {
   double project_momenta(System& system, const std::vector<Constraint>& rows,
                          const std::vector<Vec3>& x, std::vector<Vec3>& p);
   void record_geometry(const System& system);
+  [[noreturn]] void midpoint_failure(const System& system, double change) const;
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
                       std::vector<Vec3>& p);
 
@@ -91,6 +99,8 @@ class Gvi final : public Integrator {
   ReflectionOperator reflection_;
   ReflectionEnergy energy_;
   Feasibility feasibility_;
+  Lagrangian lagrangian_;
+  bool reflections_;
   GviStatistics stats_;
   double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
   double virial_sum_ = 0.0;   // sum over steps of step_virial_ / h since the last sample

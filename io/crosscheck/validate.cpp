@@ -59,7 +59,7 @@ std::vector<Vec3> unwrapped_start(const System& system) {
 }  // namespace
 
 ValidationReport validate(const RunInput& input, const ValidateOptions& options) {
-  if (input.force_field_spec.gravity) {
+  if (input.force_field_spec.gravity || !input.force_field_spec.radial.empty()) {
     throw UnsupportedModel(
         "deli validate compares force fields of pair, bond and angle terms; "
         "this input has an external field (gravity)");

@@ -275,6 +275,29 @@ ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigi
       const auto g = external->numbers("gravity", 3);
       spec.gravity = Vec3{g[0], g[1], g[2]};
     }
+    if (auto r = external->table("inverse_square")) {
+      ForceFieldSpec::Radial radial;
+      radial.inverse_square = true;
+      radial.coefficients = {r->number("strength")};
+      if (r->has("center")) {
+        const auto c = r->numbers("center", 3);
+        radial.center = {c[0], c[1], c[2]};
+      }
+      r->finish();
+      spec.radial.push_back(radial);
+    }
+    if (auto r = external->table("radial_polynomial")) {
+      ForceFieldSpec::Radial radial;
+      const auto count = r->integer("degree") + 1;
+      if (count < 1 || count > 16) r->fail("must be between 0 and 15", "degree");
+      radial.coefficients = r->numbers("coefficients", static_cast<std::size_t>(count));
+      if (r->has("center")) {
+        const auto c = r->numbers("center", 3);
+        radial.center = {c[0], c[1], c[2]};
+      }
+      r->finish();
+      spec.radial.push_back(radial);
+    }
     external->finish();
   }
   t->finish();
@@ -356,9 +379,14 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   auto integrator = root.table("integrator");
   if (!integrator) root.fail("missing the [integrator] table (type = \"verlet\", timestep = ...)");
-  input.integrator = integrator->choice("type", {"verlet", "gvi"}, "verlet");
-  if (input.integrator == "gvi") {
-    integrator->choice("lagrangian", {"verlet"}, "verlet");
+  input.integrator = integrator->choice("type", {"verlet", "gvi", "dsi", "midpoint"}, "verlet");
+  const bool constrained = input.integrator == "gvi" || input.integrator == "dsi";
+  if (constrained) {
+    input.gvi.reflections = input.integrator == "gvi";
+    input.gvi.lagrangian =
+        integrator->choice("lagrangian", {"verlet", "midpoint"}, "verlet") == "midpoint"
+            ? Lagrangian::midpoint
+            : Lagrangian::verlet;
     const std::string guard =
         integrator->choice("feasibility", {"restore", "reflect", "inelastic", "none"}, "restore");
     input.gvi.feasibility = guard == "restore"     ? Feasibility::restore
@@ -373,10 +401,19 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       input.gvi.energy = r->choice("energy", {"hamiltonian", "shadow"}, "hamiltonian") == "shadow"
                              ? ReflectionEnergy::shadow
                              : ReflectionEnergy::hamiltonian;
+      if (input.gvi.energy == ReflectionEnergy::shadow &&
+          input.gvi.lagrangian != Lagrangian::verlet) {
+        r->fail(
+            "the shadow Hamiltonian is Verlet's: use lagrangian = \"verlet\" or "
+            "energy = \"hamiltonian\"",
+            "energy");
+      }
       r->finish();
     }
   } else if (!input.constraints.empty()) {
-    integrator->fail("the input has [constraints]: they need type = \"gvi\"", "type");
+    integrator->fail("the input has [constraints]: they need type = \"gvi\" (or \"dsi\")", "type");
+  } else if (input.integrator == "midpoint") {
+    input.gvi.lagrangian = Lagrangian::midpoint;  // implicit midpoint, nothing to constrain
   }
   input.timestep = positive(*integrator, "timestep");
   integrator->finish();
