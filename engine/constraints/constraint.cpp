@@ -16,6 +16,8 @@ const char* kind_name(ConstraintKind k) {
       return "inside sphere";
     case ConstraintKind::outside_sphere:
       return "outside sphere";
+    case ConstraintKind::linear_pair:
+      return "linearised pair";
   }
   return "?";
 }
@@ -44,8 +46,25 @@ ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box) {
     }
     case ConstraintKind::outside_sphere:
       return distance(x[c.i] - c.point, c.length);
+    case ConstraintKind::linear_pair:
+      return {dot(c.normal, box.minimum_image(x[c.i] - x[c.j])) - c.length, c.normal};
   }
   return {0, {}};
+}
+
+Constraint linearized(const Constraint& c, const Vec3* q, const Box& box) {
+  const ConstraintValue v = evaluate(c, q, box);
+  Constraint l = c;
+  l.normal = v.u;
+  if (c.j >= 0) {
+    l.kind = ConstraintKind::linear_pair;
+    l.length = dot(v.u, box.minimum_image(q[c.i] - q[c.j])) - v.gap;
+  } else {
+    l.kind = ConstraintKind::plane;
+    l.point = q[c.i] - v.u * v.gap;
+    l.length = 0.0;
+  }
+  return l;
 }
 
 }  // namespace deli

@@ -16,14 +16,16 @@ enum class ConstraintKind : std::uint8_t {
   sphere_pair,    // inequality: |x_i - x_j| - (r_i + r_j) >= 0
   plane,          // inequality: n . (x_i - point) - r_i >= 0
   inside_sphere,  // inequality: R - r_i - |x_i - c| >= 0
-  outside_sphere  // inequality: |x_i - c| - R - r_i >= 0
+  outside_sphere,  // inequality: |x_i - c| - R - r_i >= 0
+  linear_pair      // inequality: n . (x_i - x_j) - length >= 0 (a pair linearised)
 };
 
 constexpr bool is_equality(ConstraintKind k) {
   return k == ConstraintKind::rod || k == ConstraintKind::anchor;
 }
 constexpr bool is_pair(ConstraintKind k) {
-  return k == ConstraintKind::rod || k == ConstraintKind::sphere_pair;
+  return k == ConstraintKind::rod || k == ConstraintKind::sphere_pair ||
+         k == ConstraintKind::linear_pair;
 }
 const char* kind_name(ConstraintKind k);
 
@@ -42,5 +44,10 @@ struct ConstraintValue {
 };
 
 ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box);
+
+// The constraint's first-order expansion at positions q, as a constraint of its own: a
+// plane for a one-particle row, a linear pair for a two-particle one. Its gap agrees at q
+// and its gradient is the one at q, everywhere.
+Constraint linearized(const Constraint& c, const Vec3* q, const Box& box);
 
 }  // namespace deli

@@ -40,15 +40,21 @@ struct ConstraintSet {
   // special_bonds) that must still not overlap: checked every step.
   std::vector<std::array<std::int32_t, 2>> always_checked_pairs;
   ConstraintTolerances tolerances;
+  // Replace every inequality by its linearisation about the previous step's configuration
+  // (gaps linearised at the last converged state, as contact codes do): the paper's
+  // counterexample, whose impulses no longer point along the current normals.
+  bool linearized = false;
 
   bool empty() const { return equalities.empty() && walls.empty() && !hard_spheres; }
   // Largest contact distance r_i + r_j, for the neighbour list.
   double contact_reach(const Particles& particles) const;
 
-  // The extended active set: inequality rows with g(predicted) <= 0 or g(q) <= tolerance.
+  // The extended active set: inequality rows with g(predicted) <= 0 or g(q) <= tolerance;
+  // with `linearize_about`, every row is first replaced by its linearisation there.
   std::vector<Constraint> active_inequalities(const Particles& particles, const Vec3* q,
                                               const Vec3* predicted, const NeighborList& list,
-                                              const Box& box) const;
+                                              const Box& box,
+                                              const Vec3* linearize_about = nullptr) const;
   // The smallest inequality gap over every pair within reach and every wall (diagnostics).
   double minimum_gap(const Particles& particles, const Vec3* x, const NeighborList& list,
                      const Box& box) const;

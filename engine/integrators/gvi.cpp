@@ -323,6 +323,8 @@ void Gvi::step(System& system, bool tally) {
   }
   const std::vector<Vec3> q = P.position;
   const std::vector<Vec3> p_start = p;
+  if (previous_positions_.size() != n) previous_positions_ = q;
+  const Vec3* about = constraints_.linearized ? previous_positions_.data() : nullptr;
   const NeighborList& list = engine_.neighbors();
 
   // Extended active set and reflection. A reflection can send a particle into a contact
@@ -332,7 +334,7 @@ void Gvi::step(System& system, bool tally) {
   for (int round = 0; round < 16; ++round) {
     bool grew = false;
     for (const Constraint& c :
-         constraints_.active_inequalities(P, q.data(), predicted.data(), list, system.box)) {
+         constraints_.active_inequalities(P, q.data(), predicted.data(), list, system.box, about)) {
       if (!contains(active, c)) active.push_back(c), grew = true;
     }
     if (!grew) break;
@@ -403,7 +405,7 @@ void Gvi::step(System& system, bool tally) {
     std::vector<Constraint> violated;
     if (feasibility_ != Feasibility::none) {
       for (const Constraint& c :
-           constraints_.active_inequalities(P, q.data(), x.data(), list, system.box)) {
+           constraints_.active_inequalities(P, q.data(), x.data(), list, system.box, about)) {
         if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c))
           violated.push_back(c);
       }
@@ -464,6 +466,7 @@ void Gvi::step(System& system, bool tally) {
   }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
+  previous_positions_ = q;
   virial_sum_ += step_virial_ / h;
   record_geometry(system);
 }

@@ -141,6 +141,7 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
     set.walls.push_back(wall);
   }
 
+  set.linearized = t.boolean("linearized", false);
   if (auto tol = t.table("tolerance")) {
     set.tolerances.gap = tol->number("gap", set.tolerances.gap);
     set.tolerances.velocity = tol->number("velocity", set.tolerances.velocity);
