@@ -11,11 +11,11 @@ namespace deli {
 // particles, a gap (residual) and its gradient. Every deli constraint's gradient is +u on
 // particle i and, for two-particle kinds, -u on particle j, so a row is (i, j, u).
 enum class ConstraintKind : std::uint8_t {
-  rod,            // equality: |x_i - x_j| - length = 0
-  anchor,         // equality: |x_i - point| - length = 0 (pendulum string)
-  sphere_pair,    // inequality: |x_i - x_j| - (r_i + r_j) >= 0
-  plane,          // inequality: n . (x_i - point) - r_i >= 0
-  inside_sphere,  // inequality: R - r_i - |x_i - c| >= 0
+  rod,             // equality: |x_i - x_j| - length = 0
+  anchor,          // equality: |x_i - point| - length = 0 (pendulum string)
+  sphere_pair,     // inequality: |x_i - x_j| - (r_i + r_j) >= 0
+  plane,           // inequality: n . (x_i - point) - r_i >= 0
+  inside_sphere,   // inequality: R - r_i - |x_i - c| >= 0
   outside_sphere,  // inequality: |x_i - c| - R - r_i >= 0
   linear_pair      // inequality: n . (x_i - x_j) - length >= 0 (a pair linearised)
 };

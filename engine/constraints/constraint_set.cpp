@@ -76,11 +76,12 @@ void for_each_inequality(const ConstraintSet& set, const Particles& particles,
 
 std::vector<Constraint> ConstraintSet::active_inequalities(const Particles& particles,
                                                            const Vec3* q, const Vec3* predicted,
-                                                           const NeighborList& list,
-                                                           const Box& box, const Vec3* linearize_about) const {
+                                                           const NeighborList& list, const Box& box,
+                                                           const Vec3* linearize_about) const {
   std::vector<Constraint> active;
   for_each_inequality(*this, particles, list, [&](const Constraint& original) {
-    const Constraint c = linearize_about ? deli::linearized(original, linearize_about, box) : original;
+    const Constraint c =
+        linearize_about ? deli::linearized(original, linearize_about, box) : original;
     if (evaluate(c, q, box).gap <= tolerances.gap || evaluate(c, predicted, box).gap <= 0.0) {
       active.push_back(c);
     }

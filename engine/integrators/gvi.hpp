@@ -104,7 +104,9 @@ class Gvi final : public Integrator {
   GviStatistics stats_;
   double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
   double virial_sum_ = 0.0;
-  std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints   // sum over steps of step_virial_ / h since the last sample
+  std::vector<Vec3>
+      previous_positions_;  // linearisation point of `linearized` constraints   // sum over steps
+                            // of step_virial_ / h since the last sample
 };
 
 }  // namespace deli
