@@ -89,6 +89,31 @@ std::vector<Constraint> ConstraintSet::active_inequalities(const Particles& part
   return active;
 }
 
+std::vector<Constraint> ConstraintSet::nearby_inequalities(const Particles& particles,
+                                                           const Vec3* q, const NeighborList& list,
+                                                           const Box& box, double reach,
+                                                           const Vec3* linearize_about) const {
+  std::vector<Constraint> nearby;
+  for_each_inequality(*this, particles, list, [&](const Constraint& original) {
+    const Constraint c =
+        linearize_about ? deli::linearized(original, linearize_about, box) : original;
+    if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
+  });
+  return nearby;
+}
+
+std::vector<Constraint> ConstraintSet::active_among(const std::vector<Constraint>& rows,
+                                                    const Vec3* q, const Vec3* x,
+                                                    const Box& box) const {
+  std::vector<Constraint> active;
+  for (const Constraint& c : rows) {
+    if (evaluate(c, q, box).gap <= tolerances.gap || evaluate(c, x, box).gap <= 0.0) {
+      active.push_back(c);
+    }
+  }
+  return active;
+}
+
 double ConstraintSet::minimum_gap(const Particles& particles, const Vec3* x,
                                   const NeighborList& list, const Box& box) const {
   double smallest = std::numeric_limits<double>::infinity();

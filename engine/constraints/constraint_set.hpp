@@ -55,6 +55,17 @@ struct ConstraintSet {
                                               const Vec3* predicted, const NeighborList& list,
                                               const Box& box,
                                               const Vec3* linearize_about = nullptr) const;
+  // Rows whose gap at q is at most `reach` (linearised about `linearize_about` if given):
+  // the only rows a step moving no particle further than reach / 2 can close. Scanned once
+  // per step instead of the whole neighbour list at every prediction.
+  std::vector<Constraint> nearby_inequalities(const Particles& particles, const Vec3* q,
+                                              const NeighborList& list, const Box& box,
+                                              double reach,
+                                              const Vec3* linearize_about = nullptr) const;
+  // Among `rows`: those active at q (gap <= tolerance) or overlapping at `x`.
+  std::vector<Constraint> active_among(const std::vector<Constraint>& rows, const Vec3* q,
+                                       const Vec3* x, const Box& box) const;
+
   // The smallest inequality gap over every pair within reach and every wall (diagnostics).
   double minimum_gap(const Particles& particles, const Vec3* x, const NeighborList& list,
                      const Box& box) const;

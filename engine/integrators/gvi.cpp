@@ -325,7 +325,21 @@ void Gvi::step(System& system, bool tally) {
   const std::vector<Vec3> p_start = p;
   if (previous_positions_.size() != n) previous_positions_ = q;
   const Vec3* about = constraints_.linearized ? previous_positions_.data() : nullptr;
-  const NeighborList& list = engine_.neighbors();
+
+  // Candidate rows: those within reach of the largest displacement seen this step, found
+  // once and refreshed only if a later displacement outgrows the reach.
+  std::vector<Constraint> nearby;
+  double reach = -1.0;
+  auto candidates_for = [&](const std::vector<Vec3>& x) -> const std::vector<Constraint>& {
+    double largest = 0.0;
+    for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, norm(x[i] - q[i]));
+    if (2.0 * largest + tol.gap > reach) {
+      reach = 4.0 * largest + 2.0 * tol.gap;
+      nearby = constraints_.nearby_inequalities(P, q.data(), engine_.neighbors(), system.box, reach,
+                                                about);
+    }
+    return nearby;
+  };
 
   // Extended active set and reflection. A reflection can send a particle into a contact
   // the first prediction did not see: predict again from the reflected momenta until the
@@ -333,8 +347,8 @@ void Gvi::step(System& system, bool tally) {
   std::vector<Constraint> active;
   for (int round = 0; round < 16; ++round) {
     bool grew = false;
-    for (const Constraint& c :
-         constraints_.active_inequalities(P, q.data(), predicted.data(), list, system.box, about)) {
+    for (const Constraint& c : constraints_.active_among(candidates_for(predicted), q.data(),
+                                                         predicted.data(), system.box)) {
       if (!contains(active, c)) active.push_back(c), grew = true;
     }
     if (!grew) break;
@@ -405,7 +419,7 @@ void Gvi::step(System& system, bool tally) {
     std::vector<Constraint> violated;
     if (feasibility_ != Feasibility::none) {
       for (const Constraint& c :
-           constraints_.active_inequalities(P, q.data(), x.data(), list, system.box, about)) {
+           constraints_.active_among(candidates_for(x), q.data(), x.data(), system.box)) {
         if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c))
           violated.push_back(c);
       }

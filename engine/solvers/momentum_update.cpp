@@ -1,6 +1,6 @@
 #include "solvers/momentum_update.hpp"
 
-#include "solvers/cluster_matrices.hpp"
+#include "solvers/cluster_rows.hpp"
 
 namespace deli {
 
@@ -14,20 +14,28 @@ SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int
     mu.resize(0);
     return status;
   }
-  const Eigen::MatrixXd C = gradient_matrix(cluster, rows, x, box);
-  const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
-  Eigen::VectorXd flat = flatten(p);
-  const Eigen::MatrixXd WC = w.asDiagonal() * C;
-  const Eigen::MatrixXd A = C.transpose() * WC;
-  const Eigen::VectorXd b = -(WC.transpose() * flat);
+  // The selected rows as a cluster of their own (same particles).
+  LocalCluster selected = cluster;
+  selected.rows.clear();
+  for (int r : rows) selected.rows.push_back(cluster.rows[r]);
+  const ClusterRows structure(selected);
+  const std::vector<Vec3> u = structure.directions(x, box);
+  std::vector<Vec3> v(p.size());
+  for (std::size_t k = 0; k < p.size(); ++k) v[k] = p[k] * cluster.inverse_mass[k];
+  // (C^T M^-1 C) mu = -C^T M^-1 p.
+  const Eigen::MatrixXd A = structure.coupling(u, u);
+  const Eigen::VectorXd b = -structure.project(u, v);
   Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
   mu = ldlt.solve(b);
   if (ldlt.info() != Eigen::Success || !mu.allFinite()) {
     mu = A.completeOrthogonalDecomposition().solve(b);  // dependent rows (a rigid loop)
   }
-  flat += C * mu;
-  p = unflatten(flat);
-  status.residual = (WC.transpose() * flat).lpNorm<Eigen::Infinity>();
+  const std::vector<Vec3> j = structure.impulse(u, mu);
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    p[k] += j[k];
+    v[k] = p[k] * cluster.inverse_mass[k];
+  }
+  status.residual = structure.project(u, v).lpNorm<Eigen::Infinity>();
   status.converged = mu.allFinite();
   return status;
 }

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "solvers/cluster_matrices.hpp"
+#include "solvers/cluster_rows.hpp"
 
 namespace deli {
 
@@ -10,24 +10,33 @@ namespace {
 double fischer_burmeister(double a, double b) {
   return a + b - std::sqrt(a * a + b * b);
 }
+
+Eigen::VectorXd solve_linear(const Eigen::MatrixXd& J, const Eigen::VectorXd& rhs) {
+  Eigen::VectorXd step = J.partialPivLu().solve(rhs);
+  // Dependent rows (a rigid loop, a contact repeating a rod) make J singular: least norm.
+  if (!step.allFinite()) step = J.completeOrthogonalDecomposition().solve(rhs);
+  return step;
+}
 }  // namespace
 
 PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vector<bool>& equality,
                                      const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
                                      double h, const Box& box, double tolerance,
                                      int max_iterations) {
+  const ClusterRows structure(cluster);
   const auto m = static_cast<Eigen::Index>(cluster.rows.size());
-  std::vector<int> all(static_cast<std::size_t>(m));
-  for (Eigen::Index k = 0; k < m; ++k) all[k] = static_cast<int>(k);
-  const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
+  const std::size_t n = cluster.size();
   // Directions of the impulses: gradients at the start of the step, fixed.
-  const Eigen::MatrixXd Cq = gradient_matrix(cluster, all, q, box);
-  const Eigen::MatrixXd Wc = w.asDiagonal() * Cq * h;
-  const Eigen::VectorXd x0_flat = flatten(x0);
+  const std::vector<Vec3> uq = structure.directions(q, box);
 
   PositionUpdate out;
   out.z = Eigen::VectorXd::Zero(m);
-  auto positions = [&](const Eigen::VectorXd& z) { return unflatten(x0_flat + Wc * z); };
+  auto positions = [&](const Eigen::VectorXd& z) {
+    const std::vector<Vec3> j = structure.impulse(uq, z);
+    std::vector<Vec3> x(n);
+    for (std::size_t p = 0; p < n; ++p) x[p] = x0[p] + j[p] * (h * cluster.inverse_mass[p]);
+    return x;
+  };
   auto residual = [&](const Eigen::VectorXd& z, const std::vector<Vec3>& x, Eigen::VectorXd& gaps) {
     Eigen::VectorXd phi(m);
     gaps.resize(m);
@@ -49,8 +58,8 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
     }
     if (out.status.iterations >= max_iterations) break;
     ++out.status.iterations;
-    // d gap_k / d z = grad g_k(x)^T h M^-1 C(q).
-    const Eigen::MatrixXd dgap = gradient_matrix(cluster, all, x, box).transpose() * Wc;
+    // d gap_k / d z_l = h grad g_k(x)^T M^-1 C_l(q).
+    const Eigen::MatrixXd dgap = h * structure.coupling(structure.directions(x, box), uq);
     Eigen::MatrixXd J = dgap;
     for (Eigen::Index k = 0; k < m; ++k) {
       if (equality[k]) continue;
@@ -61,7 +70,7 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
       J.row(k) = db * dgap.row(k);
       J(k, k) += da;
     }
-    const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-phi);
+    const Eigen::VectorXd step = solve_linear(J, -phi);
     const double merit = phi.squaredNorm();
     double t = 1.0;
     for (;;) {
@@ -77,7 +86,7 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
     }
   }
   out.x = std::move(x);
-  out.impulse = unflatten(Cq * out.z);
+  out.impulse = structure.impulse(uq, out.z);
   return out;
 }
 
