@@ -482,7 +482,11 @@ void Gvi::step(System& system, bool tally) {
   ++stats_.steps;
   previous_positions_ = q;
   virial_sum_ += step_virial_ / h;
-  record_geometry(system);
+  // The rows that can have closed this step are among the candidates (their reach covers
+  // the step's displacements): they decide overlaps; the exact minimum over every pair is
+  // taken on thermo steps, where it is reported.
+  candidates_for(P.position);
+  record_geometry(system, nearby, tally);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
@@ -525,10 +529,15 @@ void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, 
   for (std::size_t i = 0; i < n; ++i) p[i] += d[i] * alpha;
 }
 
-void Gvi::record_geometry(const System& system) {
+void Gvi::record_geometry(const System& system, const std::vector<Constraint>& candidates,
+                          bool full) {
   const Particles& P = system.particles;
-  const double gap =
-      constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
+  double gap = full
+                   ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
+                   : std::numeric_limits<double>::infinity();
+  for (const Constraint& c : candidates) {
+    gap = std::min(gap, evaluate(c, P.position.data(), system.box).gap);
+  }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
   for (const Constraint& c : constraints_.equalities) {

@@ -88,7 +88,7 @@ class Gvi final : public Integrator {
                         std::vector<Vec3>& p);
   double project_momenta(System& system, const std::vector<Constraint>& rows,
                          const std::vector<Vec3>& x, std::vector<Vec3>& p);
-  void record_geometry(const System& system);
+  void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
   [[noreturn]] void midpoint_failure(const System& system, double change) const;
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
                       std::vector<Vec3>& p);
