@@ -33,20 +33,22 @@ Constraint ConstraintSet::wall_row(const Wall& wall, std::int32_t i, double radi
 }
 
 namespace {
+Constraint sphere_pair(std::int32_t a, std::int32_t b, const Particles& particles) {
+  Constraint c;
+  c.kind = ConstraintKind::sphere_pair;
+  c.i = a;
+  c.j = b;
+  c.length = particles.radius[a] + particles.radius[b];
+  return c;
+}
+
 // Visits every hard-sphere pair of the neighbour list that is not bonded, and every
 // (particle, wall) row.
 template <class Visit>
 void for_each_inequality(const ConstraintSet& set, const Particles& particles,
                          const NeighborList& list, Visit&& visit) {
   if (set.hard_spheres) {
-    for (const auto& [a, b] : set.always_checked_pairs) {
-      Constraint c;
-      c.kind = ConstraintKind::sphere_pair;
-      c.i = a;
-      c.j = b;
-      c.length = particles.radius[a] + particles.radius[b];
-      visit(c);
-    }
+    for (const auto& [a, b] : set.always_checked_pairs) visit(sphere_pair(a, b, particles));
     const auto& offsets = list.offsets();
     const auto& neighbors = list.neighbors();
     for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
@@ -57,12 +59,7 @@ void for_each_inequality(const ConstraintSet& set, const Particles& particles,
                                std::array<std::int32_t, 2>{a, b})) {
           continue;
         }
-        Constraint c;
-        c.kind = ConstraintKind::sphere_pair;
-        c.i = a;
-        c.j = b;
-        c.length = particles.radius[a] + particles.radius[b];
-        visit(c);
+        visit(sphere_pair(a, b, particles));
       }
     }
   }
@@ -73,21 +70,6 @@ void for_each_inequality(const ConstraintSet& set, const Particles& particles,
   }
 }
 }  // namespace
-
-std::vector<Constraint> ConstraintSet::active_inequalities(const Particles& particles,
-                                                           const Vec3* q, const Vec3* predicted,
-                                                           const NeighborList& list, const Box& box,
-                                                           const Vec3* linearize_about) const {
-  std::vector<Constraint> active;
-  for_each_inequality(*this, particles, list, [&](const Constraint& original) {
-    const Constraint c =
-        linearize_about ? deli::linearized(original, linearize_about, box) : original;
-    if (evaluate(c, q, box).gap <= tolerances.gap || evaluate(c, predicted, box).gap <= 0.0) {
-      active.push_back(c);
-    }
-  });
-  return active;
-}
 
 std::vector<Constraint> ConstraintSet::nearby_inequalities(const Particles& particles,
                                                            const Vec3* q, const NeighborList& list,

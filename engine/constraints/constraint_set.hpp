@@ -49,12 +49,6 @@ struct ConstraintSet {
   // Largest contact distance r_i + r_j, for the neighbour list.
   double contact_reach(const Particles& particles) const;
 
-  // The extended active set: inequality rows with g(predicted) <= 0 or g(q) <= tolerance;
-  // with `linearize_about`, every row is first replaced by its linearisation there.
-  std::vector<Constraint> active_inequalities(const Particles& particles, const Vec3* q,
-                                              const Vec3* predicted, const NeighborList& list,
-                                              const Box& box,
-                                              const Vec3* linearize_about = nullptr) const;
   // Rows whose gap at q is at most `reach` (linearised about `linearize_about` if given):
   // the only rows a step moving no particle further than reach / 2 can close. Scanned once
   // per step instead of the whole neighbour list at every prediction.

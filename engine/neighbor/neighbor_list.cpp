@@ -246,10 +246,4 @@ bool NeighborList::needs_rebuild(const std::vector<Vec3>& position) const {
   return false;
 }
 
-bool NeighborList::update(const std::vector<Vec3>& position, const Box& box) {
-  if (!needs_rebuild(position)) return false;
-  build(position, box);
-  return true;
-}
-
 }  // namespace deli

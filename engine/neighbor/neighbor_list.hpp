@@ -27,8 +27,6 @@ class NeighborList {
 
   void build(const std::vector<Vec3>& position, const Box& box);
   bool needs_rebuild(const std::vector<Vec3>& position) const;
-  // Rebuilds if needed; returns whether it did.
-  bool update(const std::vector<Vec3>& position, const Box& box);
 
   // Neighbours of i are neighbors()[offsets()[i] .. offsets()[i+1]).
   const std::vector<std::int32_t>& neighbors() const { return neighbors_; }
