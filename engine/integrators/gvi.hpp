@@ -50,6 +50,8 @@ struct GviOptions {
   // false: the Discrete-Smooth Integrator (no reflections; every row of the extended
   // active set enters the position update's complementarity problem).
   bool reflections = true;
+  // Predict with the equality rows solved (else the unconstrained step, as the paper).
+  bool constrained_predictor = false;
   double timestep = 0.005;
   double skin = 0.3;
   ReflectionOperator reflection = ReflectionOperator::generalized;
@@ -101,6 +103,7 @@ class Gvi final : public Integrator {
   Feasibility feasibility_;
   Lagrangian lagrangian_;
   bool reflections_;
+  bool constrained_predictor_;
   GviStatistics stats_;
   double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
   double virial_sum_ = 0.0;

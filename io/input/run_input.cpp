@@ -387,6 +387,8 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
         integrator->choice("lagrangian", {"verlet", "midpoint"}, "verlet") == "midpoint"
             ? Lagrangian::midpoint
             : Lagrangian::verlet;
+    input.gvi.constrained_predictor =
+        integrator->choice("predictor", {"free", "constrained"}, "free") == "constrained";
     const std::string guard =
         integrator->choice("feasibility", {"restore", "reflect", "inelastic", "none"}, "restore");
     input.gvi.feasibility = guard == "restore"     ? Feasibility::restore
