@@ -132,3 +132,26 @@ TEST(PaperExamples, PogoStickBoundedTo1e5) {
 
 }  // namespace
 }  // namespace deli
+
+namespace deli {
+namespace {
+
+// The cradle's pattern: after the two pulled balls strike, the two on the far side leave
+// and the rest come (nearly) to rest.
+TEST(PaperExamples, NewtonsCradlePattern) {
+  RunInput input =
+      load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/paper/newtons_cradle_h0.005.toml");
+  Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+  run(input.system, gvi, 130, 0, {});  // t = 0.65: after the strike, before the far balls return
+  const Particles& p = input.system.particles;
+  const double speed = norm(p.velocity[4]);
+  std::printf("cradle at t = 0.65: |v| = %.3f %.3f %.3f %.3f %.3f\n", norm(p.velocity[0]),
+              norm(p.velocity[1]), norm(p.velocity[2]), norm(p.velocity[3]), speed);
+  EXPECT_GT(speed, 1.0);
+  EXPECT_GT(norm(p.velocity[3]), 0.5 * speed);
+  EXPECT_GT(p.velocity[4].x, 0.0);
+  for (int k = 0; k < 3; ++k) EXPECT_LT(norm(p.velocity[k]), 0.2 * speed) << "ball " << k + 1;
+}
+
+}  // namespace
+}  // namespace deli
