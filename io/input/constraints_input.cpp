@@ -146,6 +146,11 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
     set.tolerances.gap = tol->number("gap", set.tolerances.gap);
     set.tolerances.velocity = tol->number("velocity", set.tolerances.velocity);
     set.tolerances.solver = tol->number("solver", set.tolerances.solver);
+    for (const auto& [key, value] :
+         {std::pair{"gap", set.tolerances.gap}, std::pair{"velocity", set.tolerances.velocity},
+          std::pair{"solver", set.tolerances.solver}}) {
+      if (!(value > 0)) tol->fail("must be positive", key);
+    }
     tol->finish();
   }
   t.finish();

@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 
+#include "core/error.hpp"
 #include "simulation/thermo.hpp"
 #include "support/atoms_input.hpp"
 
@@ -376,6 +379,44 @@ TEST(GviFeasibility, PogoStickShadowReflections) {
   EXPECT_GT(restore.min_gap, -1e-10);
   EXPECT_LT(restore.max_relative_energy_error, 1.5e-2);
   EXPECT_LT(std::abs(restore.final_relative_energy_error), 1e-2);
+}
+
+}  // namespace
+}  // namespace deli
+
+namespace deli {
+namespace {
+
+// A position update that cannot converge (two rods on one pair, of lengths 1 and 1.5)
+// stops the run with the step, the cluster and the residual, and leaves the problem in a
+// file.
+TEST(GviFailure, UnconvergedSolveIsReportedWithItsProblem) {
+  RunInput input = testing::input_with_atoms(
+      "fail", {{{0, 0, 0}, {0.3, 0.1, 0}}, {{1, 0, 0}, {-0.2, 0.4, 0.1}}}, "fff", {-5, -5, -5},
+      {5, 5, 5},
+      "[forcefield.pair]\nstyle = \"none\"\n[constraints]\nrods = [{ atoms = [1, 2], length = "
+      "1.0 }, { atoms = [1, 2], length = 1.5 }]\n[integrator]\ntype = \"gvi\"\ntimestep = "
+      "0.01\n[run]\nsteps = 0\n");
+  Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+  try {
+    gvi.setup(input.system);
+    gvi.step(input.system, true);
+    FAIL() << "expected a solver failure";
+  } catch (const SimulationError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("did not converge"), std::string::npos) << what;
+    EXPECT_NE(what.find("from atom 1"), std::string::npos) << what;
+    EXPECT_NE(what.find("residual"), std::string::npos) << what;
+    const auto at = what.find("deli-failed-solve-step");
+    ASSERT_NE(at, std::string::npos) << what;
+    const std::string file = what.substr(at, what.find(';', at) - at);
+    std::ifstream dumped(file);
+    EXPECT_TRUE(dumped.good()) << file;
+    std::string header;
+    std::getline(dumped, header);
+    EXPECT_NE(header.find("failed position update"), std::string::npos);
+    std::remove(file.c_str());
+  }
 }
 
 }  // namespace
