@@ -155,3 +155,21 @@ TEST(PaperExamples, NewtonsCradlePattern) {
 
 }  // namespace
 }  // namespace deli
+
+namespace deli {
+namespace {
+
+// The paper's LJ chain to 2000 time units: rods exact, no overlap, angular momentum
+// exact, energy within the band of the first half (measured 0.14 then 0.21 of |E0|).
+TEST(PaperExamples, LjChainTo2000) {
+  const Trace t = run_example("lj_chain", -1, 100);
+  std::printf("LJ chain: max |dE|/|E0| %.3e, growth %.2f, |dL| %.3e\n",
+              t.max_relative_energy_error(), t.growth(), t.max_angular_change());
+  EXPECT_LT(t.max_relative_energy_error(), 0.3);
+  EXPECT_LT(t.growth(), 2.0);
+  EXPECT_LT(t.max_angular_change(), 1e-11);
+  EXPECT_GT(t.min_gap, -1e-10);
+}
+
+}  // namespace
+}  // namespace deli
