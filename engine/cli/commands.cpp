@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 
 #include "core/error.hpp"
+#include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
@@ -60,6 +62,15 @@ int command_run(const std::vector<std::string>& args) {
   if (!input.thermo.file.empty()) {
     csv = std::make_unique<ThermoCsv>(input.thermo.file);
     observers.push_back(csv.get());
+  }
+  std::unique_ptr<H5mdWriter> trajectory;
+  if (!input.trajectory.file.empty()) {
+    const char* user = std::getenv("USER");
+    trajectory = std::make_unique<H5mdWriter>(
+        TrajectorySpec{input.trajectory.file, input.trajectory.every, input.trajectory.velocities,
+                       input.trajectory.images, input.trajectory.compression},
+        input.system, input.source_text, user ? user : "deli user");
+    observers.push_back(trajectory.get());
   }
   std::unique_ptr<ProgressLine> progress;
   if (isatty(STDERR_FILENO)) {

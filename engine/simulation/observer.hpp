@@ -11,6 +11,11 @@ class Observer {
   virtual void on_start(const System&, std::int64_t /*steps*/) {}
   virtual void on_thermo(const ThermoSample&) {}
   virtual void on_step(const System&) {}  // after every step: keep it cheap
+  // Trajectory writers: whether the state after `step` is a frame, and the frame itself
+  // with the thermodynamic state at that step (pressure without constraint impulses, which
+  // are averaged between thermo samples).
+  virtual bool wants_frame(std::int64_t /*step*/) const { return false; }
+  virtual void on_frame(const System&, const ThermoSample&) {}
   virtual void on_finish(const System&) {}
 };
 

@@ -13,14 +13,26 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
                   std::int64_t thermo_every, const std::vector<Observer*>& observers) {
   integrator.setup(system);
   for (Observer* o : observers) o->on_start(system, steps);
-  auto sample = [&] {
+  auto wants_frame = [&] {
+    for (Observer* o : observers) {
+      if (o->wants_frame(system.step)) return true;
+    }
+    return false;
+  };
+  auto sample = [&](bool thermo, bool frame) {
     ThermoSample s = measure_thermo(system, integrator.forces().last());
+    s.shadow_energy = integrator.shadow_energy(system);
+    if (frame) {
+      for (Observer* o : observers) {
+        if (o->wants_frame(system.step)) o->on_frame(system, s);
+      }
+    }
+    if (!thermo) return;
     s.pressure += integrator.take_constraint_virial() / (3.0 * system.box.volume());
     s.integrator = integrator.take_statistics();
-    s.shadow_energy = integrator.shadow_energy(system);
     for (Observer* o : observers) o->on_thermo(s);
   };
-  sample();
+  sample(true, wants_frame());
 
   RunStatistics stats;
   stats.atoms = system.particles.size();
@@ -28,10 +40,14 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   const auto start = std::chrono::steady_clock::now();
   try {
     for (std::int64_t n = 1; n <= steps; ++n) {
-      const bool sampled = (thermo_every > 0 && n % thermo_every == 0) || n == steps;
-      integrator.step(system, sampled);
+      const bool thermo = (thermo_every > 0 && n % thermo_every == 0) || n == steps;
+      // Observers ask about the step the integrator is about to reach.
+      system.step += 1;
+      const bool frame = wants_frame();
+      system.step -= 1;
+      integrator.step(system, thermo || frame);
       for (Observer* o : observers) o->on_step(system);
-      if (sampled) sample();
+      if (thermo || frame) sample(thermo, frame);
       stats.steps = n;
     }
   } catch (...) {

@@ -351,6 +351,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   RunInput input;
   input.path = path;
+  input.source_text = text;
   TomlTable root(doc, path, "");
   const fs::path dir = fs::path(path).parent_path();
 
@@ -432,6 +433,18 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       if (input.thermo.every < 0) thermo->fail("must not be negative", "every");
       input.thermo.file = thermo->string("file", "");
       thermo->finish();
+    }
+    if (auto trajectory = output->table("trajectory")) {
+      input.trajectory.file = trajectory->string("file");
+      input.trajectory.every = trajectory->integer("every", 1000);
+      if (input.trajectory.every < 1) trajectory->fail("must be at least 1", "every");
+      input.trajectory.velocities = trajectory->boolean("velocities", true);
+      input.trajectory.images = trajectory->boolean("images", true);
+      input.trajectory.compression = static_cast<int>(trajectory->integer("compression", 4));
+      if (input.trajectory.compression < 0 || input.trajectory.compression > 9) {
+        trajectory->fail("deflate level from 0 (none) to 9", "compression");
+      }
+      trajectory->finish();
     }
     output->finish();
   }

@@ -13,6 +13,13 @@
 
 namespace deli {
 
+struct TrajectoryOutputSpec {
+  std::string file;  // "" = no trajectory
+  std::int64_t every = 1000;
+  bool velocities = true, images = true;
+  int compression = 4;
+};
+
 struct ThermoOutputSpec {
   std::int64_t every = 100;
   std::string file;  // "" = no CSV
@@ -29,6 +36,8 @@ struct RunInput {
   double skin = 0.3;
   std::int64_t steps = 0;
   ThermoOutputSpec thermo;
+  TrajectoryOutputSpec trajectory;
+  std::string source_text;    // the input as read, stored with trajectories
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
   GviOptions gvi;  // timestep and skin copied from above

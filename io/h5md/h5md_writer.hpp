@@ -1,0 +1,60 @@
+#pragma once
+
+#include <hdf5.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "simulation/observer.hpp"
+
+namespace deli {
+
+struct TrajectorySpec {
+  std::string file;
+  std::int64_t every = 1000;
+  bool velocities = true;
+  bool images = true;
+  int compression = 4;  // deflate level, 0: none
+};
+
+// An H5MD 1.1 trajectory (HDF5 C API): /h5md metadata, /particles/all with position,
+// velocity and image as time series (step, time, value), species, mass, id and the box
+// (edges as a D x D matrix series, as MDAnalysis reads them), /observables for the thermo
+// quantities at every frame, /connectivity/bonds, and the input under /parameters.
+// Series are chunked, compressed and extended frame by frame; the file is flushed after
+// every frame, so a run killed at any moment leaves every frame written before.
+class H5mdWriter final : public Observer {
+ public:
+  H5mdWriter(const TrajectorySpec& spec, const System& system, const std::string& input_text,
+             const std::string& author);
+  ~H5mdWriter() override;
+  H5mdWriter(const H5mdWriter&) = delete;
+  H5mdWriter& operator=(const H5mdWriter&) = delete;
+
+  bool wants_frame(std::int64_t step) const override { return step % spec_.every == 0; }
+  void on_frame(const System& system, const ThermoSample& sample) override;
+  void on_finish(const System&) override;
+  std::int64_t frames() const { return frames_; }
+
+ private:
+  struct Series {
+    hid_t group = -1, step = -1, time = -1, value = -1;
+  };
+  Series make_series(hid_t parent, const std::string& name, hid_t type,
+                     const std::vector<hsize_t>& frame_shape);
+  void append(Series& s, std::int64_t step, double time, const void* data, hid_t memory_type,
+              const std::vector<hsize_t>& frame_shape);
+  void close();
+
+  TrajectorySpec spec_;
+  hid_t file_ = -1;
+  Series position_, velocity_, image_, edges_;
+  std::map<std::string, Series> observables_;
+  hid_t observables_group_ = -1;
+  std::int64_t frames_ = 0;
+  std::size_t atoms_ = 0;
+};
+
+}  // namespace deli
