@@ -14,6 +14,7 @@
 #include "integrators/quickmin.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
+#include "text/dump_writer.hpp"
 #include "text/thermo_output.hpp"
 
 namespace deli {
@@ -71,6 +72,14 @@ int command_run(const std::vector<std::string>& args) {
                        input.trajectory.images, input.trajectory.compression},
         input.system, input.source_text, user ? user : "deli user");
     observers.push_back(trajectory.get());
+  }
+  std::unique_ptr<DumpWriter> dump;
+  if (!input.dump.file.empty()) {
+    dump = std::make_unique<DumpWriter>(
+        input.dump.file,
+        input.dump.format == "xyz" ? DumpWriter::Format::xyz : DumpWriter::Format::lammps,
+        input.dump.every);
+    observers.push_back(dump.get());
   }
   std::unique_ptr<ProgressLine> progress;
   if (isatty(STDERR_FILENO)) {

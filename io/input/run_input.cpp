@@ -434,6 +434,13 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       input.thermo.file = thermo->string("file", "");
       thermo->finish();
     }
+    if (auto dump = output->table("dump")) {
+      input.dump.file = dump->string("file");
+      input.dump.format = dump->choice("format", {"lammps", "xyz"}, "lammps");
+      input.dump.every = dump->integer("every", 1000);
+      if (input.dump.every < 1) dump->fail("must be at least 1", "every");
+      dump->finish();
+    }
     if (auto trajectory = output->table("trajectory")) {
       input.trajectory.file = trajectory->string("file");
       input.trajectory.every = trajectory->integer("every", 1000);

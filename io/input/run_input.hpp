@@ -20,6 +20,12 @@ struct TrajectoryOutputSpec {
   int compression = 4;
 };
 
+struct DumpOutputSpec {
+  std::string file;               // "" = none
+  std::string format = "lammps";  // lammps (dump custom) | xyz
+  std::int64_t every = 1000;
+};
+
 struct ThermoOutputSpec {
   std::int64_t every = 100;
   std::string file;  // "" = no CSV
@@ -37,6 +43,7 @@ struct RunInput {
   std::int64_t steps = 0;
   ThermoOutputSpec thermo;
   TrajectoryOutputSpec trajectory;
+  DumpOutputSpec dump;
   std::string source_text;    // the input as read, stored with trajectories
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;

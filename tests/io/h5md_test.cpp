@@ -5,12 +5,14 @@
 
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 
 #include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
 #include "input/run_input.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
+#include "text/dump_writer.hpp"
 
 namespace deli {
 namespace {
@@ -59,6 +61,40 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
   std::printf("%s", output.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+}
+
+}  // namespace
+}  // namespace deli
+
+namespace deli {
+namespace {
+
+// The LAMMPS dump layout, read back: frames, atom count, and coordinates to the 10 digits
+// written.
+TEST(Dump, LammpsCustomLayoutReadsBack) {
+  const std::string dir = ::testing::TempDir();
+  RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  DumpWriter dump(dir + "/melt.lammpstrj", DumpWriter::Format::lammps, 20);
+  VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
+  run(input.system, verlet, 40, 40, {&dump});
+  std::ifstream in(dir + "/melt.lammpstrj");
+  std::string line;
+  int frames = 0;
+  double x_of_atom_1 = 0;
+  while (std::getline(in, line)) {
+    if (line == "ITEM: TIMESTEP") ++frames;
+    if (line.rfind("ITEM: ATOMS id type x y z", 0) == 0) {
+      std::getline(in, line);
+      std::istringstream fields(line);
+      long id;
+      int type;
+      fields >> id >> type >> x_of_atom_1;
+      EXPECT_EQ(id, 1);
+    }
+  }
+  EXPECT_EQ(frames, 3);
+  EXPECT_NEAR(x_of_atom_1, input.system.particles.position[0].x,
+              1e-9 * std::abs(input.system.particles.position[0].x));
 }
 
 }  // namespace

@@ -1,0 +1,45 @@
+#include "text/dump_writer.hpp"
+
+#include "core/error.hpp"
+
+namespace deli {
+
+DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t every)
+    : path_(path), out_(path), format_(format), every_(every) {
+  if (!out_) {
+    throw InputError(path +
+                     ": cannot open the dump file for writing; check that the directory "
+                     "exists and is writable");
+  }
+  out_.precision(10);
+}
+
+void DumpWriter::on_frame(const System& system, const ThermoSample&) {
+  const Particles& p = system.particles;
+  const Box& box = system.box;
+  if (format_ == Format::xyz) {
+    out_ << p.size() << "\nstep " << system.step << " time " << system.time << " box "
+         << box.length().x << ' ' << box.length().y << ' ' << box.length().z << '\n';
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      out_ << p.type[i] + 1 << ' ' << p.position[i].x << ' ' << p.position[i].y << ' '
+           << p.position[i].z << '\n';
+    }
+  } else {
+    out_ << "ITEM: TIMESTEP\n"
+         << system.step << "\nITEM: NUMBER OF ATOMS\n"
+         << p.size() << "\nITEM: BOX BOUNDS " << (box.periodic(0) ? "pp" : "ff") << ' '
+         << (box.periodic(1) ? "pp" : "ff") << ' ' << (box.periodic(2) ? "pp" : "ff") << '\n';
+    for (int a = 0; a < 3; ++a) out_ << box.lo()[a] << ' ' << box.hi()[a] << '\n';
+    out_ << "ITEM: ATOMS id type x y z ix iy iz vx vy vz\n";
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const Vec3& x = p.position[i];
+      const Vec3& v = p.velocity[i];
+      out_ << p.id[i] << ' ' << p.type[i] + 1 << ' ' << x.x << ' ' << x.y << ' ' << x.z << ' '
+           << p.image[i][0] << ' ' << p.image[i][1] << ' ' << p.image[i][2] << ' ' << v.x << ' '
+           << v.y << ' ' << v.z << '\n';
+    }
+  }
+  out_.flush();
+}
+
+}  // namespace deli

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <cstdint>
+#include <fstream>
+#include <string>
+
+#include "simulation/observer.hpp"
+
+namespace deli {
+
+// Text trajectories for quick looks: LAMMPS `dump custom` layout (id type x y z ix iy iz
+// vx vy vz, which OVITO reads) or XYZ (type and position). A frame every `every` steps,
+// flushed as written.
+class DumpWriter final : public Observer {
+ public:
+  enum class Format { lammps, xyz };
+  DumpWriter(const std::string& path, Format format, std::int64_t every);
+
+  bool wants_frame(std::int64_t step) const override { return step % every_ == 0; }
+  void on_frame(const System& system, const ThermoSample&) override;
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+  Format format_;
+  std::int64_t every_;
+};
+
+}  // namespace deli
