@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "h5md/h5md_info.hpp"
 #include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
 #include "input/run_input.hpp"
@@ -93,6 +94,12 @@ int command_run(const std::vector<std::string>& args) {
       "list builds\n",
       stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
       stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
+  return 0;
+}
+
+int command_info(const std::vector<std::string>& args) {
+  if (args.size() != 1) throw InputError("usage: deli info FILE (an H5MD trajectory)");
+  std::fputs(describe_h5md(args[0]).c_str(), stdout);
   return 0;
 }
 

@@ -9,5 +9,6 @@ namespace deli {
 int command_run(const std::vector<std::string>& args);
 int command_write_data(const std::vector<std::string>& args);
 int command_validate(const std::vector<std::string>& args);
+int command_info(const std::vector<std::string>& args);
 
 }  // namespace deli

@@ -19,6 +19,7 @@ constexpr const char* kUsage =
     "  validate INPUT [--engine openmm|lammps|all] [--platform reference|cpu] [--steps N]\n"
     "                            compare energies, forces, virial and an N-step (100)\n"
     "                            NVE trajectory with OpenMM and LAMMPS in-process\n"
+    "  info FILE                 summarise an H5MD trajectory\n"
     "  write-data INPUT FILE     write the system INPUT builds as a LAMMPS data file\n"
     "\n"
     "options:\n"
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
     if (args[0] == "run") return deli::command_run(rest);
     if (args[0] == "write-data") return deli::command_write_data(rest);
     if (args[0] == "validate") return deli::command_validate(rest);
+    if (args[0] == "info") return deli::command_info(rest);
     std::fprintf(stderr, "deli: unknown command '%s'; run 'deli --help' for the commands\n",
                  args[0].c_str());
     return 2;

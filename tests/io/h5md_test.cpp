@@ -63,6 +63,24 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
 }
 
+// `deli info` on the same kind of file names what is in it.
+TEST(H5md, InfoSummarisesTheFile) {
+  const std::string dir = ::testing::TempDir();
+  RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  H5mdWriter writer({dir + "/info.h5", 10, true, false, 0}, input.system, input.source_text, "t");
+  VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
+  run(input.system, verlet, 30, 30, {&writer});
+  writer.on_finish(input.system);
+  FILE* pipe = popen((std::string(DELI_BINARY) + " info " + dir + "/info.h5 2>&1").c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  EXPECT_EQ(pclose(pipe), 0) << output;
+  EXPECT_NE(output.find("4000 atoms, 4 frames, time 0 to 0.15"), std::string::npos) << output;
+  EXPECT_NE(output.find("bonds: 3800"), std::string::npos) << output;
+  EXPECT_EQ(output.find("image"), std::string::npos) << "images were not asked for";
+}
+
 }  // namespace
 }  // namespace deli
 
