@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "h5md/checkpoint.hpp"
 #include "h5md/h5md_info.hpp"
 #include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
@@ -14,6 +15,7 @@
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
 #include "integrators/velocity_verlet.hpp"
+#include "simulation/interrupt.hpp"
 #include "simulation/run_loop.hpp"
 #include "text/dump_writer.hpp"
 #include "text/thermo_output.hpp"
@@ -39,9 +41,29 @@ std::string style_for(const System& system) {
 }  // namespace
 
 int command_run(const std::vector<std::string>& args) {
-  if (args.size() > 1) throw InputError("deli run takes at most one INPUT file; see deli --help");
-  const std::string path = args.empty() ? std::string(DELI_DEFAULT_INPUT) : args[0];
+  std::string path, restart;
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    if (args[k] == "--restart") {
+      if (k + 1 >= args.size()) throw InputError("deli run: --restart needs a CHECKPOINT file");
+      restart = args[++k];
+    } else if (path.empty()) {
+      path = args[k];
+    } else {
+      throw InputError("deli run takes one INPUT file (and --restart CHECKPOINT); see deli --help");
+    }
+  }
+  if (path.empty()) path = DELI_DEFAULT_INPUT;
   RunInput input = load_run_input(path);
+  Checkpoint checkpoint;
+  if (!restart.empty()) {
+    checkpoint = read_checkpoint(restart);
+    apply_checkpoint(checkpoint, input.system, restart);
+    if (checkpoint.step >= input.steps) {
+      throw InputError(restart + ": the checkpoint is at step " + std::to_string(checkpoint.step) +
+                       ", already at the input's " + std::to_string(input.steps) +
+                       " steps; raise [run] steps to continue");
+    }
+  }
 
   std::printf("deli %s: %s\n", DELI_VERSION, path.c_str());
   std::printf("%zu atoms, %zu bonds, %zu angles; box %g x %g x %g; dt %g, %lld steps\n",
@@ -50,7 +72,7 @@ int command_run(const std::vector<std::string>& args) {
               input.system.box.length().y, input.system.box.length().z, input.timestep,
               static_cast<long long>(input.steps));
 
-  minimize_if_asked(input);
+  if (restart.empty()) minimize_if_asked(input);
   std::unique_ptr<Integrator> integrator;
   if (input.integrator != "verlet") {  // gvi, dsi, midpoint: one integrator, options
     integrator = std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi,
@@ -87,8 +109,27 @@ int command_run(const std::vector<std::string>& args) {
     progress = std::make_unique<ProgressLine>(stderr);
     observers.insert(observers.begin(), progress.get());
   }
-  const RunStatistics stats =
-      run(input.system, *integrator, input.steps, input.thermo.every, observers);
+  std::unique_ptr<CheckpointWriter> checkpoints;
+  if (!input.checkpoint.file.empty()) {
+    checkpoints = std::make_unique<CheckpointWriter>(input.checkpoint.file, input.checkpoint.every,
+                                                     *integrator);
+    observers.push_back(checkpoints.get());
+  }
+  install_interrupt_handlers();
+  // A restart continues to the input's step count, from where the checkpoint was written.
+  if (!restart.empty()) integrator->resume(input.system, checkpoint.build_positions);
+  const RunStatistics stats = run(input.system, *integrator, input.steps - input.system.step,
+                                  input.thermo.every, observers, restart.empty());
+  if (stats.interrupted) {
+    const std::string file =
+        input.checkpoint.file.empty() ? path + ".interrupted.h5" : input.checkpoint.file;
+    write_checkpoint(file, input.system, integrator->forces().neighbors().positions_at_build());
+    std::printf(
+        "interrupted after step %lld: checkpoint written to %s; continue with\n  deli run "
+        "%s --restart %s\n",
+        static_cast<long long>(input.system.step), file.c_str(), path.c_str(), file.c_str());
+    return 130;
+  }
   std::printf(
       "loop time %.3f s for %lld steps of %zu atoms: %.4g atom-steps/s, %lld neighbour "
       "list builds\n",

@@ -13,7 +13,8 @@ constexpr const char* kUsage =
     "usage: deli <command> [arguments]\n"
     "\n"
     "commands:\n"
-    "  run [INPUT]               run a simulation (no INPUT: the default input,\n"
+    "  run [INPUT] [--restart CHECKPOINT]\n"
+    "                            run a simulation (no INPUT: the default input,\n"
     "                            " DELI_DEFAULT_INPUT
     ")\n"
     "  validate INPUT [--engine openmm|lammps|all] [--platform reference|cpu] [--steps N]\n"

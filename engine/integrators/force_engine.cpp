@@ -22,6 +22,12 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   return true;
 }
 
+void ForceEngine::restore_neighbors(System& system, const std::vector<Vec3>& build_positions) {
+  const SpecialPairs special = find_special_pairs(system.topology, system.particles.size());
+  neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
+  neighbors_.build(build_positions, system.box);
+}
+
 const ForceEvaluation& ForceEngine::compute(System& system, bool tally) {
   ensure_neighbors(system);
   last_ = force_field_.compute(system, neighbors_, force_, tally);

@@ -29,6 +29,8 @@ class ForceEngine {
   // Rebuilds the neighbour list (wrapping positions) if the particles have moved too far,
   // or always when `force`.
   bool ensure_neighbors(System& system, bool force = false);
+  // Rebuilds the list from `build_positions` (a checkpoint's), leaving the system's own.
+  void restore_neighbors(System& system, const std::vector<Vec3>& build_positions);
   // Whether the current list also holds every pair within reach at positions x.
   bool neighbors_cover(const std::vector<Vec3>& x) const { return !neighbors_.needs_rebuild(x); }
 

@@ -27,6 +27,9 @@ class NeighborList {
 
   void build(const std::vector<Vec3>& position, const Box& box);
   bool needs_rebuild(const std::vector<Vec3>& position) const;
+  // The positions of the last build: a restart rebuilds from them, so that the pair order,
+  // and with it every rounding, repeats.
+  const std::vector<Vec3>& positions_at_build() const { return position_at_build_; }
 
   // Neighbours of i are neighbors()[offsets()[i] .. offsets()[i+1]).
   const std::vector<std::int32_t>& neighbors() const { return neighbors_; }

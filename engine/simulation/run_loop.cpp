@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "simulation/interrupt.hpp"
+
 namespace deli {
 
 double RunStatistics::atom_steps_per_second() const {
@@ -10,8 +12,8 @@ double RunStatistics::atom_steps_per_second() const {
 }
 
 RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
-                  std::int64_t thermo_every, const std::vector<Observer*>& observers) {
-  integrator.setup(system);
+                  std::int64_t thermo_every, const std::vector<Observer*>& observers, bool set_up) {
+  if (set_up) integrator.setup(system);
   for (Observer* o : observers) o->on_start(system, steps);
   auto wants_frame = [&] {
     for (Observer* o : observers) {
@@ -48,6 +50,11 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       integrator.step(system, thermo || frame);
       for (Observer* o : observers) o->on_step(system);
       if (thermo || frame) sample(thermo, frame);
+      if (interrupt_requested()) {
+        stats.interrupted = true;
+        stats.steps = n;
+        break;
+      }
       stats.steps = n;
     }
   } catch (...) {

@@ -13,13 +13,16 @@ struct RunStatistics {
   std::size_t atoms = 0;
   double loop_seconds = 0;  // the step loop only: no set-up, no final output
   std::int64_t neighbor_builds = 0;
+  bool interrupted = false;  // stopped early by SIGINT/SIGTERM, after a whole step
   double atom_steps_per_second() const;
 };
 
 // Runs `steps` steps, sampling thermo at the start, every `thermo_every` steps and at the
 // end. Observers see every sample; a SimulationError propagates after observers finish,
 // so what was written before is kept.
+// `set_up = false`: the integrator was already set up (or resumed from a checkpoint).
 RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
-                  std::int64_t thermo_every, const std::vector<Observer*>& observers);
+                  std::int64_t thermo_every, const std::vector<Observer*>& observers,
+                  bool set_up = true);
 
 }  // namespace deli

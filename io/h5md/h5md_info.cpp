@@ -72,6 +72,18 @@ std::string describe_h5md(const std::string& path) {
   const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (file < 0) throw InputError(path + ": cannot be opened (truncated or damaged?)");
   std::ostringstream out;
+  if (H5Lexists(file, "/neighbor_build_positions", H5P_DEFAULT) > 0) {
+    const std::vector<hsize_t> position = shape_of(file, "/position");
+    std::int64_t step = 0;
+    const hid_t set = H5Dopen2(file, "/step", H5P_DEFAULT);
+    H5Dread(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &step);
+    H5Dclose(set);
+    out << path << ": deli checkpoint, " << (position.empty() ? 0 : position[0])
+        << " atoms at step " << step << ", time " << double_at(file, "/time", 0)
+        << "\n  fields: position velocity image neighbor_build_positions\n";
+    H5Fclose(file);
+    return out.str();
+  }
   if (H5Lexists(file, "/h5md", H5P_DEFAULT) <= 0 ||
       H5Lexists(file, "/particles", H5P_DEFAULT) <= 0) {
     H5Fclose(file);

@@ -434,6 +434,12 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       input.thermo.file = thermo->string("file", "");
       thermo->finish();
     }
+    if (auto checkpoint = output->table("checkpoint")) {
+      input.checkpoint.file = checkpoint->string("file");
+      input.checkpoint.every = checkpoint->integer("every", 10000);
+      if (input.checkpoint.every < 1) checkpoint->fail("must be at least 1", "every");
+      checkpoint->finish();
+    }
     if (auto dump = output->table("dump")) {
       input.dump.file = dump->string("file");
       input.dump.format = dump->choice("format", {"lammps", "xyz"}, "lammps");

@@ -44,6 +44,10 @@ struct RunInput {
   ThermoOutputSpec thermo;
   TrajectoryOutputSpec trajectory;
   DumpOutputSpec dump;
+  struct {
+    std::string file;  // "" = none
+    std::int64_t every = 10000;
+  } checkpoint;
   std::string source_text;    // the input as read, stored with trajectories
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;

@@ -1,0 +1,126 @@
+// A run continued from a checkpoint is the uninterrupted run, bit for bit; damaged
+// checkpoints are refused with their name.
+#include "h5md/checkpoint.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "input/run_input.hpp"
+#include "integrators/gvi.hpp"
+#include "integrators/velocity_verlet.hpp"
+#include "simulation/run_loop.hpp"
+
+namespace deli {
+namespace {
+
+std::unique_ptr<Integrator> integrator_for(const RunInput& input) {
+  if (input.integrator == "verlet") {
+    return std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
+  }
+  return std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi,
+                               input.system.particles);
+}
+
+void expect_restart_identical(const std::string& input_path, int first, int second) {
+  const std::string file = ::testing::TempDir() + "/restart.h5";
+  RunInput straight = load_run_input(input_path);
+  auto a = integrator_for(straight);
+  run(straight.system, *a, first + second, 0, {});
+
+  RunInput interrupted = load_run_input(input_path);
+  auto b = integrator_for(interrupted);
+  run(interrupted.system, *b, first, 0, {});
+  write_checkpoint(file, interrupted.system, b->forces().neighbors().positions_at_build());
+
+  RunInput resumed = load_run_input(input_path);
+  const Checkpoint checkpoint = read_checkpoint(file);
+  apply_checkpoint(checkpoint, resumed.system, file);
+  auto c = integrator_for(resumed);
+  c->resume(resumed.system, checkpoint.build_positions);
+  run(resumed.system, *c, second, 0, {}, false);
+
+  ASSERT_EQ(resumed.system.step, straight.system.step);
+  const Particles& x = straight.system.particles;
+  const Particles& y = resumed.system.particles;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(x.position[i][k], y.position[i][k]) << "atom " << x.id[i];
+      ASSERT_EQ(x.velocity[i][k], y.velocity[i][k]) << "atom " << x.id[i];
+    }
+  }
+}
+
+TEST(Checkpoint, VerletRestartIsBitwiseIdentical) {
+  expect_restart_identical(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml", 75, 75);
+}
+
+TEST(Checkpoint, GviRestartIsBitwiseIdentical) {
+  expect_restart_identical(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/rigid_slit.toml", 40,
+                           40);
+}
+
+TEST(Checkpoint, DamagedCheckpointIsRefused) {
+  const std::string dir = ::testing::TempDir();
+  RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  write_checkpoint(dir + "/good.h5", input.system, input.system.particles.position);
+  // Truncated to half its size.
+  std::ifstream in(dir + "/good.h5", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  std::ofstream(dir + "/cut.h5", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  for (const std::string& name : {std::string("/cut.h5"), std::string("/none.h5")}) {
+    try {
+      read_checkpoint(dir + name);
+      FAIL() << name << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(dir + name), std::string::npos) << e.what();
+    }
+  }
+  // A checkpoint of another system.
+  RunInput other = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/paper/pogo_stick.toml");
+  EXPECT_THROW(apply_checkpoint(read_checkpoint(dir + "/good.h5"), other.system, "good.h5"),
+               InputError);
+}
+
+}  // namespace
+}  // namespace deli
+
+namespace deli {
+namespace {
+
+// SIGTERM mid-run: the step finishes, a checkpoint is written, the exit status is 130, and
+// the checkpoint restarts.
+TEST(Checkpoint, SigtermLeavesACheckpointThatRestarts) {
+  const std::string dir = ::testing::TempDir();
+  const std::string input = dir + "/long.toml";
+  std::ofstream(input)
+      << "[system]\ndata = \"" DELI_SOURCE_DIR
+         "/inputs/lj_chains/melt.data\"\n"
+         "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
+         "[forcefield.pair]\nstyle = \"wca\"\n"
+         "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+         "[forcefield.bond]\nstyle = \"fene\"\n"
+         "coeffs = [{ type = 1, k = 30.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 }]\n"
+         "[integrator]\ntimestep = 0.005\n[run]\nsteps = 100000000\n"
+         "[output]\nthermo = { every = 1000 }\ncheckpoint = { file = \""
+      << dir << "/stop.h5\", every = 1000000 }\n";
+  const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " + dir +
+                              "/stop.log 2>&1 & pid=$!; sleep 1; kill -TERM $pid; "
+                              "wait $pid; echo $?'";
+  FILE* pipe = popen(command.c_str(), "r");
+  char buffer[256] = {};
+  std::fgets(buffer, sizeof buffer, pipe);
+  pclose(pipe);
+  EXPECT_EQ(std::string(buffer), "130\n");
+  const Checkpoint c = read_checkpoint(dir + "/stop.h5");
+  EXPECT_GT(c.step, 0);
+  EXPECT_EQ(c.id.size(), 4000u);
+  RunInput resumed = load_run_input(input);
+  apply_checkpoint(c, resumed.system, dir + "/stop.h5");
+  EXPECT_EQ(resumed.system.step, c.step);
+}
+
+}  // namespace
+}  // namespace deli
