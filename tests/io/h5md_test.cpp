@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -61,6 +62,23 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
   std::printf("%s", output.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+}
+
+// The plot tool turns the same kind of file into a PNG.
+TEST(H5md, PlotToolWritesAPng) {
+  const std::string dir = ::testing::TempDir();
+  RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  H5mdWriter writer({dir + "/plot.h5", 10, false, false, 0}, input.system, input.source_text, "t");
+  VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
+  run(input.system, verlet, 30, 30, {&writer});
+  writer.on_finish(input.system);
+  const std::string command = "/usr/bin/python3 " + std::string(DELI_SOURCE_DIR) +
+                              "/tools/plot_h5md.py " + dir + "/plot.h5 " + dir + "/plot.png 2>&1";
+  EXPECT_EQ(std::system(command.c_str()), 0);
+  std::ifstream png(dir + "/plot.png", std::ios::binary);
+  char signature[8] = {};
+  png.read(signature, 8);
+  EXPECT_EQ(std::string(signature + 1, 3), "PNG");
 }
 
 // `deli info` on the same kind of file names what is in it.
