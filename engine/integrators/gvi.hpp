@@ -68,10 +68,6 @@ class Gvi final : public Integrator {
   double timestep() const override { return dt_; }
   // Puts the state on the constraint manifold (positions, then momenta) and computes forces.
   void setup(System& system) override;
-  void resume(System& system, const std::vector<Vec3>& build_positions) override {
-    engine_.restore_neighbors(system, build_positions);
-    engine_.compute(system);
-  }
   ForceEngine& engine() override { return engine_; }
   void step(System& system, bool tally = true) override;
   const ForceEngine& forces() const override { return engine_; }

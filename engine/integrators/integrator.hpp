@@ -20,7 +20,10 @@ class Integrator {
   virtual void setup(System& system) = 0;
   // Continues from a checkpoint: the neighbour list rebuilt from the saved build positions
   // and forces computed, the state itself left untouched (no projection).
-  virtual void resume(System& system, const std::vector<Vec3>& build_positions) = 0;
+  void resume(System& system, const std::vector<Vec3>& build_positions) {
+    engine().restore_neighbors(system, build_positions);
+    engine().compute(system);
+  }
   virtual ForceEngine& engine() = 0;
   virtual void step(System& system, bool tally = true) = 0;
   virtual const ForceEngine& forces() const = 0;

@@ -12,10 +12,6 @@ class VelocityVerlet final : public Integrator {
   std::string name() const override { return "verlet"; }
   double timestep() const override { return dt_; }
   void setup(System& system) override;
-  void resume(System& system, const std::vector<Vec3>& build_positions) override {
-    engine_.restore_neighbors(system, build_positions);
-    engine_.compute(system);
-  }
   ForceEngine& engine() override { return engine_; }
   void step(System& system, bool tally = true) override;
   const ForceEngine& forces() const override { return engine_; }
