@@ -268,6 +268,7 @@ void Gvi::reflect_clusters(System& system, const std::vector<Constraint>& rows,
     stats_.reflected += r.reflected;
     stats_.shadow_fallbacks += r.shadow_fallbacks;
     stats_.stalled += r.capped ? 1 : 0;
+    stats_.cycled += r.cycled ? 1 : 0;
     scatter(p_local, cluster.particles, p);
   }
 }
@@ -577,6 +578,7 @@ std::vector<std::pair<std::string, double>> Gvi::take_statistics() {
           {"reflected", static_cast<double>(s.reflected)},
           {"smooth_per_step", static_cast<double>(s.smooth) / steps},
           {"stalled_reflections", static_cast<double>(s.stalled)},
+          {"cycled_reflections", static_cast<double>(s.cycled)},
           {"penetrating_steps", static_cast<double>(s.penetrations)},
           {"landings", static_cast<double>(s.fallbacks)},
           {"landing_deficits", static_cast<double>(s.deficits)},

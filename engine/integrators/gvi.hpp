@@ -16,6 +16,7 @@ struct GviStatistics {
   std::int64_t reflected = 0;         // rows that received a reflection impulse
   std::int64_t smooth = 0;            // rows in the smooth sets
   std::int64_t stalled = 0;           // reflections capped or stalled
+  std::int64_t cycled = 0;            // reflections that cycled (ended inelastically)
   std::int64_t penetrations = 0;      // steps ending with an inequality below -tolerance
   std::int64_t fallbacks = 0;         // rows the feasibility guard landed
   std::int64_t deficits = 0;          // landings whose energy could not be restored
@@ -108,9 +109,7 @@ class Gvi final : public Integrator {
   GviStatistics stats_;
   double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
   double virial_sum_ = 0.0;
-  std::vector<Vec3>
-      previous_positions_;  // linearisation point of `linearized` constraints   // sum over steps
-                            // of step_virial_ / h since the last sample
+  std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
 };
 
 }  // namespace deli

@@ -67,6 +67,12 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
   Eigen::VectorXd flat = flatten(p);
   std::vector<bool> reflected(in_rows.size(), false);
 
+  // Momenta after each solve: a later solve landing on one of them bit for bit has entered a
+  // cycle (e.g. a particle pinned between two parallel walls bounces from one to the other
+  // for ever), which no number of further iterations leaves.
+  std::vector<Eigen::VectorXd> history;
+  std::vector<bool> ever_in_set(in_rows.size(), false);
+  bool stopped = false;
   for (int iteration = 0;; ++iteration) {
     const Eigen::VectorXd normal_velocity = N.transpose() * (w.asDiagonal() * flat);
     std::vector<int> set;
@@ -76,8 +82,10 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     }
     if (op == ReflectionOperator::generalized && set.empty()) break;
     if (op == ReflectionOperator::moreau && iteration == 1) break;
+    for (int k : set) ever_in_set[k] = true;
     if (iteration >= max_iterations) {
       stats.capped = true;
+      stopped = true;
       break;
     }
     Eigen::MatrixXd NV(N.rows(), static_cast<Eigen::Index>(set.size()));
@@ -117,6 +125,7 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     ++stats.iterations;
     if (lambda.lpNorm<Eigen::Infinity>() == 0.0) {
       stats.capped = true;  // approaching, yet no energy-preserving impulse: stalled
+      stopped = true;
       break;
     }
     flat += NV * lambda;
@@ -124,6 +133,39 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       total_lambda(set[k]) += lambda(static_cast<Eigen::Index>(k));
     for (std::size_t k = 0; k < set.size(); ++k) {
       if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[set[k]] = true;
+    }
+    if (op == ReflectionOperator::generalized) {
+      for (const Eigen::VectorXd& earlier : history) {
+        if (earlier == flat) stats.cycled = true;
+      }
+      if (stats.cycled) {
+        stopped = true;
+        break;
+      }
+      history.push_back(flat);
+    }
+  }
+  if (stopped) {
+    // No energy-preserving way out: take the least kinetic energy change that leaves every
+    // row met so far non-approaching (an inelastic Moreau step, min |p' - p|_K over
+    // p' = p + N lambda, lambda >= 0), so the step ends feasible. Counted by the caller.
+    std::vector<int> rows;
+    for (std::size_t k = 0; k < in_rows.size(); ++k) {
+      if (ever_in_set[k]) rows.push_back(static_cast<int>(k));
+    }
+    Eigen::MatrixXd NV(N.rows(), static_cast<Eigen::Index>(rows.size()));
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      NV.col(static_cast<Eigen::Index>(k)) = N.col(rows[k]);
+    }
+    const Eigen::MatrixXd KN = k_diag.asDiagonal() * NV;
+    const Eigen::MatrixXd Q = NV.transpose() * KN;
+    const Eigen::VectorXd c = KN.transpose() * flat;
+    Eigen::VectorXd lambda;
+    solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    flat += NV * lambda;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      total_lambda(rows[k]) += lambda(static_cast<Eigen::Index>(k));
+      if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[rows[k]] = true;
     }
   }
   for (bool r : reflected) stats.reflected += r ? 1 : 0;

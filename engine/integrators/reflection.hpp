@@ -29,11 +29,17 @@ struct ReflectionStats {
   int iterations = 0;        // solves (Algorithm 2 loops; 1 for Moreau)
   int reflected = 0;         // rows that received an impulse
   bool capped = false;       // Algorithm 2 hit its iteration cap or stalled
+  bool cycled = false;       // Algorithm 2 returned to momenta it had already produced
   int shadow_fallbacks = 0;  // solves where the shadow energy had no reflection: H used
   // The impulse each local row applied, along its own gradient (equality rows carry the
   // share of the projected normals that runs along them): for the constraint virial.
   std::vector<double> row_impulse;
 };
+
+// The cluster's inequality normals at x projected onto the cotangent space of its equality
+// rows (columns in the order of the inequality rows), in the 3n local coordinates.
+Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector<bool>& equality,
+                                  const std::vector<Vec3>& x, const Box& box);
 
 // Energy-preserving reflection of the momenta p of one cluster off its inequality rows
 // at q (the paper's Algorithms 2 and 3, energy E = H, K = M^-1 / 2). Inequality normals
@@ -41,12 +47,10 @@ struct ReflectionStats {
 // so the momenta stay tangent to the rod manifold. Each solve minimises
 // |L^T (N lambda + 2 p)| over lambda >= 0 (K = L L^T), whose optimality conditions give
 // lambda^T N^T K (N lambda + 2 p) = 0: E conserved exactly whatever the number of rows.
-// Rows with normal velocity below -tolerance count as approaching.
-// The cluster's inequality normals at x projected onto the cotangent space of its equality
-// rows (columns in the order of the inequality rows), in the 3n local coordinates.
-Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector<bool>& equality,
-                                  const std::vector<Vec3>& x, const Box& box);
-
+// Rows with normal velocity below -tolerance count as approaching. Algorithm 2 always ends:
+// at `max_iterations`, when a solve stalls (approaching, no energy-preserving impulse) or
+// when it cycles (momenta repeat bit for bit), the rows met so far get an inelastic
+// projection instead and the event is flagged in the stats.
 // With `shadow`, E is Verlet's shadow Hamiltonian; a solve where it admits no reflection
 // (an approaching row with grad g^T K p >= 0, or K not positive on the normals) falls back
 // to E = H for that solve and is counted.

@@ -189,6 +189,32 @@ TEST(Gvi, NarrowWedgeTerminatesAndKeepsEnergy) {
   EXPECT_GT(run.particles().velocity[0].x, 0) << "it should leave the wedge";
 }
 
+// A sphere in a slit exactly its diameter wide, moving towards one wall: Algorithm 2 sends
+// it towards the other wall, then back, and so on for ever (the sign flips are exact, so the
+// momenta repeat bit for bit). The loop must notice the cycle, end with no approaching row
+// (normal velocity zero, tangential velocity kept), count it, and the sphere must not move
+// into either wall.
+TEST(Gvi, PinnedSphereReflectionCycleIsDetected) {
+  GviRun run(input_with_atoms("pinned", {{{0.5, 0, 0}, {-1.0, 0.3, 0}}}, "fff", {-5, -5, -5},
+                              {5, 5, 5},
+                              kNoPairs +
+                                  "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+                                  "walls = [{ type = \"plane\", normal = [1, 0, 0] },\n"
+                                  "         { type = \"plane\", normal = [-1, 0, 0], "
+                                  "point = [1, 0, 0] }]\n" +
+                                  with_timestep(0.01)));
+  for (int n = 0; n < 10; ++n) run.step();
+  const Particles& p = run.particles();
+  EXPECT_NEAR(p.position[0].x, 0.5, 1e-12);
+  EXPECT_NEAR(p.velocity[0].x, 0.0, 1e-12);
+  EXPECT_NEAR(p.velocity[0].y, 0.3, 1e-14);
+  double cycled = -1;
+  for (const auto& [name, value] : run.gvi->take_statistics()) {
+    if (name == "cycled_reflections") cycled = value;
+  }
+  EXPECT_EQ(cycled, 1) << "the first step cycles; later ones find nothing approaching";
+}
+
 // A sphere hitting two touching spheres in a line: one generalized reflection, momentum
 // and energy kept, every pair separating or tangent afterwards.
 TEST(Gvi, SphereHitsTwoTouchingSpheres) {
