@@ -80,20 +80,25 @@ int command_run(const std::vector<std::string>& args) {
   } else {
     integrator = std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
   }
+  // A restart appends to the run's outputs, cut back to what precedes the checkpoint.
+  const std::int64_t continue_from = restart.empty() ? -1 : checkpoint.step;
   ThermoTable table(stdout);
   std::vector<Observer*> observers{&table};
   std::unique_ptr<ThermoCsv> csv;
   if (!input.thermo.file.empty()) {
-    csv = std::make_unique<ThermoCsv>(input.thermo.file);
+    csv = std::make_unique<ThermoCsv>(input.thermo.file, continue_from);
     observers.push_back(csv.get());
   }
   std::unique_ptr<H5mdWriter> trajectory;
   if (!input.trajectory.file.empty()) {
     const char* user = std::getenv("USER");
-    trajectory = std::make_unique<H5mdWriter>(
-        TrajectorySpec{input.trajectory.file, input.trajectory.every, input.trajectory.velocities,
-                       input.trajectory.images, input.trajectory.compression},
-        input.system, input.source_text, user ? user : "deli user");
+    std::vector<std::pair<std::int32_t, std::int32_t>> rods;
+    for (const Constraint& c : input.constraints.equalities) {
+      if (c.kind == ConstraintKind::rod) rods.emplace_back(c.i, c.j);
+    }
+    trajectory = std::make_unique<H5mdWriter>(input.trajectory, input.system, input.source_text,
+                                              user ? user : "deli user", rods,
+                                              TrajectoryContinuation{continue_from});
     observers.push_back(trajectory.get());
   }
   std::unique_ptr<DumpWriter> dump;
@@ -101,7 +106,7 @@ int command_run(const std::vector<std::string>& args) {
     dump = std::make_unique<DumpWriter>(
         input.dump.file,
         input.dump.format == "xyz" ? DumpWriter::Format::xyz : DumpWriter::Format::lammps,
-        input.dump.every);
+        input.dump.every, continue_from);
     observers.push_back(dump.get());
   }
   std::unique_ptr<ProgressLine> progress;

@@ -497,12 +497,16 @@ void Gvi::step(System& system, bool tally) {
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
   previous_positions_ = q;
-  virial_sum_ += step_virial_ / h;
   // The rows that can have closed this step are among the candidates (their reach covers
   // the step's displacements): they decide overlaps; the exact minimum over every pair is
   // taken on thermo steps, where it is reported.
   candidates_for(P.position);
   record_geometry(system, nearby, tally);
+  for (std::size_t k = 0; k < sampled_.size(); ++k) {
+    sampled_[k].add(stats_);
+    virial_sums_[k] += step_virial_ / h;
+  }
+  stats_ = GviStatistics{};
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
@@ -562,15 +566,36 @@ void Gvi::record_geometry(const System& system, const std::vector<Constraint>& c
   }
 }
 
-double Gvi::take_constraint_virial() {
-  const double average = stats_.steps > 0 ? virial_sum_ / static_cast<double>(stats_.steps) : 0.0;
-  virial_sum_ = 0.0;
+void GviStatistics::add(const GviStatistics& later) {
+  steps += later.steps;
+  active += later.active;
+  reflected += later.reflected;
+  smooth += later.smooth;
+  stalled += later.stalled;
+  cycled += later.cycled;
+  penetrations += later.penetrations;
+  fallbacks += later.fallbacks;
+  deficits += later.deficits;
+  shadow_fallbacks += later.shadow_fallbacks;
+  solves += later.solves;
+  solver_iterations += later.solver_iterations;
+  max_solver_iterations = std::max(max_solver_iterations, later.max_solver_iterations);
+  min_gap = std::min(min_gap, later.min_gap);
+  max_rod_violation = std::max(max_rod_violation, later.max_rod_violation);
+}
+
+double Gvi::take_constraint_virial(Sampler sampler) {
+  const auto k = static_cast<std::size_t>(sampler);
+  const std::int64_t steps = sampled_[k].steps;
+  const double average = steps > 0 ? virial_sums_[k] / static_cast<double>(steps) : 0.0;
+  virial_sums_[k] = 0.0;
   return average;
 }
 
-std::vector<std::pair<std::string, double>> Gvi::take_statistics() {
-  const GviStatistics s = stats_;
-  stats_ = GviStatistics{};
+std::vector<std::pair<std::string, double>> Gvi::take_statistics(Sampler sampler) {
+  const auto k = static_cast<std::size_t>(sampler);
+  const GviStatistics s = sampled_[k];
+  sampled_[k] = GviStatistics{};
   const double steps = std::max<double>(1.0, static_cast<double>(s.steps));
   return {{"min_gap", std::isfinite(s.min_gap) ? s.min_gap : 0.0},
           {"max_rod_violation", s.max_rod_violation},

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <limits>
 
 #include "constraints/clusters.hpp"
@@ -9,7 +10,7 @@
 
 namespace deli {
 
-// Counters between two thermo samples.
+// Counters over a span of steps (one step, or the steps between two samples).
 struct GviStatistics {
   std::int64_t steps = 0;
   std::int64_t active = 0;            // rows in the extended active sets
@@ -25,6 +26,8 @@ struct GviStatistics {
   int max_solver_iterations = 0;
   double min_gap = std::numeric_limits<double>::infinity();
   double max_rod_violation = 0;  // |f| / length, equality rows
+
+  void add(const GviStatistics& later);
 };
 
 // The generalized variational integrator (Kaufman & Pai, Algorithm 1) with the Verlet
@@ -72,8 +75,9 @@ class Gvi final : public Integrator {
   ForceEngine& engine() override { return engine_; }
   void step(System& system, bool tally = true) override;
   const ForceEngine& forces() const override { return engine_; }
-  std::vector<std::pair<std::string, double>> take_statistics() override;
-  double take_constraint_virial() override;
+  std::vector<std::pair<std::string, double>> take_statistics(
+      Sampler sampler = Sampler::thermo) override;
+  double take_constraint_virial(Sampler sampler = Sampler::thermo) override;
   std::optional<double> shadow_energy(const System& system) const override {
     if (lagrangian_ != Lagrangian::verlet) return std::nullopt;
     return engine_.verlet_shadow_energy(system, dt_);
@@ -106,9 +110,10 @@ class Gvi final : public Integrator {
   Lagrangian lagrangian_;
   bool reflections_;
   bool constrained_predictor_;
-  GviStatistics stats_;
+  GviStatistics stats_;  // this step's (and setup's) figures, added to each sampler's at its end
+  std::array<GviStatistics, 2> sampled_;
   double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
-  double virial_sum_ = 0.0;
+  std::array<double, 2> virial_sums_{};  // sum over steps of step_virial_ / h, per sampler
   std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
 };
 

@@ -9,6 +9,10 @@
 
 namespace deli {
 
+// Who samples the integrator's accumulated figures: the thermo output and the trajectory
+// frames each get their own tally, since they sample at different intervals.
+enum class Sampler { thermo = 0, frame = 1 };
+
 // Advances a system by one timestep. setup() brings forces up to date before the first
 // step; after every step, forces() holds those at the new positions, with energies and
 // virial when the step was asked to `tally` them.
@@ -27,11 +31,14 @@ class Integrator {
   virtual ForceEngine& engine() = 0;
   virtual void step(System& system, bool tally = true) = 0;
   virtual const ForceEngine& forces() const = 0;
-  // Named figures accumulated since the last call (constraint statistics), for thermo.
-  virtual std::vector<std::pair<std::string, double>> take_statistics() { return {}; }
+  // Named figures accumulated since the sampler's last call (constraint statistics).
+  virtual std::vector<std::pair<std::string, double>> take_statistics(
+      Sampler = Sampler::thermo) {
+    return {};
+  }
   // The constraint impulses' virial, sum of r . J / h per step, averaged over the steps
-  // since the last call: impulses are instantaneous, a single step's would be noise.
-  virtual double take_constraint_virial() { return 0.0; }
+  // since the sampler's last call: impulses are instantaneous, one step's would be noise.
+  virtual double take_constraint_virial(Sampler = Sampler::thermo) { return 0.0; }
   // Verlet's modified energy H - h^2/24 F.M^-1.F + h^2/12 v.d2V.v (potential forces only),
   // for Verlet-based integrators whose force field has pairwise Hessians.
   virtual std::optional<double> shadow_energy(const System&) const { return std::nullopt; }

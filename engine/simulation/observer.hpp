@@ -12,10 +12,11 @@ class Observer {
   virtual void on_thermo(const ThermoSample&) {}
   virtual void on_step(const System&) {}  // after every step: keep it cheap
   // Trajectory writers: whether the state after `step` is a frame, and the frame itself
-  // with the thermodynamic state at that step (pressure without constraint impulses, which
-  // are averaged between thermo samples).
+  // with the thermodynamic state at that step (constraint impulses and statistics over the
+  // steps since the previous frame) and the force field's forces on each atom.
   virtual bool wants_frame(std::int64_t /*step*/) const { return false; }
-  virtual void on_frame(const System&, const ThermoSample&) {}
+  virtual void on_frame(const System&, const ThermoSample&, const std::vector<Vec3>& /*forces*/) {
+  }
   virtual void on_finish(const System&) {}
 };
 

@@ -24,14 +24,18 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   auto sample = [&](bool thermo, bool frame) {
     ThermoSample s = measure_thermo(system, integrator.forces().last());
     s.shadow_energy = integrator.shadow_energy(system);
+    const double volume = system.box.volume();
     if (frame) {
+      ThermoSample f = s;
+      f.pressure += integrator.take_constraint_virial(Sampler::frame) / (3.0 * volume);
+      f.integrator = integrator.take_statistics(Sampler::frame);
       for (Observer* o : observers) {
-        if (o->wants_frame(system.step)) o->on_frame(system, s);
+        if (o->wants_frame(system.step)) o->on_frame(system, f, integrator.forces().force());
       }
     }
     if (!thermo) return;
-    s.pressure += integrator.take_constraint_virial() / (3.0 * system.box.volume());
-    s.integrator = integrator.take_statistics();
+    s.pressure += integrator.take_constraint_virial(Sampler::thermo) / (3.0 * volume);
+    s.integrator = integrator.take_statistics(Sampler::thermo);
     for (Observer* o : observers) o->on_thermo(s);
   };
   sample(true, wants_frame());

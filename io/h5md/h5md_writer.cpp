@@ -1,5 +1,6 @@
 #include "h5md/h5md_writer.hpp"
 
+#include <algorithm>
 #include <array>
 
 #include "core/error.hpp"
@@ -75,12 +76,29 @@ hid_t group(hid_t parent, const char* name) {
 }  // namespace
 
 H5mdWriter::H5mdWriter(const TrajectorySpec& spec, const System& system,
-                       const std::string& input_text, const std::string& author)
+                       const std::string& input_text, const std::string& author,
+                       const std::vector<std::pair<std::int32_t, std::int32_t>>& rods,
+                       TrajectoryContinuation continuation)
     : spec_(spec), atoms_(system.particles.size()) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors come back as codes, reported by us
-  file_ = H5Fcreate(spec.file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (continuation.step >= 0 && H5Fis_hdf5(spec.file.c_str()) > 0) {
+    try {
+      reopen(system, continuation.step);
+    } catch (...) {
+      close();
+      throw;
+    }
+    return;
+  }
+  create(system, input_text, author, rods);
+}
+
+void H5mdWriter::create(const System& system, const std::string& input_text,
+                        const std::string& author,
+                        const std::vector<std::pair<std::int32_t, std::int32_t>>& rods) {
+  file_ = H5Fcreate(spec_.file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file_ < 0) {
-    throw InputError(spec.file +
+    throw InputError(spec_.file +
                      ": cannot create the trajectory file; check that the "
                      "directory exists and is writable");
   }
@@ -112,36 +130,130 @@ H5mdWriter::H5mdWriter(const TrajectorySpec& spec, const System& system,
   edges_ = make_series(box, "edges", H5T_NATIVE_DOUBLE, {3, 3});
   H5Gclose(box);
   position_ = make_series(all, "position", H5T_NATIVE_DOUBLE, {n, 3});
-  if (spec.velocities) velocity_ = make_series(all, "velocity", H5T_NATIVE_DOUBLE, {n, 3});
-  if (spec.images) image_ = make_series(all, "image", H5T_NATIVE_INT, {n, 3});
+  if (spec_.velocities) velocity_ = make_series(all, "velocity", H5T_NATIVE_DOUBLE, {n, 3});
+  if (spec_.forces) force_ = make_series(all, "force", H5T_NATIVE_DOUBLE, {n, 3});
+  if (spec_.images) image_ = make_series(all, "image", H5T_NATIVE_INT, {n, 3});
   H5Gclose(all);
   H5Gclose(particles);
 
   observables_group_ = group(file_, "observables");
 
-  if (!system.topology.bonds.empty()) {
+  if (!system.topology.bonds.empty() || !rods.empty()) {
     const hid_t connectivity = group(file_, "connectivity");
-    std::vector<std::int64_t> pairs;
-    for (const Bond& b : system.topology.bonds) pairs.push_back(b.i), pairs.push_back(b.j);
-    fixed_dataset(connectivity, "bonds", H5T_NATIVE_INT64, {system.topology.bonds.size(), 2},
-                  pairs);
     // Indices into /particles/all (0-based), as the H5MD connectivity module specifies.
-    const hid_t bonds = H5Dopen2(connectivity, "bonds", H5P_DEFAULT);
-    hobj_ref_t reference;
-    H5Rcreate(&reference, file_, "/particles/all", H5R_OBJECT, -1);
-    const hid_t space = H5Screate(H5S_SCALAR);
-    const hid_t attr =
-        H5Acreate2(bonds, "particles_group", H5T_STD_REF_OBJ, space, H5P_DEFAULT, H5P_DEFAULT);
-    H5Awrite(attr, H5T_STD_REF_OBJ, &reference);
-    H5Aclose(attr);
-    H5Sclose(space);
-    H5Dclose(bonds);
+    auto pair_list = [&](const char* name, const std::vector<std::int64_t>& pairs) {
+      if (pairs.empty()) return;
+      fixed_dataset(connectivity, name, H5T_NATIVE_INT64, {pairs.size() / 2, 2}, pairs);
+      const hid_t set = H5Dopen2(connectivity, name, H5P_DEFAULT);
+      hobj_ref_t reference;
+      H5Rcreate(&reference, file_, "/particles/all", H5R_OBJECT, -1);
+      const hid_t space = H5Screate(H5S_SCALAR);
+      const hid_t attr =
+          H5Acreate2(set, "particles_group", H5T_STD_REF_OBJ, space, H5P_DEFAULT, H5P_DEFAULT);
+      H5Awrite(attr, H5T_STD_REF_OBJ, &reference);
+      H5Aclose(attr);
+      H5Sclose(space);
+      H5Dclose(set);
+    };
+    std::vector<std::int64_t> bonds, rod_pairs;
+    for (const Bond& b : system.topology.bonds) bonds.push_back(b.i), bonds.push_back(b.j);
+    for (const auto& [i, j] : rods) rod_pairs.push_back(i), rod_pairs.push_back(j);
+    pair_list("bonds", bonds);
+    pair_list("rods", rod_pairs);
     H5Gclose(connectivity);
   }
 
   const hid_t parameters = group(file_, "parameters");
   string_attribute(parameters, "input", input_text);
   H5Gclose(parameters);
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), spec_.file, "flush the file");
+}
+
+H5mdWriter::Series H5mdWriter::continue_series(hid_t parent, const std::string& name,
+                                               std::int64_t step) {
+  Series s;
+  s.group = H5Gopen2(parent, name.c_str(), H5P_DEFAULT);
+  if (s.group >= 0) {
+    s.step = H5Dopen2(s.group, "step", H5P_DEFAULT);
+    s.time = H5Dopen2(s.group, "time", H5P_DEFAULT);
+    s.value = H5Dopen2(s.group, "value", H5P_DEFAULT);
+  }
+  if (s.group < 0 || s.step < 0 || s.time < 0 || s.value < 0) {
+    throw InputError(spec_.file + ": cannot continue this trajectory: it has no readable " + name +
+                     " series; move the file aside to start a new one");
+  }
+  hid_t space = H5Dget_space(s.step);
+  hsize_t frames = 0;
+  H5Sget_simple_extent_dims(space, &frames, nullptr);
+  H5Sclose(space);
+  std::vector<std::int64_t> steps(frames);
+  if (frames > 0) {
+    check(H5Dread(s.step, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, steps.data()),
+          spec_.file, "read the frame steps");
+  }
+  const auto keep =
+      static_cast<hsize_t>(std::lower_bound(steps.begin(), steps.end(), step) - steps.begin());
+  for (hid_t set : {s.step, s.time, s.value}) {
+    space = H5Dget_space(set);
+    std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
+    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+    H5Sclose(space);
+    dims[0] = keep;
+    check(H5Dset_extent(set, dims.data()), spec_.file, "cut the trajectory back to the checkpoint");
+  }
+  return s;
+}
+
+void H5mdWriter::reopen(const System& system, std::int64_t step) {
+  file_ = H5Fopen(spec_.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file_ < 0) {
+    throw InputError(spec_.file +
+                     ": cannot open the trajectory to continue it; check that it is writable");
+  }
+  const hid_t all = H5Gopen2(file_, "/particles/all", H5P_DEFAULT);
+  if (all < 0) {
+    throw InputError(spec_.file +
+                     ": not a deli H5MD trajectory (no /particles/all); move it aside or name "
+                     "another trajectory file");
+  }
+  auto has = [&](const char* name) { return H5Lexists(all, name, H5P_DEFAULT) > 0; };
+  for (const auto& [name, wanted] : {std::pair{"velocity", spec_.velocities},
+                                     std::pair{"force", spec_.forces},
+                                     std::pair{"image", spec_.images}}) {
+    if (has(name) != wanted) {
+      H5Gclose(all);
+      throw InputError(spec_.file + ": the trajectory " + (wanted ? "lacks" : "has") + " " +
+                       name + " frames, the input " + (wanted ? "asks for" : "does not ask for") +
+                       " them; keep [output] trajectory as it was to continue the file");
+    }
+  }
+  position_ = continue_series(all, "position", step);
+  hid_t space = H5Dget_space(position_.value);
+  hsize_t dims[3] = {0, 0, 0};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  H5Sclose(space);
+  if (dims[1] != system.particles.size()) {
+    H5Gclose(all);
+    throw InputError(spec_.file + ": the trajectory holds " + std::to_string(dims[1]) +
+                     " atoms, the run " + std::to_string(system.particles.size()) +
+                     "; it belongs to another system");
+  }
+  if (spec_.velocities) velocity_ = continue_series(all, "velocity", step);
+  if (spec_.forces) force_ = continue_series(all, "force", step);
+  if (spec_.images) image_ = continue_series(all, "image", step);
+  const hid_t box = H5Gopen2(all, "box", H5P_DEFAULT);
+  edges_ = continue_series(box, "edges", step);
+  H5Gclose(box);
+  H5Gclose(all);
+  observables_group_ = H5Gopen2(file_, "observables", H5P_DEFAULT);
+  hsize_t count = 0;
+  H5Gget_num_objs(observables_group_, &count);
+  for (hsize_t k = 0; k < count; ++k) {
+    char name[256] = {};
+    H5Gget_objname_by_idx(observables_group_, k, name, sizeof name);
+    observables_.emplace(name, continue_series(observables_group_, name, step));
+  }
+  frames_ = 0;
   check(H5Fflush(file_, H5F_SCOPE_GLOBAL), spec_.file, "flush the file");
 }
 
@@ -205,12 +317,16 @@ void H5mdWriter::append(Series& s, std::int64_t step, double time, const void* d
   grow_and_write(s.value, memory_type, data, frame_shape);
 }
 
-void H5mdWriter::on_frame(const System& system, const ThermoSample& sample) {
+void H5mdWriter::on_frame(const System& system, const ThermoSample& sample,
+                          const std::vector<Vec3>& forces) {
   const Particles& p = system.particles;
   const hsize_t n = atoms_;
   append(position_, system.step, system.time, p.position.data(), H5T_NATIVE_DOUBLE, {n, 3});
   if (spec_.velocities) {
     append(velocity_, system.step, system.time, p.velocity.data(), H5T_NATIVE_DOUBLE, {n, 3});
+  }
+  if (spec_.forces) {
+    append(force_, system.step, system.time, forces.data(), H5T_NATIVE_DOUBLE, {n, 3});
   }
   if (spec_.images)
     append(image_, system.step, system.time, p.image.data(), H5T_NATIVE_INT, {n, 3});
@@ -227,6 +343,12 @@ void H5mdWriter::on_frame(const System& system, const ThermoSample& sample) {
     values.emplace_back("energy_" + sample.term_names[t], sample.term_energies[t]);
   }
   if (sample.shadow_energy) values.emplace_back("shadow_energy", *sample.shadow_energy);
+  if (sample.angular_momentum) {
+    values.emplace_back("angular_momentum_x", sample.angular_momentum->x);
+    values.emplace_back("angular_momentum_y", sample.angular_momentum->y);
+    values.emplace_back("angular_momentum_z", sample.angular_momentum->z);
+  }
+  for (const auto& [name, value] : sample.integrator) values.emplace_back(name, value);
   for (const auto& [name, value] : values) {
     auto it = observables_.find(name);
     if (it == observables_.end()) {
@@ -253,6 +375,7 @@ void H5mdWriter::close() {
   };
   close_series(position_);
   close_series(velocity_);
+  close_series(force_);
   close_series(image_);
   close_series(edges_);
   for (auto& [name, s] : observables_) close_series(s);

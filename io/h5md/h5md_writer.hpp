@@ -7,34 +7,38 @@
 #include <string>
 #include <vector>
 
+#include "h5md/trajectory_spec.hpp"
 #include "simulation/observer.hpp"
 
 namespace deli {
 
-struct TrajectorySpec {
-  std::string file;
-  std::int64_t every = 1000;
-  bool velocities = true;
-  bool images = true;
-  int compression = 4;  // deflate level, 0: none
+// Where a trajectory continues: a run restarted from a checkpoint at `step` appends to the
+// existing file, dropping its frames from `step` on (the restarted run writes them again).
+struct TrajectoryContinuation {
+  std::int64_t step = -1;  // -1: a new file
 };
 
 // An H5MD 1.1 trajectory (HDF5 C API): /h5md metadata, /particles/all with position,
-// velocity and image as time series (step, time, value), species, mass, id and the box
-// (edges as a D x D matrix series, as MDAnalysis reads them), /observables for the thermo
-// quantities at every frame, /connectivity/bonds, and the input under /parameters.
+// velocity, force and image as time series (step, time, value), species, mass, id and the
+// box (edges as a D x D matrix series, as MDAnalysis reads them), /observables for the
+// thermo quantities and constraint statistics at every frame (MDAnalysis reads observables
+// by frame index, so every observable has one entry per frame), /connectivity/bonds and
+// /connectivity/rods, and the input under /parameters.
 // Series are chunked, compressed and extended frame by frame; the file is flushed after
 // every frame, so a run killed at any moment leaves every frame written before.
 class H5mdWriter final : public Observer {
  public:
   H5mdWriter(const TrajectorySpec& spec, const System& system, const std::string& input_text,
-             const std::string& author);
+             const std::string& author,
+             const std::vector<std::pair<std::int32_t, std::int32_t>>& rods = {},
+             TrajectoryContinuation continuation = {});
   ~H5mdWriter() override;
   H5mdWriter(const H5mdWriter&) = delete;
   H5mdWriter& operator=(const H5mdWriter&) = delete;
 
   bool wants_frame(std::int64_t step) const override { return step % spec_.every == 0; }
-  void on_frame(const System& system, const ThermoSample& sample) override;
+  void on_frame(const System& system, const ThermoSample& sample,
+                const std::vector<Vec3>& forces) override;
   void on_finish(const System&) override;
   std::int64_t frames() const { return frames_; }
 
@@ -44,13 +48,18 @@ class H5mdWriter final : public Observer {
   };
   Series make_series(hid_t parent, const std::string& name, hid_t type,
                      const std::vector<hsize_t>& frame_shape);
+  void create(const System& system, const std::string& input_text, const std::string& author,
+              const std::vector<std::pair<std::int32_t, std::int32_t>>& rods);
+  void reopen(const System& system, std::int64_t step);
+  // Opens an existing series and cuts it back to its frames before `step`.
+  Series continue_series(hid_t parent, const std::string& name, std::int64_t step);
   void append(Series& s, std::int64_t step, double time, const void* data, hid_t memory_type,
               const std::vector<hsize_t>& frame_shape);
   void close();
 
   TrajectorySpec spec_;
   hid_t file_ = -1;
-  Series position_, velocity_, image_, edges_;
+  Series position_, velocity_, force_, image_, edges_;
   std::map<std::string, Series> observables_;
   hid_t observables_group_ = -1;
   std::int64_t frames_ = 0;

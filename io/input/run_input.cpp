@@ -453,6 +453,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       if (input.trajectory.every < 1) trajectory->fail("must be at least 1", "every");
       input.trajectory.velocities = trajectory->boolean("velocities", true);
       input.trajectory.images = trajectory->boolean("images", true);
+      input.trajectory.forces = trajectory->boolean("forces", false);
       input.trajectory.compression = static_cast<int>(trajectory->integer("compression", 4));
       if (input.trajectory.compression < 0 || input.trajectory.compression > 9) {
         trajectory->fail("deflate level from 0 (none) to 9", "compression");

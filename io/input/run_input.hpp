@@ -7,18 +7,12 @@
 #include "constraints/constraint_set.hpp"
 #include "force_field.hpp"
 #include "force_field_spec.hpp"
+#include "h5md/trajectory_spec.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
 #include "system/system.hpp"
 
 namespace deli {
-
-struct TrajectoryOutputSpec {
-  std::string file;  // "" = no trajectory
-  std::int64_t every = 1000;
-  bool velocities = true, images = true;
-  int compression = 4;
-};
 
 struct DumpOutputSpec {
   std::string file;               // "" = none
@@ -42,7 +36,7 @@ struct RunInput {
   double skin = 0.3;
   std::int64_t steps = 0;
   ThermoOutputSpec thermo;
-  TrajectoryOutputSpec trajectory;
+  TrajectorySpec trajectory;
   DumpOutputSpec dump;
   struct {
     std::string file;  // "" = none

@@ -1,11 +1,32 @@
 #include "text/dump_writer.hpp"
 
 #include "core/error.hpp"
+#include "text/continuation.hpp"
 
 namespace deli {
 
-DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t every)
-    : path_(path), out_(path), format_(format), every_(every) {
+DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t every,
+                       std::int64_t continue_from)
+    : path_(path), format_(format), every_(every) {
+  bool kept = false;
+  if (continue_from >= 0) {
+    // LAMMPS: "ITEM: TIMESTEP" then the step; XYZ: the atom count, then "step N ...".
+    kept = cut_back_before_step(
+        path, continue_from,
+        [format](const std::vector<std::string>& lines,
+                 std::size_t k) -> std::optional<std::int64_t> {
+          if (k + 1 >= lines.size()) return std::nullopt;
+          if (format == Format::lammps) {
+            if (lines[k] != "ITEM: TIMESTEP") return std::nullopt;
+            return std::stoll(lines[k + 1]);
+          }
+          if (lines[k + 1].rfind("step ", 0) != 0 || lines[k].find(' ') != std::string::npos) {
+            return std::nullopt;
+          }
+          return std::stoll(lines[k + 1].substr(5));
+        });
+  }
+  out_.open(path, kept ? std::ios::app : std::ios::trunc);
   if (!out_) {
     throw InputError(path +
                      ": cannot open the dump file for writing; check that the directory "
@@ -14,7 +35,7 @@ DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t ever
   out_.precision(10);
 }
 
-void DumpWriter::on_frame(const System& system, const ThermoSample&) {
+void DumpWriter::on_frame(const System& system, const ThermoSample&, const std::vector<Vec3>&) {
   const Particles& p = system.particles;
   const Box& box = system.box;
   if (format_ == Format::xyz) {

@@ -14,10 +14,13 @@ namespace deli {
 class DumpWriter final : public Observer {
  public:
   enum class Format { lammps, xyz };
-  DumpWriter(const std::string& path, Format format, std::int64_t every);
+  // continue_from >= 0: a restart at that step appends to the file, cut back to the frames
+  // before it.
+  DumpWriter(const std::string& path, Format format, std::int64_t every,
+             std::int64_t continue_from = -1);
 
   bool wants_frame(std::int64_t step) const override { return step % every_ == 0; }
-  void on_frame(const System& system, const ThermoSample&) override;
+  void on_frame(const System& system, const ThermoSample&, const std::vector<Vec3>&) override;
 
  private:
   std::string path_;

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "text/continuation.hpp"
 
 namespace deli {
 
@@ -32,7 +33,16 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
   std::fflush(out_);
 }
 
-ThermoCsv::ThermoCsv(const std::string& path) : path_(path), out_(path) {
+ThermoCsv::ThermoCsv(const std::string& path, std::int64_t continue_from) : path_(path) {
+  if (continue_from >= 0) {
+    header_written_ = cut_back_before_step(
+        path, continue_from,
+        [](const std::vector<std::string>& lines, std::size_t k) -> std::optional<std::int64_t> {
+          if (k == 0 || lines[k].empty()) return std::nullopt;  // the header
+          return std::stoll(lines[k].substr(0, lines[k].find(',')));
+        });
+  }
+  out_.open(path, header_written_ ? std::ios::app : std::ios::trunc);
   if (!out_)
     throw InputError(path +
                      ": cannot open the thermo file for writing; check the "

@@ -25,7 +25,9 @@ class ThermoTable final : public Observer {
 // dies keeps everything sampled before.
 class ThermoCsv final : public Observer {
  public:
-  explicit ThermoCsv(const std::string& path);
+  // continue_from >= 0: a restart at that step appends to the file, cut back to the rows
+  // before it.
+  explicit ThermoCsv(const std::string& path, std::int64_t continue_from = -1);
   void on_thermo(const ThermoSample& s) override;
 
  private:

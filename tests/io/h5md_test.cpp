@@ -25,7 +25,7 @@ class Expected final : public Observer {
     out_.precision(17);
   }
   bool wants_frame(std::int64_t step) const override { return step % every_ == 0; }
-  void on_frame(const System& s, const ThermoSample&) override {
+  void on_frame(const System& s, const ThermoSample&, const std::vector<Vec3>&) override {
     const Vec3 l = s.box.length();
     out_ << s.particles.size() << ' ' << s.step << ' ' << s.time << ' ' << l.x << ' ' << l.y << ' '
          << l.z << '\n';
