@@ -122,13 +122,19 @@ int command_run(const std::vector<std::string>& args) {
   }
   install_interrupt_handlers();
   // A restart continues to the input's step count, from where the checkpoint was written.
-  if (!restart.empty()) integrator->resume(input.system, checkpoint.build_positions);
+  if (!restart.empty()) {
+    try {
+      integrator->resume(input.system, checkpoint.build_positions, checkpoint.integrator_state);
+    } catch (const InputError& e) {
+      throw InputError(restart + ": " + e.what());
+    }
+  }
   const RunStatistics stats = run(input.system, *integrator, input.steps - input.system.step,
                                   input.thermo.every, observers, restart.empty());
   if (stats.interrupted) {
     const std::string file =
         input.checkpoint.file.empty() ? path + ".interrupted.h5" : input.checkpoint.file;
-    write_checkpoint(file, input.system, integrator->forces().neighbors().positions_at_build());
+    write_checkpoint(file, input.system, *integrator);
     std::printf(
         "interrupted after step %lld: checkpoint written to %s; continue with\n  deli run "
         "%s --restart %s\n",

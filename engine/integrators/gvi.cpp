@@ -584,6 +584,57 @@ void GviStatistics::add(const GviStatistics& later) {
   max_rod_violation = std::max(max_rod_violation, later.max_rod_violation);
 }
 
+void GviStatistics::save(std::vector<double>& out) const {
+  for (std::int64_t count : {steps, active, reflected, smooth, stalled, cycled, penetrations,
+                             fallbacks, deficits, shadow_fallbacks, solves, solver_iterations}) {
+    out.push_back(static_cast<double>(count));
+  }
+  out.push_back(max_solver_iterations);
+  out.push_back(min_gap);
+  out.push_back(max_rod_violation);
+}
+
+GviStatistics GviStatistics::load(const double* in) {
+  GviStatistics s;
+  for (std::int64_t* count :
+       {&s.steps, &s.active, &s.reflected, &s.smooth, &s.stalled, &s.cycled, &s.penetrations,
+        &s.fallbacks, &s.deficits, &s.shadow_fallbacks, &s.solves, &s.solver_iterations}) {
+    *count = static_cast<std::int64_t>(*in++);
+  }
+  s.max_solver_iterations = static_cast<int>(*in++);
+  s.min_gap = *in++;
+  s.max_rod_violation = *in++;
+  return s;
+}
+
+// Layout: the two samplers' statistics and virial sums, then the previous step's positions
+// (the linearisation point of linearised constraints).
+std::vector<double> Gvi::saved_state() const {
+  std::vector<double> out;
+  for (const GviStatistics& s : sampled_) s.save(out);
+  out.insert(out.end(), virial_sums_.begin(), virial_sums_.end());
+  for (const Vec3& x : previous_positions_) out.insert(out.end(), {x.x, x.y, x.z});
+  return out;
+}
+
+void Gvi::restore_state(const std::vector<double>& state, const System& system) {
+  const std::size_t head = 2 * GviStatistics::saved_size + 2;
+  const std::size_t n = system.particles.size();
+  if (state.size() != head && state.size() != head + 3 * n) {
+    throw InputError("the checkpoint's integrator state (" + std::to_string(state.size()) +
+                     " numbers) is not that of '" + name() + "' for " + std::to_string(n) +
+                     " atoms; restart with the input that wrote it");
+  }
+  for (std::size_t k = 0; k < sampled_.size(); ++k) {
+    sampled_[k] = GviStatistics::load(&state[k * GviStatistics::saved_size]);
+    virial_sums_[k] = state[2 * GviStatistics::saved_size + k];
+  }
+  previous_positions_.clear();
+  for (std::size_t i = head; i < state.size(); i += 3) {
+    previous_positions_.push_back({state[i], state[i + 1], state[i + 2]});
+  }
+}
+
 double Gvi::take_constraint_virial(Sampler sampler) {
   const auto k = static_cast<std::size_t>(sampler);
   const std::int64_t steps = sampled_[k].steps;

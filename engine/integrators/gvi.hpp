@@ -28,6 +28,10 @@ struct GviStatistics {
   double max_rod_violation = 0;  // |f| / length, equality rows
 
   void add(const GviStatistics& later);
+  // As numbers for a checkpoint (counts are exact in a double up to 2^53).
+  void save(std::vector<double>& out) const;
+  static constexpr std::size_t saved_size = 15;
+  static GviStatistics load(const double* in);
 };
 
 // The generalized variational integrator (Kaufman & Pai, Algorithm 1) with the Verlet
@@ -78,6 +82,8 @@ class Gvi final : public Integrator {
   std::vector<std::pair<std::string, double>> take_statistics(
       Sampler sampler = Sampler::thermo) override;
   double take_constraint_virial(Sampler sampler = Sampler::thermo) override;
+  std::vector<double> saved_state() const override;
+  void restore_state(const std::vector<double>& state, const System& system) override;
   std::optional<double> shadow_energy(const System& system) const override {
     if (lagrangian_ != Lagrangian::verlet) return std::nullopt;
     return engine_.verlet_shadow_energy(system, dt_);
@@ -112,8 +118,8 @@ class Gvi final : public Integrator {
   bool constrained_predictor_;
   GviStatistics stats_;  // this step's (and setup's) figures, added to each sampler's at its end
   std::array<GviStatistics, 2> sampled_;
-  double step_virial_ = 0.0;  // sum of r . J over this step's constraint impulses
-  std::array<double, 2> virial_sums_{};  // sum over steps of step_virial_ / h, per sampler
+  double step_virial_ = 0.0;              // sum of r . J over this step's constraint impulses
+  std::array<double, 2> virial_sums_{};   // sum over steps of step_virial_ / h, per sampler
   std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
 };
 

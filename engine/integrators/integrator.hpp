@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.hpp"
 #include "integrators/force_engine.hpp"
 
 namespace deli {
@@ -24,16 +25,26 @@ class Integrator {
   virtual void setup(System& system) = 0;
   // Continues from a checkpoint: the neighbour list rebuilt from the saved build positions
   // and forces computed, the state itself left untouched (no projection).
-  void resume(System& system, const std::vector<Vec3>& build_positions) {
+  void resume(System& system, const std::vector<Vec3>& build_positions,
+              const std::vector<double>& state) {
+    restore_state(state, system);
     engine().restore_neighbors(system, build_positions);
     engine().compute(system);
   }
+  // What a checkpoint must carry beyond the particles to continue bit for bit.
+  virtual std::vector<double> saved_state() const { return {}; }
   virtual ForceEngine& engine() = 0;
+  // Takes back saved_state(); refuses one that is not this integrator's for this system.
+  virtual void restore_state(const std::vector<double>& state, const System&) {
+    if (!state.empty()) {
+      throw InputError("the checkpoint carries state of another integrator than '" + name() +
+                       "'; restart with the input that wrote it");
+    }
+  }
   virtual void step(System& system, bool tally = true) = 0;
   virtual const ForceEngine& forces() const = 0;
   // Named figures accumulated since the sampler's last call (constraint statistics).
-  virtual std::vector<std::pair<std::string, double>> take_statistics(
-      Sampler = Sampler::thermo) {
+  virtual std::vector<std::pair<std::string, double>> take_statistics(Sampler = Sampler::thermo) {
     return {};
   }
   // The constraint impulses' virial, sum of r . J / h per step, averaged over the steps

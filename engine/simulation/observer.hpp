@@ -11,12 +11,13 @@ class Observer {
   virtual void on_start(const System&, std::int64_t /*steps*/) {}
   virtual void on_thermo(const ThermoSample&) {}
   virtual void on_step(const System&) {}  // after every step: keep it cheap
+  // After every step once its thermo row and frames are out (checkpoints).
+  virtual void on_step_complete(const System&) {}
   // Trajectory writers: whether the state after `step` is a frame, and the frame itself
   // with the thermodynamic state at that step (constraint impulses and statistics over the
   // steps since the previous frame) and the force field's forces on each atom.
   virtual bool wants_frame(std::int64_t /*step*/) const { return false; }
-  virtual void on_frame(const System&, const ThermoSample&, const std::vector<Vec3>& /*forces*/) {
-  }
+  virtual void on_frame(const System&, const ThermoSample&, const std::vector<Vec3>& /*forces*/) {}
   virtual void on_finish(const System&) {}
 };
 

@@ -38,7 +38,8 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     s.integrator = integrator.take_statistics(Sampler::thermo);
     for (Observer* o : observers) o->on_thermo(s);
   };
-  sample(true, wants_frame());
+  // A restart's first step was sampled by the run that wrote the checkpoint.
+  if (set_up) sample(true, wants_frame());
 
   RunStatistics stats;
   stats.atoms = system.particles.size();
@@ -54,6 +55,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       integrator.step(system, thermo || frame);
       for (Observer* o : observers) o->on_step(system);
       if (thermo || frame) sample(thermo, frame);
+      for (Observer* o : observers) o->on_step_complete(system);
       if (interrupt_requested()) {
         stats.interrupted = true;
         stats.steps = n;

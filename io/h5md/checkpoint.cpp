@@ -42,8 +42,14 @@ void read_set(hid_t file, const char* name, hid_t type, std::size_t count, T* da
 
 }  // namespace
 
+void write_checkpoint(const std::string& path, const System& system, const Integrator& integrator) {
+  write_checkpoint(path, system, integrator.forces().neighbors().positions_at_build(),
+                   integrator.saved_state());
+}
+
 void write_checkpoint(const std::string& path, const System& system,
-                      const std::vector<Vec3>& build_positions) {
+                      const std::vector<Vec3>& build_positions,
+                      const std::vector<double>& integrator_state) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   const std::string aside = path + ".partial";
   const hid_t file = H5Fcreate(aside.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
@@ -59,6 +65,8 @@ void write_checkpoint(const std::string& path, const System& system,
   write_set(file, "image", H5T_NATIVE_INT, {n, 3}, p.image.data(), aside);
   write_set(file, "neighbor_build_positions", H5T_NATIVE_DOUBLE, {build_positions.size(), 3},
             build_positions.data(), aside);
+  write_set(file, "integrator_state", H5T_NATIVE_DOUBLE, {integrator_state.size()},
+            integrator_state.data(), aside);
   if (H5Fclose(file) < 0 || std::rename(aside.c_str(), path.c_str()) != 0) {
     throw SimulationError(path + ": could not complete the checkpoint (disk full?)");
   }
@@ -92,6 +100,14 @@ Checkpoint read_checkpoint(const std::string& path) {
     read_set(file, "image", H5T_NATIVE_INT, 3 * n, c.image.data(), path);
     read_set(file, "neighbor_build_positions", H5T_NATIVE_DOUBLE, 3 * n, c.build_positions.data(),
              path);
+    const hid_t state = H5Dopen2(file, "integrator_state", H5P_DEFAULT);
+    if (state < 0) throw InputError(path + ": the checkpoint has no 'integrator_state'");
+    const hid_t state_space = H5Dget_space(state);
+    c.integrator_state.resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(state_space)));
+    H5Sclose(state_space);
+    H5Dclose(state);
+    read_set(file, "integrator_state", H5T_NATIVE_DOUBLE, c.integrator_state.size(),
+             c.integrator_state.data(), path);
   } catch (...) {
     H5Fclose(file);
     throw;
@@ -114,9 +130,9 @@ void apply_checkpoint(const Checkpoint& c, System& system, const std::string& pa
   system.time = c.time;
 }
 
-void CheckpointWriter::on_step(const System& system) {
+void CheckpointWriter::on_step_complete(const System& system) {
   if (system.step % every_ != 0) return;
-  write_checkpoint(path_, system, integrator_.forces().neighbors().positions_at_build());
+  write_checkpoint(path_, system, integrator_);
 }
 
 }  // namespace deli

@@ -12,21 +12,26 @@ namespace deli {
 class Integrator;
 
 // Everything a run needs to continue bit for bit: positions (as wrapped), velocities,
-// image flags, step and time, and the positions of the last neighbour-list build (the
-// pair order, hence the rounding, depends on them). Runs draw no random numbers after the
-// start, so there is no generator state to keep.
+// image flags, step and time, the positions of the last neighbour-list build (the pair
+// order, hence the rounding, depends on them) and the integrator's own state (statistics
+// accumulated since the last samples, the linearisation point of linearised constraints).
+// Runs draw no random numbers after the start, so there is no generator state to keep.
+// A checkpoint is taken after its step's thermo row and frames are written.
 struct Checkpoint {
   std::int64_t step = 0;
   double time = 0;
   std::vector<std::int64_t> id;
   std::vector<Vec3> position, velocity, build_positions;
   std::vector<std::array<int, 3>> image;
+  std::vector<double> integrator_state;
 };
 
 // Written aside (PATH.partial) and renamed over PATH: a crash mid-write leaves the previous
 // checkpoint intact.
 void write_checkpoint(const std::string& path, const System& system,
-                      const std::vector<Vec3>& build_positions);
+                      const std::vector<Vec3>& build_positions,
+                      const std::vector<double>& integrator_state = {});
+void write_checkpoint(const std::string& path, const System& system, const Integrator& integrator);
 // Refuses a missing, truncated or foreign file with a message naming it.
 Checkpoint read_checkpoint(const std::string& path);
 // Puts a checkpoint's state into a system built from the same input; the atoms must match.
@@ -37,7 +42,7 @@ class CheckpointWriter final : public Observer {
  public:
   CheckpointWriter(std::string path, std::int64_t every, const Integrator& integrator)
       : path_(std::move(path)), every_(every), integrator_(integrator) {}
-  void on_step(const System& system) override;
+  void on_step_complete(const System& system) override;
 
  private:
   std::string path_;

@@ -192,7 +192,7 @@ H5mdWriter::Series H5mdWriter::continue_series(hid_t parent, const std::string& 
           spec_.file, "read the frame steps");
   }
   const auto keep =
-      static_cast<hsize_t>(std::lower_bound(steps.begin(), steps.end(), step) - steps.begin());
+      static_cast<hsize_t>(std::upper_bound(steps.begin(), steps.end(), step) - steps.begin());
   for (hid_t set : {s.step, s.time, s.value}) {
     space = H5Dget_space(set);
     std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
@@ -217,13 +217,13 @@ void H5mdWriter::reopen(const System& system, std::int64_t step) {
                      "another trajectory file");
   }
   auto has = [&](const char* name) { return H5Lexists(all, name, H5P_DEFAULT) > 0; };
-  for (const auto& [name, wanted] : {std::pair{"velocity", spec_.velocities},
-                                     std::pair{"force", spec_.forces},
-                                     std::pair{"image", spec_.images}}) {
+  for (const auto& [name, wanted] :
+       {std::pair{"velocity", spec_.velocities}, std::pair{"force", spec_.forces},
+        std::pair{"image", spec_.images}}) {
     if (has(name) != wanted) {
       H5Gclose(all);
-      throw InputError(spec_.file + ": the trajectory " + (wanted ? "lacks" : "has") + " " +
-                       name + " frames, the input " + (wanted ? "asks for" : "does not ask for") +
+      throw InputError(spec_.file + ": the trajectory " + (wanted ? "lacks" : "has") + " " + name +
+                       " frames, the input " + (wanted ? "asks for" : "does not ask for") +
                        " them; keep [output] trajectory as it was to continue the file");
     }
   }

@@ -13,7 +13,7 @@
 namespace deli {
 
 // Where a trajectory continues: a run restarted from a checkpoint at `step` appends to the
-// existing file, dropping its frames from `step` on (the restarted run writes them again).
+// existing file, dropping its frames after `step` (the restarted run writes them again).
 struct TrajectoryContinuation {
   std::int64_t step = -1;  // -1: a new file
 };
@@ -51,7 +51,7 @@ class H5mdWriter final : public Observer {
   void create(const System& system, const std::string& input_text, const std::string& author,
               const std::vector<std::pair<std::int32_t, std::int32_t>>& rods);
   void reopen(const System& system, std::int64_t step);
-  // Opens an existing series and cuts it back to its frames before `step`.
+  // Opens an existing series and cuts it back to its frames up to `step`.
   Series continue_series(hid_t parent, const std::string& name, std::int64_t step);
   void append(Series& s, std::int64_t step, double time, const void* data, hid_t memory_type,
               const std::vector<hsize_t>& frame_shape);

@@ -7,8 +7,8 @@
 
 namespace deli {
 
-bool cut_back_before_step(const std::string& path, std::int64_t step,
-                          const RecordStep& record_step) {
+bool cut_back_after_step(const std::string& path, std::int64_t step,
+                         const RecordStep& record_step) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   std::vector<std::string> lines;
@@ -25,7 +25,7 @@ bool cut_back_before_step(const std::string& path, std::int64_t step,
   if (!lines.empty() && offset > keep) keep = offsets.back();
   for (std::size_t k = 0; k < lines.size(); ++k) {
     const std::optional<std::int64_t> at = record_step(lines, k);
-    if (offsets[k] < keep && at && *at >= step) {
+    if (offsets[k] < keep && at && *at > step) {
       keep = offsets[k];
       break;
     }

@@ -11,7 +11,7 @@ DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t ever
   bool kept = false;
   if (continue_from >= 0) {
     // LAMMPS: "ITEM: TIMESTEP" then the step; XYZ: the atom count, then "step N ...".
-    kept = cut_back_before_step(
+    kept = cut_back_after_step(
         path, continue_from,
         [format](const std::vector<std::string>& lines,
                  std::size_t k) -> std::optional<std::int64_t> {

@@ -15,7 +15,7 @@ class DumpWriter final : public Observer {
  public:
   enum class Format { lammps, xyz };
   // continue_from >= 0: a restart at that step appends to the file, cut back to the frames
-  // before it.
+  // up to it.
   DumpWriter(const std::string& path, Format format, std::int64_t every,
              std::int64_t continue_from = -1);
 

@@ -35,7 +35,7 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
 
 ThermoCsv::ThermoCsv(const std::string& path, std::int64_t continue_from) : path_(path) {
   if (continue_from >= 0) {
-    header_written_ = cut_back_before_step(
+    header_written_ = cut_back_after_step(
         path, continue_from,
         [](const std::vector<std::string>& lines, std::size_t k) -> std::optional<std::int64_t> {
           if (k == 0 || lines[k].empty()) return std::nullopt;  // the header

@@ -26,7 +26,7 @@ class ThermoTable final : public Observer {
 class ThermoCsv final : public Observer {
  public:
   // continue_from >= 0: a restart at that step appends to the file, cut back to the rows
-  // before it.
+  // up to it.
   explicit ThermoCsv(const std::string& path, std::int64_t continue_from = -1);
   void on_thermo(const ThermoSample& s) override;
 

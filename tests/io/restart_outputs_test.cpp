@@ -1,0 +1,73 @@
+// `deli run --restart` continues the run's outputs: the thermo CSV, the H5MD trajectory and
+// the LAMMPS dump of a run stopped at a checkpoint (and run on past it, frames the restart
+// must drop) and then restarted are those of the uninterrupted run, bit for bit.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace deli {
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int shell(const std::string& command, std::string& output) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  char buffer[4096];
+  output.clear();
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// The default input (GVI: rods, hard cores, walls) with its own run length and outputs.
+std::string slit_input(const std::string& dir, const std::string& name, int steps) {
+  std::string text = slurp(DELI_SOURCE_DIR "/inputs/lj_chains/rigid_slit.toml");
+  text = text.substr(0, text.find("[run]"));
+  text.replace(text.find("\"rigid_slit.data\""), 17,
+               "\"" DELI_SOURCE_DIR "/inputs/lj_chains/rigid_slit.data\"");
+  const std::string path = dir + "/" + name + ".toml";
+  std::ofstream(path) << text << "[run]\nsteps = " << steps << "\n[output]\n"
+                      << "thermo = { every = 20, file = \"" << dir << "/out.csv\" }\n"
+                      << "trajectory = { file = \"" << dir << "/out.h5\", every = 20, "
+                      << "forces = true }\n"
+                      << "dump = { file = \"" << dir << "/out.dump\", every = 40 }\n"
+                      << "checkpoint = { file = \"" << dir << "/out.chk\", every = 100 }\n";
+  return path;
+}
+
+TEST(Restart, OutputsContinueBitForBit) {
+  const std::string root = ::testing::TempDir() + "/restart_outputs";
+  std::string log;
+  ASSERT_EQ(
+      shell("rm -rf " + root + " && mkdir -p " + root + "/straight " + root + "/stopped", log), 0);
+  const std::string deli = DELI_BINARY;
+  ASSERT_EQ(shell(deli + " run " + slit_input(root + "/straight", "run", 200), log), 0) << log;
+  // Stopped: runs to 140 (its last checkpoint at 100), then is restarted to 200: the
+  // frames and rows from 100 on are cut and written again.
+  const std::string stopped = root + "/stopped";
+  ASSERT_EQ(shell(deli + " run " + slit_input(stopped, "first", 140), log), 0) << log;
+  ASSERT_EQ(shell(deli + " run " + slit_input(stopped, "second", 200) + " --restart " + stopped +
+                      "/out.chk",
+                  log),
+            0)
+      << log;
+  EXPECT_EQ(slurp(root + "/straight/out.csv"), slurp(stopped + "/out.csv"));
+  EXPECT_EQ(slurp(root + "/straight/out.dump"), slurp(stopped + "/out.dump"));
+  ASSERT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/compare_h5md.py " + root +
+                      "/straight/out.h5 " + stopped + "/out.h5 11",
+                  log),
+            0)
+      << log;
+  std::printf("%s", log.c_str());
+}
+
+}  // namespace
+}  // namespace deli
