@@ -3,8 +3,10 @@
 #include "h5md/checkpoint.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 
 #include "core/error.hpp"
@@ -128,6 +130,40 @@ TEST(Checkpoint, SigtermLeavesACheckpointThatRestarts) {
   RunInput resumed = load_run_input(input);
   apply_checkpoint(c, resumed.system, dir + "/stop.h5");
   EXPECT_EQ(resumed.system.step, c.step);
+}
+
+// SIGKILL at an arbitrary moment: no handler runs, nothing is closed. The trajectory must
+// open (h5py, MDAnalysis) and hold every frame flushed before the kill: at least every
+// frame whose thermo row reached the CSV (rows are written after their frames).
+TEST(Checkpoint, SigkillLeavesAReadableTrajectory) {
+  const std::string dir = ::testing::TempDir() + "/killed";
+  std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
+  const std::string input = dir + "/long.toml";
+  std::ofstream(input)
+      << "[system]\ndata = \"" DELI_SOURCE_DIR
+         "/inputs/lj_chains/melt.data\"\n"
+         "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
+         "[forcefield.pair]\nstyle = \"wca\"\n"
+         "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+         "[forcefield.bond]\nstyle = \"fene\"\n"
+         "coeffs = [{ type = 1, k = 30.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 }]\n"
+         "[integrator]\ntimestep = 0.005\n[run]\nsteps = 100000000\n"
+         "[output]\nthermo = { every = 10, file = \""
+      << dir << "/run.csv\" }\ntrajectory = { file = \"" << dir
+      << "/run.h5\", every = 10, forces = true }\n";
+  const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " + dir +
+                              "/run.log 2>&1 & pid=$!; sleep 1.5; kill -KILL $pid; wait $pid; " +
+                              "/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/killed_run_check.py " +
+                              dir + "/run.h5 " + dir +
+                              "/run.csv 10 " DELI_SOURCE_DIR "/inputs/lj_chains/melt.data 2>&1'";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  const int status = pclose(pipe);
+  std::printf("%s", output.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Reads a deli H5MD trajectory as a user would, with h5py and MDAnalysis, and checks it
 against what deli held (expected.txt: per frame 'frame step time Lx Ly Lz', then one line
-per atom 'x y z vx vy vz' at 17 digits) and the bonds of the LAMMPS data file.
+per atom 'x y z vx vy vz fx fy fz' at 17 digits) and the bonds of the LAMMPS data file.
 
 usage: h5md_roundtrip.py TRAJ.h5 EXPECTED.txt TOPOLOGY.data"""
 import sys
@@ -51,6 +51,8 @@ with h5py.File(traj, "r") as f:
             failures.append(f"frame {i}: positions differ from deli's (double precision)")
         if not np.array_equal(velocity[i], data[:, 3:6]):
             failures.append(f"frame {i}: velocities differ from deli's (double precision)")
+        if not np.array_equal(f["particles/all/force/value"][i], data[:, 6:9]):
+            failures.append(f"frame {i}: forces differ from deli's (double precision)")
         if not np.array_equal(np.diag(f["particles/all/box/edges/value"][i]), box):
             failures.append(f"frame {i}: box differs")
 
@@ -65,6 +67,8 @@ for i, ts in enumerate(u.trajectory):
         failures.append(f"MDAnalysis frame {i}: positions differ")
     if not np.array_equal(ts.velocities, data[:, 3:6].astype(np.float32)):
         failures.append(f"MDAnalysis frame {i}: velocities differ")
+    if not np.array_equal(ts.forces, data[:, 6:9].astype(np.float32)):
+        failures.append(f"MDAnalysis frame {i}: forces differ")
     if not np.array_equal(ts.dimensions[:3], np.array(box, dtype=np.float32)):
         failures.append(f"MDAnalysis frame {i}: box {ts.dimensions[:3]} != {box}")
     if abs(ts.time - time) > 1e-12 * max(1.0, abs(time)):

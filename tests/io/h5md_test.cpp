@@ -25,14 +25,16 @@ class Expected final : public Observer {
     out_.precision(17);
   }
   bool wants_frame(std::int64_t step) const override { return step % every_ == 0; }
-  void on_frame(const System& s, const ThermoSample&, const std::vector<Vec3>&) override {
+  void on_frame(const System& s, const ThermoSample&, const std::vector<Vec3>& forces) override {
     const Vec3 l = s.box.length();
     out_ << s.particles.size() << ' ' << s.step << ' ' << s.time << ' ' << l.x << ' ' << l.y << ' '
          << l.z << '\n';
     for (std::size_t i = 0; i < s.particles.size(); ++i) {
       const Vec3& x = s.particles.position[i];
       const Vec3& v = s.particles.velocity[i];
-      out_ << x.x << ' ' << x.y << ' ' << x.z << ' ' << v.x << ' ' << v.y << ' ' << v.z << '\n';
+      const Vec3& f = forces[i];
+      out_ << x.x << ' ' << x.y << ' ' << x.z << ' ' << v.x << ' ' << v.y << ' ' << v.z << ' '
+           << f.x << ' ' << f.y << ' ' << f.z << '\n';
     }
     out_.flush();
   }
@@ -46,7 +48,8 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
   const std::string dir = ::testing::TempDir();
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   write_lammps_data(input.system, dir + "/melt.data", "bond", "h5md test");
-  H5mdWriter writer({dir + "/melt.h5", 25, true, true, 4}, input.system, input.source_text, "test");
+  H5mdWriter writer({dir + "/melt.h5", 25, true, true, 4, true}, input.system, input.source_text,
+                    "test");
   Expected expected(dir + "/expected.txt", 25);
   VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
   run(input.system, verlet, 100, 50, {&writer, &expected});

@@ -67,6 +67,23 @@ TEST(Restart, OutputsContinueBitForBit) {
             0)
       << log;
   std::printf("%s", log.c_str());
+  // The GVI trajectory carries the rods and the constraint statistics; the plot tool draws
+  // them.
+  ASSERT_EQ(
+      shell("/usr/bin/python3 -c \"import h5py; f = h5py.File('" + stopped +
+                "/out.h5'); print(f['connectivity/rods'].shape, "
+                "f['observables/min_gap/value'].shape, f['observables/reflected/value'][:].sum() "
+                "> 0)\"",
+            log),
+      0)
+      << log;
+  EXPECT_NE(log.find("(1140, 2) (11,) True"), std::string::npos) << log;
+  ASSERT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tools/plot_h5md.py " + stopped +
+                      "/out.h5 " + stopped + "/out.png",
+                  log),
+            0)
+      << log;
+  EXPECT_NE(log.find("constraint events"), std::string::npos) << log;
 }
 
 }  // namespace
