@@ -1,0 +1,397 @@
+#include "integrators/constrained_integrator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "constraints/clusters.hpp"
+#include "core/error.hpp"
+#include "solvers/cluster_matrices.hpp"
+#include "solvers/momentum_update.hpp"
+#include "solvers/position_update.hpp"
+
+namespace deli {
+
+ConstrainedIntegrator::ConstrainedIntegrator(const ForceField& force_field,
+                                             ConstraintSet constraints, double timestep,
+                                             double skin, ReflectionOperator reflection,
+                                             ReflectionEnergy energy, const Particles& particles)
+    : constraints_(std::move(constraints)),
+      engine_(force_field, skin, constraints_.contact_reach(particles)),
+      dt_(timestep),
+      reflection_(reflection),
+      energy_(energy) {}
+
+std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which) {
+  std::vector<Vec3> out;
+  out.reserve(which.size());
+  for (std::int32_t i : which) out.push_back(all[i]);
+  return out;
+}
+
+void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& which,
+             std::vector<Vec3>& all) {
+  for (std::size_t k = 0; k < which.size(); ++k) all[which[k]] = local[k];
+}
+
+void ConstrainedIntegrator::midpoint_failure(const System& system, double change) const {
+  throw SimulationError("step " + std::to_string(system.step + 1) +
+                        ": the implicit-midpoint iteration did not converge (last change " +
+                        std::to_string(change) +
+                        " sigma after 200 iterations); reduce the "
+                        "timestep");
+}
+
+namespace {
+
+std::string describe(const Constraint& c, const Particles& particles) {
+  std::string s = std::string(kind_name(c.kind)) + " on atom " + std::to_string(particles.id[c.i]);
+  if (c.j >= 0) s += " and atom " + std::to_string(particles.id[c.j]);
+  return s;
+}
+
+// Writes a failed cluster solve to a file that a test can load: rows, positions, masses.
+std::string dump_failed_problem(const System& system, const LocalCluster& cluster,
+                                const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
+                                const std::vector<bool>& equality, double h) {
+  const std::string path = "deli-failed-solve-step" + std::to_string(system.step) + ".txt";
+  std::ofstream out(path);
+  out.precision(17);
+  out << "# deli failed position update: step " << system.step << ", h " << h << "\n";
+  out << "particles " << cluster.size() << "\n";
+  for (std::size_t k = 0; k < cluster.size(); ++k) {
+    out << system.particles.id[cluster.particles[k]] << " " << 1.0 / cluster.inverse_mass[k] << " "
+        << q[k].x << " " << q[k].y << " " << q[k].z << " " << x0[k].x << " " << x0[k].y << " "
+        << x0[k].z << "\n";
+  }
+  out << "rows " << cluster.rows.size() << "\n";
+  for (std::size_t r = 0; r < cluster.rows.size(); ++r) {
+    const Constraint& c = cluster.rows[r];
+    out << kind_name(c.kind) << (equality[r] ? " equality " : " inequality ") << c.i << " " << c.j
+        << " " << c.length << " " << c.point.x << " " << c.point.y << " " << c.point.z << " "
+        << c.normal.x << " " << c.normal.y << " " << c.normal.z << "\n";
+  }
+  return path;
+}
+
+}  // namespace
+
+namespace {
+// r . J for an impulse z along a pair row's gradient at positions x: z |d|. One-particle
+// rows (walls, strings) act from outside the system and add nothing, as LAMMPS' walls.
+double pair_virial(const Constraint& c, double z, const Vec3* x, const Box& box) {
+  if (c.j < 0) return 0.0;
+  return z * norm(box.minimum_image(x[c.i] - x[c.j]));
+}
+}  // namespace
+
+double ConstrainedIntegrator::solve_positions(System& system, const std::vector<Constraint>& rows,
+                                              const std::vector<bool>& equality,
+                                              const std::vector<Vec3>& q,
+                                              const std::vector<Vec3>& delta,
+                                              std::vector<Vec3>& impulse) {
+  const Particles& particles = system.particles;
+  double virial = 0.0;
+  for (const Cluster& cluster : find_clusters(rows, particles.size())) {
+    const LocalCluster local = localize(cluster, rows, particles.mass);
+    std::vector<bool> local_equality;
+    for (std::int32_t r : cluster.rows) local_equality.push_back(equality[r]);
+    const std::vector<Vec3> q_local = gather(q, cluster.particles);
+    std::vector<Vec3> x0_local = gather(delta, cluster.particles);
+    for (std::size_t k = 0; k < x0_local.size(); ++k) x0_local[k] += q_local[k];
+    const PositionUpdate solved = solve_position_update(
+        local, local_equality, q_local, x0_local, dt_, system.box, constraints_.tolerances.solver);
+    ++stats_.solves;
+    stats_.solver_iterations += solved.status.iterations;
+    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
+    if (!solved.status.converged) {
+      const std::string file =
+          dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
+      throw SimulationError(
+          "step " + std::to_string(system.step + 1) +
+          ": the position update did not converge for the cluster of " +
+          std::to_string(cluster.particles.size()) + " atoms from atom " +
+          std::to_string(particles.id[cluster.particles.front()]) + " (" +
+          std::to_string(cluster.rows.size()) +
+          " constraints, first: " + describe(rows[cluster.rows.front()], particles) +
+          "): residual " + std::to_string(solved.status.residual) + " after " +
+          std::to_string(solved.status.iterations) + " Newton iterations; the problem is in " +
+          file + "; reduce the timestep");
+    }
+    for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
+      impulse[cluster.particles[k]] = solved.impulse[k];
+    }
+    for (std::size_t r = 0; r < local.rows.size(); ++r) {
+      virial += pair_virial(local.rows[r], solved.z(static_cast<Eigen::Index>(r)), q_local.data(),
+                            system.box);
+    }
+  }
+  return virial;
+}
+
+double ConstrainedIntegrator::project_momenta(System& system, const std::vector<Constraint>& rows,
+                                              const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+  double virial = 0.0;
+  for (const Cluster& cluster : find_clusters(rows, system.particles.size())) {
+    const LocalCluster local = localize(cluster, rows, system.particles.mass);
+    std::vector<int> all(local.rows.size());
+    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+    std::vector<Vec3> p_local = gather(p, cluster.particles);
+    const std::vector<Vec3> x_local = gather(x, cluster.particles);
+    Eigen::VectorXd mu;
+    const SolverStatus status = project_momentum(local, all, x_local, p_local, system.box, mu);
+    for (std::size_t r = 0; r < local.rows.size(); ++r) {
+      virial +=
+          pair_virial(local.rows[r], mu(static_cast<Eigen::Index>(r)), x_local.data(), system.box);
+    }
+    if (!status.converged) {
+      throw SimulationError("step " + std::to_string(system.step) +
+                            ": the momentum update failed for the cluster from atom " +
+                            std::to_string(system.particles.id[cluster.particles.front()]) +
+                            " (singular constraint matrix)");
+    }
+    scatter(p_local, cluster.particles, p);
+  }
+  return virial;
+}
+
+void ConstrainedIntegrator::setup(System& system) {
+  Particles& P = system.particles;
+  engine_.ensure_neighbors(system);
+  // Start on the manifold: positions onto the equality constraints (a position update from
+  // rest), then momenta tangent to it.
+  if (!constraints_.equalities.empty()) {
+    std::vector<Vec3> impulse(P.size());
+    solve_positions(system, constraints_.equalities,
+                    std::vector<bool>(constraints_.equalities.size(), true), P.position,
+                    std::vector<Vec3>(P.size()), impulse);
+    for (std::size_t i = 0; i < P.size(); ++i) P.position[i] += impulse[i] * (dt_ / P.mass[i]);
+  }
+  const double gap =
+      constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box);
+  if (gap < -constraints_.tolerances.gap) {
+    throw SimulationError(
+        "the starting configuration overlaps: the smallest hard-sphere or wall "
+        "gap is " +
+        std::to_string(gap) + " sigma; start from a configuration without overlaps");
+  }
+  engine_.compute(system);
+  std::vector<Vec3> p(P.size());
+  for (std::size_t i = 0; i < P.size(); ++i) p[i] = P.velocity[i] * P.mass[i];
+  project_momenta(system, constraints_.equalities, P.position, p);
+  for (std::size_t i = 0; i < P.size(); ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
+}
+
+bool same_row(const Constraint& a, const Constraint& b) {
+  return a.kind == b.kind && a.i == b.i && a.j == b.j && a.point.x == b.point.x &&
+         a.point.y == b.point.y && a.point.z == b.point.z && a.normal.x == b.normal.x &&
+         a.normal.y == b.normal.y && a.normal.z == b.normal.z && a.length == b.length;
+}
+
+bool contains(const std::vector<Constraint>& rows, const Constraint& c) {
+  for (const Constraint& r : rows) {
+    if (same_row(r, c)) return true;
+  }
+  return false;
+}
+
+double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec3>& p,
+                       const Particles& P) {
+  double v = dot(u, p[c.i]) / P.mass[c.i];
+  if (c.j >= 0) v -= dot(u, p[c.j]) / P.mass[c.j];
+  return v;
+}
+
+// The Hessian blocks of the potential touching a cluster, at the current positions (the
+// reflection's q), in the cluster's numbering.
+ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, const Cluster& cluster,
+                                                      const std::vector<Vec3>& p) const {
+  const Particles& P = system.particles;
+  std::vector<char> mask(P.size(), 0);
+  for (std::int32_t i : cluster.particles) mask[i] = 1;
+  std::vector<PairHessian> blocks;
+  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), mask, blocks)) {
+    throw SimulationError(
+        "shadow-Hamiltonian reflections need a pairwise Hessian, which "
+        "harmonic angles lack: use energy = \"hamiltonian\"");
+  }
+  ShadowOperator shadow;
+  shadow.h = dt_;
+  auto local = [&](std::int32_t g) {
+    const auto it = std::lower_bound(cluster.particles.begin(), cluster.particles.end(), g);
+    return it != cluster.particles.end() && *it == g
+               ? static_cast<std::int32_t>(it - cluster.particles.begin())
+               : std::int32_t{-1};
+  };
+  for (PairHessian b : blocks) {
+    std::int32_t a = local(b.a), c = local(b.b);
+    Vec3 outside_velocity;
+    if (a < 0) {  // keep the cluster's particle first: the block is symmetric in a, b
+      std::swap(a, c);
+      outside_velocity = p[b.a] * (1.0 / P.mass[b.a]);
+    } else if (c < 0) {
+      outside_velocity = p[b.b] * (1.0 / P.mass[b.b]);
+    }
+    shadow.blocks.push_back({a, c, b.block});
+    shadow.outside_velocity.push_back(outside_velocity);
+  }
+  return shadow;
+}
+
+// Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
+// index `first_inequality`) that holds an inequality, at positions x.
+void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<Constraint>& rows,
+                                             std::size_t first_inequality,
+                                             const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+  const Particles& P = system.particles;
+  for (const Cluster& cluster : find_clusters(rows, P.size())) {
+    if (cluster.rows.back() < static_cast<std::int32_t>(first_inequality)) continue;
+    const LocalCluster local = localize(cluster, rows, P.mass);
+    std::vector<bool> equality;
+    for (std::int32_t r : cluster.rows)
+      equality.push_back(r < static_cast<std::int32_t>(first_inequality));
+    std::vector<Vec3> p_local = gather(p, cluster.particles);
+    ShadowOperator shadow;
+    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, p);
+    const std::vector<Vec3> x_local = gather(x, cluster.particles);
+    const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
+                                      constraints_.tolerances.velocity,
+                                      energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
+    for (std::size_t k = 0; k < local.rows.size(); ++k) {
+      step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
+    }
+    stats_.reflected += r.reflected;
+    stats_.shadow_fallbacks += r.shadow_fallbacks;
+    stats_.stalled += r.capped ? 1 : 0;
+    stats_.cycled += r.cycled ? 1 : 0;
+    scatter(p_local, cluster.particles, p);
+  }
+}
+
+void ConstrainedIntegrator::finish_step() {
+  for (std::size_t k = 0; k < sampled_.size(); ++k) {
+    sampled_[k].add(stats_);
+    virial_sums_[k] += step_virial_ / dt_;
+  }
+  stats_ = ConstraintStatistics{};
+}
+
+void ConstrainedIntegrator::record_geometry(const System& system,
+                                            const std::vector<Constraint>& candidates, bool full) {
+  const Particles& P = system.particles;
+  double gap = full
+                   ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
+                   : std::numeric_limits<double>::infinity();
+  for (const Constraint& c : candidates) {
+    gap = std::min(gap, evaluate(c, P.position.data(), system.box).gap);
+  }
+  stats_.min_gap = std::min(stats_.min_gap, gap);
+  if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
+  for (const Constraint& c : constraints_.equalities) {
+    const double violation = std::abs(evaluate(c, P.position.data(), system.box).gap) / c.length;
+    stats_.max_rod_violation = std::max(stats_.max_rod_violation, violation);
+  }
+}
+
+void ConstraintStatistics::add(const ConstraintStatistics& later) {
+  steps += later.steps;
+  active += later.active;
+  reflected += later.reflected;
+  smooth += later.smooth;
+  stalled += later.stalled;
+  cycled += later.cycled;
+  penetrations += later.penetrations;
+  fallbacks += later.fallbacks;
+  deficits += later.deficits;
+  shadow_fallbacks += later.shadow_fallbacks;
+  solves += later.solves;
+  solver_iterations += later.solver_iterations;
+  max_solver_iterations = std::max(max_solver_iterations, later.max_solver_iterations);
+  min_gap = std::min(min_gap, later.min_gap);
+  max_rod_violation = std::max(max_rod_violation, later.max_rod_violation);
+}
+
+void ConstraintStatistics::save(std::vector<double>& out) const {
+  for (std::int64_t count : {steps, active, reflected, smooth, stalled, cycled, penetrations,
+                             fallbacks, deficits, shadow_fallbacks, solves, solver_iterations}) {
+    out.push_back(static_cast<double>(count));
+  }
+  out.push_back(max_solver_iterations);
+  out.push_back(min_gap);
+  out.push_back(max_rod_violation);
+}
+
+ConstraintStatistics ConstraintStatistics::load(const double* in) {
+  ConstraintStatistics s;
+  for (std::int64_t* count :
+       {&s.steps, &s.active, &s.reflected, &s.smooth, &s.stalled, &s.cycled, &s.penetrations,
+        &s.fallbacks, &s.deficits, &s.shadow_fallbacks, &s.solves, &s.solver_iterations}) {
+    *count = static_cast<std::int64_t>(*in++);
+  }
+  s.max_solver_iterations = static_cast<int>(*in++);
+  s.min_gap = *in++;
+  s.max_rod_violation = *in++;
+  return s;
+}
+
+// Layout: the two samplers' statistics and virial sums, then the previous step's positions
+// (the linearisation point of linearised constraints).
+std::vector<double> ConstrainedIntegrator::saved_state() const {
+  std::vector<double> out;
+  for (const ConstraintStatistics& s : sampled_) s.save(out);
+  out.insert(out.end(), virial_sums_.begin(), virial_sums_.end());
+  for (const Vec3& x : previous_positions_) out.insert(out.end(), {x.x, x.y, x.z});
+  return out;
+}
+
+void ConstrainedIntegrator::restore_state(const std::vector<double>& state, const System& system) {
+  const std::size_t head = 2 * ConstraintStatistics::saved_size + 2;
+  const std::size_t n = system.particles.size();
+  if (state.size() != head && state.size() != head + 3 * n) {
+    throw InputError("the checkpoint's integrator state (" + std::to_string(state.size()) +
+                     " numbers) is not that of '" + name() + "' for " + std::to_string(n) +
+                     " atoms; restart with the input that wrote it");
+  }
+  for (std::size_t k = 0; k < sampled_.size(); ++k) {
+    sampled_[k] = ConstraintStatistics::load(&state[k * ConstraintStatistics::saved_size]);
+    virial_sums_[k] = state[2 * ConstraintStatistics::saved_size + k];
+  }
+  previous_positions_.clear();
+  for (std::size_t i = head; i < state.size(); i += 3) {
+    previous_positions_.push_back({state[i], state[i + 1], state[i + 2]});
+  }
+}
+
+double ConstrainedIntegrator::take_constraint_virial(Sampler sampler) {
+  const auto k = static_cast<std::size_t>(sampler);
+  const std::int64_t steps = sampled_[k].steps;
+  const double average = steps > 0 ? virial_sums_[k] / static_cast<double>(steps) : 0.0;
+  virial_sums_[k] = 0.0;
+  return average;
+}
+
+std::vector<std::pair<std::string, double>> ConstrainedIntegrator::take_statistics(
+    Sampler sampler) {
+  const auto k = static_cast<std::size_t>(sampler);
+  const ConstraintStatistics s = sampled_[k];
+  sampled_[k] = ConstraintStatistics{};
+  const double steps = std::max<double>(1.0, static_cast<double>(s.steps));
+  return {{"min_gap", std::isfinite(s.min_gap) ? s.min_gap : 0.0},
+          {"max_rod_violation", s.max_rod_violation},
+          {"active_per_step", static_cast<double>(s.active) / steps},
+          {"reflected", static_cast<double>(s.reflected)},
+          {"smooth_per_step", static_cast<double>(s.smooth) / steps},
+          {"stalled_reflections", static_cast<double>(s.stalled)},
+          {"cycled_reflections", static_cast<double>(s.cycled)},
+          {"penetrating_steps", static_cast<double>(s.penetrations)},
+          {"landings", static_cast<double>(s.fallbacks)},
+          {"landing_deficits", static_cast<double>(s.deficits)},
+          {"shadow_fallbacks", static_cast<double>(s.shadow_fallbacks)},
+          {"solver_iterations_mean",
+           s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)
+                        : 0.0},
+          {"solver_iterations_max", static_cast<double>(s.max_solver_iterations)}};
+}
+
+}  // namespace deli

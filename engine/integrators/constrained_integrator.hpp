@@ -1,0 +1,103 @@
+#pragma once
+
+#include <array>
+#include <limits>
+
+#include "constraints/clusters.hpp"
+#include "constraints/constraint_set.hpp"
+#include "integrators/integrator.hpp"
+#include "integrators/reflection.hpp"
+
+namespace deli {
+
+// Counters over a span of steps (one step, or the steps between two samples).
+struct ConstraintStatistics {
+  std::int64_t steps = 0;
+  std::int64_t active = 0;            // rows in the extended active sets (or contact events)
+  std::int64_t reflected = 0;         // rows that received a reflection impulse
+  std::int64_t smooth = 0;            // rows in the smooth sets
+  std::int64_t stalled = 0;           // reflections capped or stalled
+  std::int64_t cycled = 0;            // reflections that cycled (ended inelastically)
+  std::int64_t penetrations = 0;      // steps ending with an inequality below -tolerance
+  std::int64_t fallbacks = 0;         // rows the feasibility guard landed
+  std::int64_t deficits = 0;          // landings whose energy could not be restored
+  std::int64_t shadow_fallbacks = 0;  // shadow-H solves that fell back to H
+  std::int64_t solves = 0, solver_iterations = 0;
+  int max_solver_iterations = 0;
+  double min_gap = std::numeric_limits<double>::infinity();
+  double max_rod_violation = 0;  // |f| / length, equality rows
+
+  void add(const ConstraintStatistics& later);
+  // As numbers for a checkpoint (counts are exact in a double up to 2^53).
+  void save(std::vector<double>& out) const;
+  static constexpr std::size_t saved_size = 15;
+  static ConstraintStatistics load(const double* in);
+};
+
+// What every integrator of constrained systems shares (GVI, the direct-substitution and
+// collision baselines): the constraint set and the force engine, the position update
+// solved cluster by cluster (failures reported with the problem dumped), the momentum
+// projection, reflections (H or Verlet's shadow H), the statistics and constraint virial
+// per sampler, and the checkpointed state. Each integrator writes only its step.
+class ConstrainedIntegrator : public Integrator {
+ public:
+  double timestep() const override { return dt_; }
+  // Puts the state on the constraint manifold (positions, then momenta) and computes forces.
+  void setup(System& system) override;
+  ForceEngine& engine() override { return engine_; }
+  const ForceEngine& forces() const override { return engine_; }
+  std::vector<std::pair<std::string, double>> take_statistics(
+      Sampler sampler = Sampler::thermo) override;
+  double take_constraint_virial(Sampler sampler = Sampler::thermo) override;
+  std::vector<double> saved_state() const override;
+  void restore_state(const std::vector<double>& state, const System& system) override;
+
+  const ConstraintSet& constraints() const { return constraints_; }
+
+ protected:
+  ConstrainedIntegrator(const ForceField& force_field, ConstraintSet constraints, double timestep,
+                        double skin, ReflectionOperator reflection, ReflectionEnergy energy,
+                        const Particles& particles);
+
+  // Solves x = q + delta + h M^-1 C(q) z with f(x) = 0 for the equality rows and
+  // 0 <= z _|_ g(x) >= 0 for the rest, per cluster; returns the impulses C z per particle in
+  // `impulse` and their virial. Gradients are taken at `q`.
+  double solve_positions(System& system, const std::vector<Constraint>& rows,
+                         const std::vector<bool>& equality, const std::vector<Vec3>& q,
+                         const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
+  ShadowOperator shadow_operator(const System& system, const Cluster& cluster,
+                                 const std::vector<Vec3>& p) const;
+  // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
+  // index `first_inequality`) that holds an inequality, at positions x.
+  void reflect_clusters(System& system, const std::vector<Constraint>& rows,
+                        std::size_t first_inequality, const std::vector<Vec3>& x,
+                        std::vector<Vec3>& p);
+  double project_momenta(System& system, const std::vector<Constraint>& rows,
+                         const std::vector<Vec3>& x, std::vector<Vec3>& p);
+  void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
+  [[noreturn]] void midpoint_failure(const System& system, double change) const;
+  // Adds this step's statistics and virial to every sampler's.
+  void finish_step();
+
+  ConstraintSet constraints_;
+  ForceEngine engine_;
+  double dt_;
+  ReflectionOperator reflection_;
+  ReflectionEnergy energy_;
+  ConstraintStatistics stats_;  // this step's (and setup's) figures, see finish_step()
+  std::array<ConstraintStatistics, 2> sampled_;
+  double step_virial_ = 0.0;              // sum of r . J over this step's constraint impulses
+  std::array<double, 2> virial_sums_{};   // sum over steps of step_virial_ / h, per sampler
+  std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
+};
+
+std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);
+void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& which,
+             std::vector<Vec3>& all);
+bool same_row(const Constraint& a, const Constraint& b);
+bool contains(const std::vector<Constraint>& rows, const Constraint& c);
+// grad g . M^-1 p for a row with unit direction u at its particles.
+double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec3>& p,
+                       const Particles& P);
+
+}  // namespace deli
