@@ -73,13 +73,7 @@ int command_run(const std::vector<std::string>& args) {
               static_cast<long long>(input.steps));
 
   if (restart.empty()) minimize_if_asked(input);
-  std::unique_ptr<Integrator> integrator;
-  if (input.integrator != "verlet") {  // gvi, dsi, midpoint: one integrator, options
-    integrator = std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi,
-                                       input.system.particles);
-  } else {
-    integrator = std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
-  }
+  const std::unique_ptr<Integrator> integrator = make_integrator(input);
   // A restart appends to the run's outputs, cut back to what precedes the checkpoint.
   const std::int64_t continue_from = restart.empty() ? -1 : checkpoint.step;
   ThermoTable table(stdout);

@@ -12,6 +12,7 @@
 #include "input/constraints_input.hpp"
 #include "input/lammps_data.hpp"
 #include "input/toml_table.hpp"
+#include "integrators/velocity_verlet.hpp"
 #include "pair/pair_coefficients.hpp"
 #include "system/builders.hpp"
 
@@ -380,9 +381,62 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   auto integrator = root.table("integrator");
   if (!integrator) root.fail("missing the [integrator] table (type = \"verlet\", timestep = ...)");
-  input.integrator = integrator->choice("type", {"verlet", "gvi", "dsi", "midpoint"}, "verlet");
+  input.integrator = integrator->choice(
+      "type", {"verlet", "gvi", "dsi", "midpoint", "direct", "collision"}, "verlet");
   const bool constrained = input.integrator == "gvi" || input.integrator == "dsi";
-  if (constrained) {
+  if (input.integrator == "direct") {
+    const std::string scheme =
+        integrator->choice("scheme", {"midpoint", "newmark", "kane_imex"}, "midpoint");
+    input.direct.scheme = scheme == "midpoint"  ? DirectScheme::midpoint
+                          : scheme == "newmark" ? DirectScheme::newmark
+                                                : DirectScheme::kane_imex;
+    if (input.direct.scheme == DirectScheme::midpoint) {
+      input.direct.alpha =
+          integrator->choice("constraint_point", {"midpoint", "endpoint"}, "endpoint") == "midpoint"
+              ? 0.5
+              : 1.0;
+    } else {
+      input.direct.beta = integrator->number("beta", 0.25);
+      input.direct.gamma = integrator->number("gamma", 0.5);
+      if (!(input.direct.beta >= 0 && input.direct.beta <= 0.5)) {
+        integrator->fail("Newmark's beta lies in [0, 1/2]", "beta");
+      }
+      if (!(input.direct.gamma >= 0 && input.direct.gamma <= 1)) {
+        integrator->fail("Newmark's gamma lies in [0, 1]", "gamma");
+      }
+      if (input.direct.scheme == DirectScheme::newmark && input.direct.beta == 0) {
+        integrator->fail(
+            "direct Newmark with beta = 0 puts no constraint force at the step's end and "
+            "cannot keep a constraint: use beta > 0 or scheme = \"kane_imex\"",
+            "beta");
+      }
+    }
+  } else if (input.integrator == "collision") {
+    input.collision.base =
+        integrator->choice("lagrangian", {"verlet", "midpoint"}, "verlet") == "midpoint"
+            ? Lagrangian::midpoint
+            : Lagrangian::verlet;
+    input.collision.root_tolerance = positive(*integrator, "root_tolerance", 1e-12);
+    input.collision.max_events_per_step =
+        static_cast<int>(integrator->integer("max_events_per_step", 1000));
+    if (input.collision.max_events_per_step < 1) {
+      integrator->fail("must be at least 1", "max_events_per_step");
+    }
+    if (auto r = integrator->table("reflection")) {
+      input.collision.energy =
+          r->choice("energy", {"hamiltonian", "shadow"}, "hamiltonian") == "shadow"
+              ? ReflectionEnergy::shadow
+              : ReflectionEnergy::hamiltonian;
+      if (input.collision.energy == ReflectionEnergy::shadow &&
+          input.collision.base != Lagrangian::verlet) {
+        r->fail(
+            "the shadow Hamiltonian is Verlet's: use lagrangian = \"verlet\" or "
+            "energy = \"hamiltonian\"",
+            "energy");
+      }
+      r->finish();
+    }
+  } else if (constrained) {
     input.gvi.reflections = input.integrator == "gvi";
     input.gvi.lagrangian =
         integrator->choice("lagrangian", {"verlet", "midpoint"}, "verlet") == "midpoint"
@@ -414,7 +468,10 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       r->finish();
     }
   } else if (!input.constraints.empty()) {
-    integrator->fail("the input has [constraints]: they need type = \"gvi\" (or \"dsi\")", "type");
+    integrator->fail(
+        "the input has [constraints]: they need type = \"gvi\" (or \"dsi\", or the "
+        "baselines \"direct\" and \"collision\")",
+        "type");
   } else if (input.integrator == "midpoint") {
     input.gvi.lagrangian = Lagrangian::midpoint;  // implicit midpoint, nothing to constrain
   }
@@ -468,6 +525,25 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   input.gvi.skin = input.skin;
   add_excluded_contacts(input);
   return input;
+}
+
+std::unique_ptr<Integrator> make_integrator(const RunInput& input) {
+  const Particles& particles = input.system.particles;
+  if (input.integrator == "verlet") {
+    return std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
+  }
+  if (input.integrator == "direct") {
+    return std::make_unique<DirectSubstitution>(*input.force_field, input.constraints,
+                                                input.timestep, input.skin, input.direct,
+                                                particles);
+  }
+  if (input.integrator == "collision") {
+    return std::make_unique<CollisionIntegrator>(*input.force_field, input.constraints,
+                                                 input.timestep, input.skin, input.collision,
+                                                 particles);
+  }
+  // gvi, dsi, midpoint: one integrator, options
+  return std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi, particles);
 }
 
 }  // namespace deli

@@ -8,6 +8,8 @@
 #include "force_field.hpp"
 #include "force_field_spec.hpp"
 #include "h5md/trajectory_spec.hpp"
+#include "integrators/collision_integrator.hpp"
+#include "integrators/direct_substitution.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
 #include "system/system.hpp"
@@ -46,11 +48,16 @@ struct RunInput {
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
   GviOptions gvi;  // timestep and skin copied from above
+  DirectOptions direct;        // type = "direct"
+  CollisionOptions collision;  // type = "collision"
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.
 RunInput load_run_input(const std::string& path);
 // The same from TOML text; `path` names it in messages and anchors relative file names.
 RunInput parse_run_input(const std::string& text, const std::string& path);
+
+// The integrator the input's [integrator] table names, for its system.
+std::unique_ptr<Integrator> make_integrator(const RunInput& input);
 
 }  // namespace deli

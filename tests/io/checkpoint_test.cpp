@@ -19,11 +19,7 @@ namespace deli {
 namespace {
 
 std::unique_ptr<Integrator> integrator_for(const RunInput& input) {
-  if (input.integrator == "verlet") {
-    return std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
-  }
-  return std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi,
-                               input.system.particles);
+  return make_integrator(input);
 }
 
 void expect_restart_identical(const std::string& input_path, int first, int second) {
