@@ -20,8 +20,9 @@ CollisionIntegrator::CollisionIntegrator(const ForceField& force_field, Constrai
         "remove the rods/anchors or use type = \"gvi\"");
   }
   if (constraints_.linearized) {
-    throw InputError("the collision integrator finds exact contact times: linearized = true "
-                     "has no meaning for it");
+    throw InputError(
+        "the collision integrator finds exact contact times: linearized = true "
+        "has no meaning for it");
   }
 }
 
@@ -126,7 +127,8 @@ void CollisionIntegrator::step(System& system, bool tally) {
     std::vector<Vec3> f_end;
     engine_.forces_at(system, x, f_end);
     for (std::size_t i = 0; i < n; ++i) {
-      p[i] += options_.base == Lagrangian::verlet ? (f[i] + f_end[i]) * (0.5 * tau) : f_mid[i] * tau;
+      p[i] +=
+          options_.base == Lagrangian::verlet ? (f[i] + f_end[i]) * (0.5 * tau) : f_mid[i] * tau;
     }
     q = x;
     f = f_end;

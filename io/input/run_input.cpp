@@ -533,9 +533,8 @@ std::unique_ptr<Integrator> make_integrator(const RunInput& input) {
     return std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
   }
   if (input.integrator == "direct") {
-    return std::make_unique<DirectSubstitution>(*input.force_field, input.constraints,
-                                                input.timestep, input.skin, input.direct,
-                                                particles);
+    return std::make_unique<DirectSubstitution>(
+        *input.force_field, input.constraints, input.timestep, input.skin, input.direct, particles);
   }
   if (input.integrator == "collision") {
     return std::make_unique<CollisionIntegrator>(*input.force_field, input.constraints,

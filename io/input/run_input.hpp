@@ -47,7 +47,7 @@ struct RunInput {
   std::string source_text;    // the input as read, stored with trajectories
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
-  GviOptions gvi;  // timestep and skin copied from above
+  GviOptions gvi;              // timestep and skin copied from above
   DirectOptions direct;        // type = "direct"
   CollisionOptions collision;  // type = "collision"
 };
