@@ -315,6 +315,11 @@ def main():
         fig.savefig(os.path.join(out, f"spring_sphere_{kind}.png"), dpi=100)
         plt.close(fig)
         row(f"spring and sphere, {kind}", "GVI (midpoint)", gvi)
+        if kind == "smooth":  # the paper's panel (c) for the smooth case is the DSI
+            dsi = go(Run("spring_smooth_dsi", os.path.join(PAPER, "spring_sphere_smooth.toml"),
+                         steps=steps(2000, 200),
+                         integrator='type = "dsi"\nlagrangian = "midpoint"\ntimestep = 0.5'))
+            row("spring and sphere, smooth", "DSI (midpoint)", dsi)
         row(f"spring and sphere, {kind}", "direct, endpoint-constrained", direct)
 
     # Nonlinear oscillator: direct endpoint, collision, GVI, GVI with linearised constraints.
