@@ -107,18 +107,7 @@ void CollisionIntegrator::step(System& system, bool tally) {
   std::vector<Vec3> f = engine_.force();
 
   const std::vector<Vec3> x_full = free_positions(system, q, p, f, h);
-  if (engine_.neighbors().cutoff() > 0 && !engine_.neighbors_cover(x_full)) {
-    engine_.ensure_neighbors(system, true);
-    if (!engine_.neighbors_cover(x_full)) {
-      throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": a particle would move more than half the neighbour skin in one "
-                            "step; increase [neighbor] skin or reduce the timestep");
-    }
-  }
-  double largest = 0.0;
-  for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, norm(x_full[i] - q[i]));
-  const std::vector<Constraint> candidates = constraints_.nearby_inequalities(
-      P, q.data(), engine_.neighbors(), system.box, 4.0 * largest + 2.0 * tol.gap);
+  const std::vector<Constraint> candidates = candidates_for_step(system, q, x_full);
 
   // Advances (q, p) by an unconstrained step of length tau; f becomes the force at the end.
   auto advance = [&](double tau) {

@@ -277,6 +277,24 @@ void ConstrainedIntegrator::finish_step() {
   stats_ = ConstraintStatistics{};
 }
 
+std::vector<Constraint> ConstrainedIntegrator::candidates_for_step(System& system,
+                                                                   const std::vector<Vec3>& q,
+                                                                   const std::vector<Vec3>& x) {
+  if (engine_.neighbors().cutoff() > 0 && !engine_.neighbors_cover(x)) {
+    engine_.ensure_neighbors(system, true);
+    if (!engine_.neighbors_cover(x)) {
+      throw SimulationError("step " + std::to_string(system.step + 1) +
+                            ": a particle would move more than half the neighbour skin in one "
+                            "step; increase [neighbor] skin or reduce the timestep");
+    }
+  }
+  double largest = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) largest = std::max(largest, norm(x[i] - q[i]));
+  return constraints_.nearby_inequalities(system.particles, q.data(), engine_.neighbors(),
+                                          system.box,
+                                          4.0 * largest + 2.0 * constraints_.tolerances.gap);
+}
+
 void ConstrainedIntegrator::record_geometry(const System& system,
                                             const std::vector<Constraint>& candidates, bool full) {
   const Particles& P = system.particles;

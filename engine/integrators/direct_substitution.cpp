@@ -112,18 +112,7 @@ void DirectSubstitution::step(System& system, bool tally) {
   };
 
   std::vector<Vec3> x_free = free_end();
-  if (engine_.neighbors().cutoff() > 0 && !engine_.neighbors_cover(x_free)) {
-    engine_.ensure_neighbors(system, true);
-    if (!engine_.neighbors_cover(x_free)) {
-      throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": a particle would move more than half the neighbour skin in one "
-                            "step; increase [neighbor] skin or reduce the timestep");
-    }
-  }
-  double largest = 0.0;
-  for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, norm(x_free[i] - q[i]));
-  const std::vector<Constraint> candidates = constraints_.nearby_inequalities(
-      P, q.data(), engine_.neighbors(), system.box, 4.0 * largest + 2.0 * tol.gap);
+  const std::vector<Constraint> candidates = candidates_for_step(system, q, x_free);
 
   std::vector<Constraint> held;
   std::vector<Vec3> impulse(n), x(n), y0(n);
