@@ -96,36 +96,49 @@ TEST(Checkpoint, DamagedCheckpointIsRefused) {
 namespace deli {
 namespace {
 
-// SIGTERM mid-run: the step finishes, a checkpoint is written, the exit status is 130, and
-// the checkpoint restarts.
-TEST(Checkpoint, SigtermLeavesACheckpointThatRestarts) {
-  const std::string dir = ::testing::TempDir();
-  const std::string input = dir + "/long.toml";
-  std::ofstream(input)
-      << "[system]\ndata = \"" DELI_SOURCE_DIR
-         "/inputs/lj_chains/melt.data\"\n"
-         "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
-         "[forcefield.pair]\nstyle = \"wca\"\n"
-         "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
-         "[forcefield.bond]\nstyle = \"fene\"\n"
-         "coeffs = [{ type = 1, k = 30.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 }]\n"
-         "[integrator]\ntimestep = 0.005\n[run]\nsteps = 100000000\n"
-         "[output]\nthermo = { every = 1000 }\ncheckpoint = { file = \""
-      << dir << "/stop.h5\", every = 1000000 }\n";
-  const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " + dir +
-                              "/stop.log 2>&1 & pid=$!; sleep 1; kill -TERM $pid; "
-                              "wait $pid; echo $?'";
-  FILE* pipe = popen(command.c_str(), "r");
-  char buffer[256] = {};
-  std::fgets(buffer, sizeof buffer, pipe);
-  pclose(pipe);
-  EXPECT_EQ(std::string(buffer), "130\n");
-  const Checkpoint c = read_checkpoint(dir + "/stop.h5");
-  EXPECT_GT(c.step, 0);
-  EXPECT_EQ(c.id.size(), 4000u);
-  RunInput resumed = load_run_input(input);
-  apply_checkpoint(c, resumed.system, dir + "/stop.h5");
-  EXPECT_EQ(resumed.system.step, c.step);
+// The melt run for a very long time, for the signal tests; `steps` makes its restart input.
+std::string long_melt(const std::string& dir, const std::string& name, long long steps) {
+  const std::string input = dir + "/" + name + ".toml";
+  std::ofstream(input) << "[system]\ndata = \"" DELI_SOURCE_DIR
+                          "/inputs/lj_chains/melt.data\"\n"
+                          "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
+                          "[forcefield.pair]\nstyle = \"wca\"\n"
+                          "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+                          "[forcefield.bond]\nstyle = \"fene\"\n"
+                          "coeffs = [{ type = 1, k = 30.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 "
+                          "}]\n"
+                          "[integrator]\ntimestep = 0.005\n[run]\nsteps = "
+                       << steps << "\n[output]\nthermo = { every = 1000 }\ncheckpoint = { file = \""
+                       << dir << "/stop.h5\", every = 1000000 }\n";
+  return input;
+}
+
+// SIGINT or SIGTERM mid-run: the step finishes, a checkpoint is written, the exit status is
+// 130, and `deli run --restart` continues from the checkpoint to the end.
+TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
+  for (const std::string signal : {"INT", "TERM"}) {
+    const std::string dir = ::testing::TempDir() + "/signal_" + signal;
+    std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
+    const std::string input = long_melt(dir, "long", 100000000);
+    const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " +
+                                dir + "/stop.log 2>&1 & pid=$!; sleep 1; kill -" + signal +
+                                " $pid; wait $pid; echo $?'";
+    FILE* pipe = popen(command.c_str(), "r");
+    char buffer[256] = {};
+    std::fgets(buffer, sizeof buffer, pipe);
+    pclose(pipe);
+    EXPECT_EQ(std::string(buffer), "130\n") << "SIG" << signal;
+    const Checkpoint c = read_checkpoint(dir + "/stop.h5");
+    EXPECT_GT(c.step, 0);
+    EXPECT_EQ(c.id.size(), 4000u);
+    const std::string rest = long_melt(dir, "rest", c.step + 20);
+    const std::string restart = std::string(DELI_BINARY) + " run " + rest + " --restart " + dir +
+                                "/stop.h5 > " + dir + "/rest.log 2>&1";
+    EXPECT_EQ(std::system(restart.c_str()), 0) << "SIG" << signal;
+    std::ifstream log(dir + "/rest.log");
+    const std::string text((std::istreambuf_iterator<char>(log)), {});
+    EXPECT_NE(text.find("for 20 steps"), std::string::npos) << text;
+  }
 }
 
 // SIGKILL at an arbitrary moment: no handler runs, nothing is closed. The trajectory must
