@@ -176,8 +176,13 @@ std::vector<double> DirectSubstitution::saved_state() const {
 }
 
 void DirectSubstitution::restore_state(const std::vector<double>& state, const System& system) {
+  // The base state, then the constraint force on each atom.
   const std::size_t n = system.particles.size();
-  if (state.size() < 3 * n) ConstrainedIntegrator::restore_state(state, system);  // reports
+  if (state.size() < 3 * n) {
+    throw InputError("the checkpoint's integrator state (" + std::to_string(state.size()) +
+                     " numbers) is too short for '" + name() + "' with " + std::to_string(n) +
+                     " atoms; restart with the input that wrote it");
+  }
   ConstrainedIntegrator::restore_state({state.begin(), state.end() - 3 * n}, system);
   constraint_force_.clear();
   for (std::size_t i = state.size() - 3 * n; i < state.size(); i += 3) {

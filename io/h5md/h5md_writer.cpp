@@ -253,7 +253,6 @@ void H5mdWriter::reopen(const System& system, std::int64_t step) {
     H5Gget_objname_by_idx(observables_group_, k, name, sizeof name);
     observables_.emplace(name, continue_series(observables_group_, name, step));
   }
-  frames_ = 0;
   check(H5Fflush(file_, H5F_SCOPE_GLOBAL), spec_.file, "flush the file");
 }
 

@@ -14,6 +14,7 @@
 #include "integrators/gvi.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
+#include "support/shell.hpp"
 
 namespace deli {
 namespace {
@@ -123,11 +124,7 @@ TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
     const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " +
                                 dir + "/stop.log 2>&1 & pid=$!; sleep 1; kill -" + signal +
                                 " $pid; wait $pid; echo $?'";
-    FILE* pipe = popen(command.c_str(), "r");
-    char buffer[256] = {};
-    std::fgets(buffer, sizeof buffer, pipe);
-    pclose(pipe);
-    EXPECT_EQ(std::string(buffer), "130\n") << "SIG" << signal;
+    EXPECT_EQ(testing::run_shell(command).output, "130\n") << "SIG" << signal;
     const Checkpoint c = read_checkpoint(dir + "/stop.h5");
     EXPECT_GT(c.step, 0);
     EXPECT_EQ(c.id.size(), 4000u);
@@ -165,14 +162,9 @@ TEST(Checkpoint, SigkillLeavesAReadableTrajectory) {
                               "/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/killed_run_check.py " +
                               dir + "/run.h5 " + dir +
                               "/run.csv 10 " DELI_SOURCE_DIR "/inputs/lj_chains/melt.data 2>&1'";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  const int status = pclose(pipe);
-  std::printf("%s", output.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  const testing::ShellResult r = testing::run_shell(command);
+  std::printf("%s", r.output.c_str());
+  EXPECT_EQ(r.status, 0) << r.output;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "input/run_input.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
+#include "support/shell.hpp"
 #include "text/dump_writer.hpp"
 
 namespace deli {
@@ -56,15 +57,10 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
   EXPECT_EQ(writer.frames(), 5);
   const std::string command = "/usr/bin/python3 " + std::string(DELI_SOURCE_DIR) +
                               "/tests/io/h5md_roundtrip.py " + dir + "/melt.h5 " + dir +
-                              "/expected.txt " + dir + "/melt.data 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  const int status = pclose(pipe);
-  std::printf("%s", output.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+                              "/expected.txt " + dir + "/melt.data";
+  const testing::ShellResult r = testing::run_shell(command);
+  std::printf("%s", r.output.c_str());
+  EXPECT_EQ(r.status, 0) << r.output;
 }
 
 // The plot tool turns the same kind of file into a PNG.
@@ -92,11 +88,9 @@ TEST(H5md, InfoSummarisesTheFile) {
   VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
   run(input.system, verlet, 30, 30, {&writer});
   writer.on_finish(input.system);
-  FILE* pipe = popen((std::string(DELI_BINARY) + " info " + dir + "/info.h5 2>&1").c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  EXPECT_EQ(pclose(pipe), 0) << output;
+  const auto [status, output] =
+      testing::run_shell(std::string(DELI_BINARY) + " info " + dir + "/info.h5");
+  EXPECT_EQ(status, 0) << output;
   EXPECT_NE(output.find("4000 atoms, 4 frames, time 0 to 0.15"), std::string::npos) << output;
   EXPECT_NE(output.find("bonds: 3800"), std::string::npos) << output;
   EXPECT_EQ(output.find("image"), std::string::npos) << "images were not asked for";

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "support/shell.hpp"
+
 namespace deli {
 namespace {
 
@@ -19,12 +21,9 @@ std::string slurp(const std::string& path) {
 }
 
 int shell(const std::string& command, std::string& output) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  char buffer[4096];
-  output.clear();
-  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  const int status = pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const testing::ShellResult r = testing::run_shell(command);
+  output = r.output;
+  return r.status;
 }
 
 // The default input (GVI: rods, hard cores, walls) with its own run length and outputs.

@@ -9,24 +9,16 @@
 #include <fstream>
 #include <string>
 
+#include "support/shell.hpp"
+
 namespace {
 
 using ::testing::HasSubstr;
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr together
-};
+using Result = deli::testing::ShellResult;
 
 Result run_deli(const std::string& arguments) {
-  const std::string command = std::string(DELI_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  Result r{-1, ""};
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) r.output += buffer.data();
-  const int raw = pclose(pipe);
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
+  return deli::testing::run_shell(std::string(DELI_BINARY) + " " + arguments);
 }
 
 TEST(Cli, HelpListsCommands) {
