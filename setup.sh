@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The two commands of the quick start, on Debian 12 as root:
 #   ./setup.sh run [INPUT]   install what is missing, build (Release), run INPUT
-#                            (no INPUT: the default input, inputs/lj_chains/melt.toml)
+#                            (no INPUT: the default input, inputs/lj_chains/rigid_slit.toml)
 #   ./setup.sh test          install what is missing, build, run every test (ctest)
 # Re-running with nothing changed skips apt and rebuilds nothing.
 set -euo pipefail
@@ -36,7 +36,7 @@ if ((${#missing[@]})); then
 fi
 
 jobs=$(nproc)
-[ -f build/CMakeCache.txt ] || cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+[ -f build/Makefile ] || cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j "$jobs"
 
 if [ "$action" = run ]; then
