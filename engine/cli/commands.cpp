@@ -71,6 +71,17 @@ int command_run(const std::vector<std::string>& args) {
               input.system.topology.angles.size(), input.system.box.length().x,
               input.system.box.length().y, input.system.box.length().z, input.timestep,
               static_cast<long long>(input.steps));
+  std::printf("%s\n", input.degrees_of_freedom.describe().c_str());
+  if (input.thermostat) {
+    const ThermostatSettings& t = *input.thermostat;
+    std::printf("thermostat %s: T %g, damping %g, seed %llu%s\n",
+                t.kind == ThermostatKind::langevin ? "langevin" : "csvr", t.temperature, t.damping,
+                static_cast<unsigned long long>(t.seed),
+                t.until_step < 0 ? ""
+                                 : (", for steps before " + std::to_string(t.until_step) +
+                                    ", then constant energy")
+                                       .c_str());
+  }
 
   if (restart.empty()) minimize_if_asked(input);
   const std::unique_ptr<Integrator> integrator = make_integrator(input);
@@ -123,8 +134,12 @@ int command_run(const std::vector<std::string>& args) {
       throw InputError(restart + ": " + e.what());
     }
   }
+  RunOptions options;
+  options.set_up = restart.empty();
+  options.degrees_of_freedom = input.degrees_of_freedom;
+  options.start_temperature = input.start_temperature;
   const RunStatistics stats = run(input.system, *integrator, input.steps - input.system.step,
-                                  input.thermo.every, observers, restart.empty());
+                                  input.thermo.every, observers, options);
   if (stats.interrupted) {
     const std::string file =
         input.checkpoint.file.empty() ? path + ".interrupted.h5" : input.checkpoint.file;

@@ -177,6 +177,11 @@ void ConstrainedIntegrator::setup(System& system) {
         std::to_string(gap) + " sigma; start from a configuration without overlaps");
   }
   engine_.compute(system);
+  project_velocities(system);
+}
+
+void ConstrainedIntegrator::project_velocities(System& system) {
+  Particles& P = system.particles;
   std::vector<Vec3> p(P.size());
   for (std::size_t i = 0; i < P.size(); ++i) p[i] = P.velocity[i] * P.mass[i];
   project_momenta(system, constraints_.equalities, P.position, p);

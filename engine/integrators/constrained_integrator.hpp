@@ -51,6 +51,8 @@ class ConstrainedIntegrator : public Integrator {
   double take_constraint_virial(Sampler sampler = Sampler::thermo) override;
   std::vector<double> saved_state() const override;
   void restore_state(const std::vector<double>& state, const System& system) override;
+  // RATTLE's velocity projection onto the equality rows; its impulses count in no virial.
+  void project_velocities(System& system) override;
 
   const ConstraintSet& constraints() const { return constraints_; }
 

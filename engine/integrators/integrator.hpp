@@ -53,6 +53,11 @@ class Integrator {
   // Verlet's modified energy H - h^2/24 F.M^-1.F + h^2/12 v.d2V.v (potential forces only),
   // for Verlet-based integrators whose force field has pairwise Hessians.
   virtual std::optional<double> shadow_energy(const System&) const { return std::nullopt; }
+  // Makes the velocities tangent to the equality constraints (rods, strings) again after
+  // something outside the step changed them (a thermostat); a no-op without constraints.
+  virtual void project_velocities(System&) {}
+  // The energy a heat bath has put into the system since the run began (nothing: NVE).
+  virtual std::optional<double> bath_energy() const { return std::nullopt; }
 };
 
 }  // namespace deli

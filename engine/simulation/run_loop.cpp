@@ -13,7 +13,23 @@ double RunStatistics::atom_steps_per_second() const {
 
 RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
                   std::int64_t thermo_every, const std::vector<Observer*>& observers, bool set_up) {
-  if (set_up) integrator.setup(system);
+  RunOptions options;
+  options.set_up = set_up;
+  return run(system, integrator, steps, thermo_every, observers, options);
+}
+
+RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
+                  std::int64_t thermo_every, const std::vector<Observer*>& observers,
+                  const RunOptions& options) {
+  const bool set_up = options.set_up;
+  const DegreesOfFreedom dof = options.degrees_of_freedom.value_or(
+      DegreesOfFreedom::periodic_unconstrained(system.particles.size()));
+  if (set_up) {
+    integrator.setup(system);
+    if (options.start_temperature) {
+      set_temperature(system.particles, dof, *options.start_temperature);
+    }
+  }
   for (Observer* o : observers) o->on_start(system, steps);
   auto wants_frame = [&] {
     for (Observer* o : observers) {
@@ -22,8 +38,10 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     return false;
   };
   auto sample = [&](bool thermo, bool frame) {
-    ThermoSample s = measure_thermo(system, integrator.forces().last());
+    ThermoSample s = measure_thermo(system, integrator.forces().last(), dof);
     s.shadow_energy = integrator.shadow_energy(system);
+    s.bath_energy = integrator.bath_energy();
+    if (s.bath_energy) s.conserved = s.total - *s.bath_energy;
     const double volume = system.box.volume();
     if (frame) {
       ThermoSample f = s;

@@ -16,7 +16,8 @@ Vec3 total_momentum(const Particles& p) {
   return m;
 }
 
-ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation) {
+ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation,
+                            const DegreesOfFreedom& dof) {
   if (!evaluation.tallied)
     throw std::logic_error("thermo asked of a force evaluation without energies");
   ThermoSample s;
@@ -25,8 +26,8 @@ ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluat
   s.kinetic = kinetic_energy(system.particles);
   s.potential = evaluation.potential;
   s.total = s.kinetic + s.potential;
-  const double dof = 3.0 * static_cast<double>(system.particles.size()) - 3.0;
-  s.temperature = dof > 0 ? 2.0 * s.kinetic / dof : 0.0;
+  s.degrees_of_freedom = dof.count();
+  s.temperature = s.degrees_of_freedom > 0 ? 2.0 * s.kinetic / s.degrees_of_freedom : 0.0;
   s.pressure = (2.0 * s.kinetic + evaluation.virial.trace()) / (3.0 * system.box.volume());
   s.momentum = total_momentum(system.particles);
   const Box& box = system.box;

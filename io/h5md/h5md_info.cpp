@@ -109,6 +109,16 @@ std::string describe_h5md(const std::string& path) {
   out << "observables (" << observables.size() << "):";
   for (const std::string& o : observables) out << ' ' << o;
   out << '\n';
+  const std::vector<hsize_t> temperatures = shape_of(file, "/observables/temperature/value");
+  if (!temperatures.empty() && temperatures[0] > 0 &&
+      H5Lexists(file, "/observables/degrees_of_freedom", H5P_DEFAULT) > 0) {
+    double mean = 0;
+    for (hsize_t k = 0; k < temperatures[0]; ++k)
+      mean += double_at(file, "/observables/temperature/value", k);
+    out << "temperature: mean " << mean / static_cast<double>(temperatures[0]) << " over "
+        << temperatures[0] << " frames, "
+        << double_at(file, "/observables/degrees_of_freedom/value", 0) << " degrees of freedom\n";
+  }
   const std::vector<hsize_t> bonds = shape_of(file, "/connectivity/bonds");
   out << "bonds: " << (bonds.empty() ? 0 : bonds[0]) << '\n';
   H5Fclose(file);

@@ -342,6 +342,11 @@ void H5mdWriter::on_frame(const System& system, const ThermoSample& sample,
     values.emplace_back("energy_" + sample.term_names[t], sample.term_energies[t]);
   }
   if (sample.shadow_energy) values.emplace_back("shadow_energy", *sample.shadow_energy);
+  if (sample.conserved) {
+    values.emplace_back("bath_energy", *sample.bath_energy);
+    values.emplace_back("conserved_energy", *sample.conserved);
+  }
+  values.emplace_back("degrees_of_freedom", sample.degrees_of_freedom);
   if (sample.angular_momentum) {
     values.emplace_back("angular_momentum_x", sample.angular_momentum->x);
     values.emplace_back("angular_momentum_y", sample.angular_momentum->y);

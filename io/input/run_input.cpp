@@ -11,7 +11,9 @@
 #include "core/error.hpp"
 #include "input/constraints_input.hpp"
 #include "input/lammps_data.hpp"
+#include "input/thermostat_input.hpp"
 #include "input/toml_table.hpp"
+#include "integrators/thermostatted_integrator.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "pair/pair_coefficients.hpp"
 #include "system/builders.hpp"
@@ -113,14 +115,15 @@ System read_system(TomlTable& t, const fs::path& input_dir) {
   return system;
 }
 
-void read_velocities(TomlTable& root, System& system) {
+std::optional<double> read_velocities(TomlTable& root, System& system) {
   auto v = root.table("velocities");
-  if (!v) return;
+  if (!v) return std::nullopt;
   const double temperature = v->number("temperature");
   if (temperature < 0) v->fail("must not be negative", "temperature");
   const auto seed = v->integer("seed");
   v->finish();
   assign_maxwell_boltzmann(system.particles, temperature, static_cast<std::uint64_t>(seed));
+  return temperature;
 }
 
 int type_index(TomlTable& t, const std::string& key, double value, int count,
@@ -360,7 +363,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (!system) root.fail("missing the [system] table");
   input.system = read_system(*system, dir);
   system->finish();
-  read_velocities(root, input.system);
+  input.start_temperature = read_velocities(root, input.system);
   bool rigid_bonds = false;
   input.constraints = read_constraints(root.table("constraints"), input.system, rigid_bonds);
   input.force_field_spec = read_force_field(root, input.system, rigid_bonds);
@@ -519,15 +522,19 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     }
     output->finish();
   }
+  input.thermostat = read_thermostat(root.table("thermostat"));
   root.finish();
   check_box_fits_cutoff(input, root);
+  input.degrees_of_freedom = run_degrees_of_freedom(input.system, input.constraints,
+                                                    input.force_field_spec, input.thermostat);
   input.gvi.timestep = input.timestep;
   input.gvi.skin = input.skin;
   add_excluded_contacts(input);
   return input;
 }
 
-std::unique_ptr<Integrator> make_integrator(const RunInput& input) {
+namespace {
+std::unique_ptr<Integrator> make_constant_energy_integrator(const RunInput& input) {
   const Particles& particles = input.system.particles;
   if (input.integrator == "verlet") {
     return std::make_unique<VelocityVerlet>(*input.force_field, input.skin, input.timestep);
@@ -543,6 +550,14 @@ std::unique_ptr<Integrator> make_integrator(const RunInput& input) {
   }
   // gvi, dsi, midpoint: one integrator, options
   return std::make_unique<Gvi>(*input.force_field, input.constraints, input.gvi, particles);
+}
+}  // namespace
+
+std::unique_ptr<Integrator> make_integrator(const RunInput& input) {
+  std::unique_ptr<Integrator> integrator = make_constant_energy_integrator(input);
+  if (!input.thermostat) return integrator;
+  return std::make_unique<ThermostattedIntegrator>(std::move(integrator), *input.thermostat,
+                                                   input.degrees_of_freedom);
 }
 
 }  // namespace deli

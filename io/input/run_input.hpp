@@ -12,7 +12,9 @@
 #include "integrators/direct_substitution.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
+#include "simulation/degrees_of_freedom.hpp"
 #include "system/system.hpp"
+#include "thermostats/thermostat.hpp"
 
 namespace deli {
 
@@ -50,6 +52,11 @@ struct RunInput {
   GviOptions gvi;              // timestep and skin copied from above
   DirectOptions direct;        // type = "direct"
   CollisionOptions collision;  // type = "collision"
+  std::optional<ThermostatSettings> thermostat;
+  DegreesOfFreedom degrees_of_freedom;  // counts the rods and what the walls etc. conserve
+  // [velocities] temperature: the velocities are drawn when the input is read and scaled
+  // to it once the run has made them tangent to the rods (with degrees_of_freedom).
+  std::optional<double> start_temperature;
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.
@@ -57,7 +64,8 @@ RunInput load_run_input(const std::string& path);
 // The same from TOML text; `path` names it in messages and anchors relative file names.
 RunInput parse_run_input(const std::string& text, const std::string& path);
 
-// The integrator the input's [integrator] table names, for its system.
+// The integrator the input's [integrator] table names, for its system, inside the
+// [thermostat] when there is one.
 std::unique_ptr<Integrator> make_integrator(const RunInput& input);
 
 }  // namespace deli

@@ -17,6 +17,7 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
   if (!header_written_) {
     std::fprintf(out_, "%10s %12s %14s %14s %14s %12s %12s %10s", "step", "time", "kinetic",
                  "potential", "total", "temperature", "pressure", "|momentum|");
+    if (s.conserved) std::fprintf(out_, " %14s", "conserved");
     for (const auto& [name, value] : s.integrator) {
       if (shown(name)) std::fprintf(out_, " %12s", name.c_str());
     }
@@ -26,6 +27,7 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
   std::fprintf(out_, "%10lld %12.6g %14.8g %14.8g %14.8g %12.6g %12.6g %10.3g",
                static_cast<long long>(s.step), s.time, s.kinetic, s.potential, s.total,
                s.temperature, s.pressure, norm(s.momentum));
+  if (s.conserved) std::fprintf(out_, " %14.8g", *s.conserved);
   for (const auto& [name, value] : s.integrator) {
     if (shown(name)) std::fprintf(out_, " %12.4g", value);
   }
@@ -55,6 +57,7 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
     out_ << "step,time,kinetic,potential,total,temperature,pressure,px,py,pz";
     for (const std::string& name : s.term_names) out_ << ",e_" << name;
     if (s.shadow_energy) out_ << ",shadow_energy";
+    if (s.conserved) out_ << ",bath_energy,conserved";
     if (s.angular_momentum) out_ << ",Lx,Ly,Lz";
     for (const auto& [name, value] : s.integrator) out_ << ',' << name;
     out_ << '\n';
@@ -65,6 +68,7 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
        << s.momentum.z;
   for (double e : s.term_energies) out_ << ',' << e;
   if (s.shadow_energy) out_ << ',' << *s.shadow_energy;
+  if (s.conserved) out_ << ',' << *s.bath_energy << ',' << *s.conserved;
   if (s.angular_momentum) {
     out_ << ',' << s.angular_momentum->x << ',' << s.angular_momentum->y << ','
          << s.angular_momentum->z;

@@ -42,6 +42,8 @@ void expect_restart_identical(const std::string& input_path, int first, int seco
   run(resumed.system, *c, second, 0, {}, false);
 
   ASSERT_EQ(resumed.system.step, straight.system.step);
+  ASSERT_EQ(a->bath_energy().has_value(), c->bath_energy().has_value());
+  if (a->bath_energy()) ASSERT_EQ(*a->bath_energy(), *c->bath_energy());
   const Particles& x = straight.system.particles;
   const Particles& y = resumed.system.particles;
   for (std::size_t i = 0; i < x.size(); ++i) {
@@ -59,6 +61,44 @@ TEST(Checkpoint, VerletRestartIsBitwiseIdentical) {
 TEST(Checkpoint, GviRestartIsBitwiseIdentical) {
   expect_restart_identical(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/rigid_slit.toml", 40,
                            40);
+}
+
+// A thermostat's random numbers are a function of (seed, step, atom): the checkpoint
+// carries the seed and the bath's energy, the step gives the rest.
+std::string thermostatted_input(const std::string& integrator, const std::string& thermostat) {
+  const std::string path = ::testing::TempDir() + "/thermostatted_" + thermostat + ".toml";
+  std::ofstream(path)
+      << "[system]\n[system.chains]\ncount = 20\nlength = 5\ndensity = 0.6\nbond_length = 1.0\n"
+         "min_distance = 0.95\nseed = 4\n[velocities]\ntemperature = 1.0\nseed = 3\n"
+         "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n[forcefield.pair]\nstyle = \"wca\"\n"
+         "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+      << (integrator == "gvi"
+              ? "[constraints]\nbonds = \"rigid\"\nhard_spheres = { diameter = 0.9 }\n"
+              : "[forcefield.bond]\nstyle = \"harmonic\"\n"
+                "coeffs = [{ type = 1, k = 100.0, r0 = 1.0 }]\n")
+      << "[integrator]\ntype = \"" << integrator << "\"\ntimestep = 0.004\n[thermostat]\ntype = \""
+      << thermostat << "\"\ntemperature = 1.2\ndamping = 0.5\nseed = 99\n[run]\nsteps = 0\n";
+  return path;
+}
+
+TEST(Checkpoint, LangevinGviRestartIsBitwiseIdentical) {
+  expect_restart_identical(thermostatted_input("gvi", "langevin"), 37, 60);
+}
+
+TEST(Checkpoint, CsvrVerletRestartIsBitwiseIdentical) {
+  expect_restart_identical(thermostatted_input("verlet", "csvr"), 37, 60);
+}
+
+TEST(Checkpoint, CheckpointWithoutThermostatIsRefusedByThermostattedInput) {
+  const std::string file = ::testing::TempDir() + "/nve.h5";
+  RunInput nve = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  auto a = integrator_for(nve);
+  run(nve.system, *a, 5, 0, {});
+  write_checkpoint(file, nve.system, *a);
+  RunInput nvt = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  nvt.thermostat = ThermostatSettings{};
+  auto b = make_integrator(nvt);
+  EXPECT_THROW(b->restore_state(read_checkpoint(file).integrator_state, nvt.system), InputError);
 }
 
 // Linearised constraints are linearised about the previous step's positions: integrator

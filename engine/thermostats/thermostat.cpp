@@ -1,0 +1,61 @@
+#include "thermostats/thermostat.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "thermostats/random_stream.hpp"
+
+namespace deli {
+
+namespace {
+enum Stream : std::uint32_t { langevin = 1, csvr = 2 };
+
+// The counter of a draw: atom id (all ones for a global draw), step, which thermostat and
+// which half of the step; the low 16 bits count the draws (steps up to 2^39).
+PhiloxCounter draw_counter(std::uint64_t id, std::int64_t step, Stream stream, int half) {
+  const auto s = static_cast<std::uint64_t>(step);
+  return {static_cast<std::uint32_t>(id), static_cast<std::uint32_t>(id >> 32),
+          static_cast<std::uint32_t>(s),
+          (static_cast<std::uint32_t>(stream) << 30) | (static_cast<std::uint32_t>(half) << 29) |
+              (static_cast<std::uint32_t>((s >> 32) & 0x7f) << 16)};
+}
+}  // namespace
+
+void LangevinThermostat::apply(Particles& p, std::int64_t step, int half, double duration) {
+  const double c = std::exp(-duration / settings_.damping);
+  const double noise = std::sqrt((1.0 - c * c) * settings_.temperature);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    RandomStream random(settings_.seed, draw_counter(static_cast<std::uint64_t>(p.id[i]), step,
+                                                     Stream::langevin, half));
+    const double sd = noise / std::sqrt(p.mass[i]);
+    Vec3& v = p.velocity[i];
+    const double x = random.normal(), y = random.normal(), z = random.normal();
+    v = {c * v.x + sd * x, c * v.y + sd * y, c * v.z + sd * z};
+  }
+}
+
+void CsvrThermostat::apply(Particles& p, std::int64_t step, int half, double duration) {
+  double twice_kinetic = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) twice_kinetic += p.mass[i] * norm2(p.velocity[i]);
+  const double kinetic = 0.5 * twice_kinetic;
+  if (!(kinetic > 0.0) || dof_ <= 0) return;
+  RandomStream random(settings_.seed, draw_counter(~std::uint64_t{0}, step, Stream::csvr, half));
+  const double c = std::exp(-duration / settings_.damping);
+  const double target = 0.5 * dof_ * settings_.temperature;
+  const double r1 = random.normal();
+  // The sum of dof - 1 squared standard normals is 2 Gamma((dof - 1) / 2).
+  const double others = dof_ > 1.0 ? 2.0 * random.gamma(0.5 * (dof_ - 1.0)) : 0.0;
+  const double next = kinetic + (1.0 - c) * (target * (r1 * r1 + others) / dof_ - kinetic) +
+                      2.0 * r1 * std::sqrt(c * (1.0 - c) * kinetic * target / dof_);
+  const double scale = std::sqrt(std::max(next, 0.0) / kinetic);
+  for (Vec3& v : p.velocity) v *= scale;
+}
+
+std::unique_ptr<Thermostat> make_thermostat(const ThermostatSettings& settings,
+                                            const DegreesOfFreedom& dof) {
+  if (settings.kind == ThermostatKind::langevin)
+    return std::make_unique<LangevinThermostat>(settings);
+  return std::make_unique<CsvrThermostat>(settings, dof.count());
+}
+
+}  // namespace deli
