@@ -106,7 +106,7 @@ void CollisionIntegrator::step(System& system, bool tally) {
   for (std::size_t i = 0; i < n; ++i) p[i] = P.velocity[i] * P.mass[i];
   std::vector<Vec3> f = engine_.force();
 
-  const std::vector<Vec3> x_full = free_positions(system, q, p, f, h);
+  std::vector<Vec3> x_full = free_positions(system, q, p, f, h);
   const std::vector<Constraint> candidates = candidates_for_step(system, q, x_full);
 
   // Advances (q, p) by an unconstrained step of length tau; f becomes the force at the end.

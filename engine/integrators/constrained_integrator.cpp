@@ -283,10 +283,16 @@ void ConstrainedIntegrator::finish_step() {
 }
 
 std::vector<Constraint> ConstrainedIntegrator::candidates_for_step(System& system,
-                                                                   const std::vector<Vec3>& q,
-                                                                   const std::vector<Vec3>& x) {
+                                                                   std::vector<Vec3>& q,
+                                                                   std::vector<Vec3>& x) {
   if (engine_.neighbors().cutoff() > 0 && !engine_.neighbors_cover(x)) {
     engine_.ensure_neighbors(system, true);
+    // The rebuild wrapped the positions into the periodic box: q and x move with them.
+    const std::vector<Vec3>& wrapped = system.particles.position;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      x[i] += wrapped[i] - q[i];
+      q[i] = wrapped[i];
+    }
     if (!engine_.neighbors_cover(x)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
                             ": a particle would move more than half the neighbour skin in one "

@@ -76,11 +76,13 @@ class ConstrainedIntegrator : public Integrator {
                         std::vector<Vec3>& p);
   double project_momenta(System& system, const std::vector<Constraint>& rows,
                          const std::vector<Vec3>& x, std::vector<Vec3>& p);
-  // The inequality rows a step from q towards x (the unconstrained end, say) can close:
-  // those within four times its largest displacement. Rebuilds the neighbour list first if
-  // x leaves it; fails if even a fresh list cannot cover the step.
-  std::vector<Constraint> candidates_for_step(System& system, const std::vector<Vec3>& q,
-                                              const std::vector<Vec3>& x);
+  // The inequality rows a step from q (the system's positions) towards x (the
+  // unconstrained end, say) can close: those within four times its largest displacement.
+  // Rebuilds the neighbour list first if x leaves it, which wraps the positions into a
+  // periodic box: q and x are then moved with them. Fails if even a fresh list cannot cover
+  // the step.
+  std::vector<Constraint> candidates_for_step(System& system, std::vector<Vec3>& q,
+                                              std::vector<Vec3>& x);
   void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
   [[noreturn]] void midpoint_failure(const System& system, double change) const;
   // Adds this step's statistics and virial to every sampler's.

@@ -90,7 +90,7 @@ void DirectSubstitution::step(System& system, bool tally) {
   const double beta = options_.beta, gamma = options_.gamma;
   step_virial_ = 0.0;
 
-  const std::vector<Vec3> q = P.position;
+  std::vector<Vec3> q = P.position;  // wrapped with the positions if the list is rebuilt
   const std::vector<Vec3> v = P.velocity;
   const std::vector<Vec3> f0 = engine_.force();
   // The implicit force: at the midpoint (midpoint) or the endpoint (Newmark, beta > 0).

@@ -173,5 +173,51 @@ TEST_P(Thermostat, HardSphereFluidKineticEnergyIsCanonical) {
 
 INSTANTIATE_TEST_SUITE_P(Both, Thermostat, ::testing::Values("langevin", "csvr"));
 
+// Every integrator takes a thermostat: the mean temperature is the bath's. An LJ liquid
+// for the unconstrained integrators, hard spheres for those that reflect (DSI and the
+// direct method land contacts inelastically), rigid trimers for DSI and the direct method.
+// All periodic: the direct and collision baselines once lost track of the positions that
+// a neighbour-list rebuild wraps into the box.
+class EveryIntegrator : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+TEST_P(EveryIntegrator, ReachesTheBathTemperature) {
+  const auto& [integrator, thermostat] = GetParam();
+  std::string system;
+  if (integrator == "verlet" || integrator == "midpoint") {
+    system =
+        "[system.lattice]\ntype = \"fcc\"\ncells = [3, 3, 3]\ndensity = 0.8442\n"
+        "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\n"
+        "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n";
+  } else if (integrator == "gvi" || integrator == "collision") {
+    system =
+        "[system.lattice]\ntype = \"fcc\"\ncells = [3, 3, 3]\ndensity = 0.5\n"
+        "[forcefield.pair]\nstyle = \"none\"\n[constraints]\nhard_spheres = { diameter = 1.0 }\n";
+  } else {
+    system =
+        "[system.chains]\ncount = 30\nlength = 3\ndensity = 0.5\nbond_length = 1.0\n"
+        "min_distance = 0.95\nseed = 3\n[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
+        "[forcefield.pair]\nstyle = \"wca\"\ncoeffs = [{ types = [1, 1], epsilon = 1.0, "
+        "sigma = 1.0 }]\n[constraints]\nbonds = \"rigid\"\n";
+  }
+  RunInput input = testing::input_from(
+      "[system]\n" + system +
+      "[velocities]\ntemperature = 0.5\nseed = 7\n[neighbor]\nskin = 0.4\n" +
+      "[integrator]\ntype = \"" + integrator + "\"\ntimestep = 0.004\n[run]\nsteps = 0\n" +
+      thermostat_table(thermostat, 0.1));
+  // The implicit integrators are slow: fewer, sparser samples.
+  const bool implicit = integrator == "midpoint" || integrator == "direct";
+  const Sampler s = implicit ? sample(input, 500, 6000, 10) : sample(input, 1000, 20000, 20);
+  const Estimate t = block_estimate(s.temperature);
+  std::printf("%s + %s: T = %.4f +- %.4f (bath 1.5)\n", integrator.c_str(), thermostat.c_str(),
+              t.value, t.error);
+  EXPECT_NEAR(t.value, 1.5, 4.0 * t.error);
+  EXPECT_LT(t.error, 0.03 * 1.5);
+}
+
+INSTANTIATE_TEST_SUITE_P(Thermostatted, EveryIntegrator,
+                         ::testing::Combine(::testing::Values("verlet", "midpoint", "gvi", "dsi",
+                                                              "direct", "collision"),
+                                            ::testing::Values("langevin", "csvr")));
+
 }  // namespace
 }  // namespace deli
