@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "support/shell.hpp"
@@ -73,6 +74,45 @@ TEST(Cli, RunsAnInputAndWritesThermo) {
   while (std::getline(csv, line)) ++rows;
   EXPECT_THAT(header, HasSubstr("step,time,kinetic,potential,total,temperature,pressure"));
   EXPECT_EQ(rows, 3);
+}
+
+}  // namespace
+
+namespace {
+
+// Rigid 4-mers whose velocities are drawn at T = 0.988: the run starts at 0.988 counted
+// with 3N - rods - 3 degrees of freedom (the README's rule), and the trajectory and
+// `deli info` carry the same count. Before the count, deli reported 0.741 (3N - 3, and
+// the projection onto the rods removed their share after the draw).
+TEST(Cli, ConstrainedRunStartsAtItsTemperatureWithItsDegreesOfFreedom) {
+  const std::string dir = ::testing::TempDir();
+  const std::string input = dir + "/rigid4.toml";
+  std::ofstream(input) << "[system]\n[system.chains]\ncount = 25\nlength = 4\ndensity = 0.5\n"
+                          "bond_length = 1.0\nmin_distance = 0.95\nseed = 3\n"
+                          "[velocities]\ntemperature = 0.988\nseed = 5\n"
+                          "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
+                          "[forcefield.pair]\nstyle = \"wca\"\n"
+                          "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+                          "[constraints]\nbonds = \"rigid\"\n"
+                          "[integrator]\ntype = \"gvi\"\ntimestep = 0.004\n[run]\nsteps = 10\n"
+                          "[output]\nthermo = { every = 10, file = \""
+                       << dir << "/rigid4.csv\" }\ntrajectory = { file = \"" << dir
+                       << "/rigid4.h5\", every = 5 }\n";
+  const Result r = run_deli("run " + input);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("degrees of freedom 222 = 3 x 100 atoms - 75 rods/strings - 3"));
+  std::ifstream csv(dir + "/rigid4.csv");
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  std::vector<std::string> fields;
+  std::string field;
+  for (std::istringstream row(first); std::getline(row, field, ',');) fields.push_back(field);
+  ASSERT_GT(fields.size(), 5u);
+  EXPECT_NEAR(std::stod(fields[5]), 0.988, 1e-12) << first;  // temperature at step 0
+  const Result info = run_deli("info " + dir + "/rigid4.h5");
+  ASSERT_EQ(info.status, 0) << info.output;
+  EXPECT_THAT(info.output, HasSubstr("222 degrees of freedom"));
 }
 
 }  // namespace
