@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 
 #include "core/error.hpp"
@@ -23,6 +24,8 @@
 namespace deli {
 
 namespace {
+namespace fs = std::filesystem;
+
 void minimize_if_asked(RunInput& input) {
   if (input.minimize.max_steps == 0) return;
   const MinimizeResult r = quickmin(input.system, *input.force_field, input.skin, input.minimize);
@@ -141,13 +144,32 @@ int command_run(const std::vector<std::string>& args) {
   const RunStatistics stats = run(input.system, *integrator, input.steps - input.system.step,
                                   input.thermo.every, observers, options);
   if (stats.interrupted) {
-    const std::string file =
-        input.checkpoint.file.empty() ? path + ".interrupted.h5" : input.checkpoint.file;
-    write_checkpoint(file, input.system, *integrator);
+    // The configured checkpoint, else (or if it cannot be written) one in the working
+    // directory, as outputs are (the input's directory may be read-only), else one in the
+    // temporary directory.
+    const std::string name = fs::path(path).filename().string() + ".interrupted.h5";
+    std::vector<std::string> places{name, (fs::temp_directory_path() / name).string()};
+    if (!input.checkpoint.file.empty()) places.insert(places.begin(), input.checkpoint.file);
+    std::string file, failures;
+    for (const std::string& place : places) {
+      try {
+        write_checkpoint(place, input.system, *integrator);
+        file = place;
+        break;
+      } catch (const std::exception& e) {
+        failures += std::string("; ") + e.what();
+        std::fprintf(stderr, "deli: %s\n", e.what());
+      }
+    }
+    if (file.empty()) {
+      throw SimulationError("interrupted after step " + std::to_string(input.system.step) +
+                            ", but no checkpoint could be written" + failures);
+    }
     std::printf(
         "interrupted after step %lld: checkpoint written to %s; continue with\n  deli run "
         "%s --restart %s\n",
-        static_cast<long long>(input.system.step), file.c_str(), path.c_str(), file.c_str());
+        static_cast<long long>(input.system.step), fs::absolute(file).c_str(), path.c_str(),
+        fs::absolute(file).c_str());
     return 130;
   }
   std::printf(

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "simulation/interrupt.hpp"
 
 namespace deli {
 
@@ -137,6 +138,13 @@ void CollisionIntegrator::step(System& system, bool tally) {
     if (hit.empty()) {
       advance(remaining);
       break;
+    }
+    if (interrupt_requested()) {
+      throw SimulationError("interrupted during step " + std::to_string(system.step + 1) +
+                            ", which had not ended after " + std::to_string(events) +
+                            " contact events (a persistent contact, which an event-driven "
+                            "method cannot resolve): no checkpoint of an unfinished step; "
+                            "lower max_events_per_step or use type = \"gvi\"");
     }
     if (++events > options_.max_events_per_step) {
       throw SimulationError(

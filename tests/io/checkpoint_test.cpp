@@ -209,3 +209,79 @@ TEST(Checkpoint, SigkillLeavesAReadableTrajectory) {
 
 }  // namespace
 }  // namespace deli
+
+namespace deli {
+namespace {
+
+// A point resting on a floor under gravity: the collision integrator meets a contact at
+// every instant of its first step (Zeno), and with a huge event cap that step never ends.
+std::string resting_point(const std::string& dir) {
+  std::ofstream(dir + "/rest.data") << "resting point\n\n1 atoms\n1 atom types\n\n-10 10 xlo xhi\n"
+                                       "-10 10 ylo yhi\n-10 10 zlo zhi\n\nMasses\n\n1 1\n\n"
+                                       "Atoms # atomic\n\n1 1 0 0 0\n";
+  const std::string input = dir + "/zeno.toml";
+  std::ofstream(input) << "[system]\ndata = \"rest.data\"\nboundary = \"fff\"\n"
+                          "[forcefield.pair]\nstyle = \"none\"\n[forcefield.external]\n"
+                          "gravity = [0, 0, -9.8]\n[constraints]\n"
+                          "walls = [{ type = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }]\n"
+                          "[integrator]\ntype = \"collision\"\ntimestep = 0.01\n"
+                          "max_events_per_step = 2000000000\n[run]\nsteps = 10\n";
+  return input;
+}
+
+// The signal is checked inside the step: the run stops (status 1, the step named) instead of
+// ignoring SIGINT until the step ends, which it never does.
+TEST(Checkpoint, SignalStopsAStepThatDoesNotEnd) {
+  const std::string dir = ::testing::TempDir() + "/zeno";
+  std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
+  const std::string command =
+      "sh -c '" + std::string(DELI_BINARY) + " run " + resting_point(dir) + " > " + dir +
+      "/run.log 2>&1 & pid=$!; sleep 1; kill -INT $pid; wait $pid; echo $?'";
+  EXPECT_EQ(testing::run_shell(command).output, "1\n");
+  std::ifstream log(dir + "/run.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(text.find("interrupted during step 1"), std::string::npos) << text;
+}
+
+// A second signal (here SIGTERM right after SIGINT: two different signals are both
+// delivered) ends the process at once, without waiting for the step and the checkpoint.
+TEST(Checkpoint, SecondSignalStopsAtOnce) {
+  const std::string dir = ::testing::TempDir() + "/second_signal";
+  std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
+  const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " +
+                              long_melt(dir, "long", 100000000) + " > " + dir +
+                              "/run.log 2>&1 & pid=$!; sleep 1; kill -INT $pid; kill -TERM $pid; "
+                              "wait $pid; echo $?'";
+  EXPECT_EQ(testing::run_shell(command).output, "130\n");
+  std::ifstream log(dir + "/run.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(text.find("second interrupt"), std::string::npos) << text;
+}
+
+// Without a configured checkpoint the interrupt's checkpoint goes to the working directory
+// (the input's may be read-only), and the message says where.
+TEST(Checkpoint, InterruptCheckpointGoesToTheWorkingDirectory) {
+  const std::string dir = ::testing::TempDir() + "/interrupt_cwd";
+  std::system(("rm -rf " + dir + " && mkdir -p " + dir + "/input " + dir + "/work").c_str());
+  const std::string input = dir + "/input/plain.toml";
+  std::ofstream(input) << "[system]\ndata = \"" DELI_SOURCE_DIR
+                          "/inputs/lj_chains/melt.data\"\n"
+                          "[forcefield.special_bonds]\nlj = [0.0, 1.0, 1.0]\n"
+                          "[forcefield.pair]\nstyle = \"wca\"\n"
+                          "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+                          "[forcefield.bond]\nstyle = \"fene\"\n"
+                          "coeffs = [{ type = 1, k = 30.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 "
+                          "}]\n[integrator]\ntimestep = 0.005\n[run]\nsteps = 100000000\n";
+  const std::string command = "sh -c 'cd " + dir + "/work && " + std::string(DELI_BINARY) +
+                              " run " + input + " > run.log 2>&1 & pid=$!; sleep 1; kill -INT " +
+                              "$pid; wait $pid; echo $?'";
+  EXPECT_EQ(testing::run_shell(command).output, "130\n");
+  EXPECT_GT(read_checkpoint(dir + "/work/plain.toml.interrupted.h5").step, 0);
+  EXPECT_FALSE(std::ifstream(dir + "/input/plain.toml.interrupted.h5").good());
+  std::ifstream log(dir + "/work/run.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(text.find("interrupt_cwd/work/plain.toml.interrupted.h5"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace deli
