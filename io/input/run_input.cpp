@@ -147,7 +147,7 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system) {
   const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
   const bool shift = wca ? true : t.boolean("shift", false);
   const Mixing mixing =
-      t.choice("mixing", {"arithmetic", "geometric"}, "arithmetic") == "arithmetic"
+      t.choice("mixing", {"arithmetic", "geometric"}, "geometric") == "arithmetic"
           ? Mixing::arithmetic
           : Mixing::geometric;
   PairCoefficients coeffs(types, global_cutoff);
