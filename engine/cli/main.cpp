@@ -27,6 +27,41 @@ constexpr const char* kUsage =
     "  -h, --help                this help\n"
     "  --version                 the version\n";
 
+// `deli COMMAND --help`.
+constexpr const char* kRunUsage =
+    "usage: deli run [INPUT] [--restart CHECKPOINT]\n"
+    "\n"
+    "Runs the simulation INPUT (a TOML file; none: the default input,\n" DELI_DEFAULT_INPUT
+    ").\n"
+    "Prints the thermo table; writes the outputs of its [output] table. SIGINT or SIGTERM\n"
+    "stop after the current step with a checkpoint (exit status 130).\n"
+    "\n"
+    "  --restart CHECKPOINT      continue from a checkpoint written by a run of this INPUT,\n"
+    "                            to its [run] steps, appending to its outputs\n";
+constexpr const char* kValidateUsage =
+    "usage: deli validate INPUT [--engine openmm|lammps|all] [--platform reference|cpu]\n"
+    "                     [--steps N]\n"
+    "\n"
+    "Builds INPUT's model in deli, OpenMM and LAMMPS (in this process) and compares the\n"
+    "energy of every term, every force component, the virial and the positions after an\n"
+    "N-step (default 100) NVE trajectory. Exit status 0 when all agree within tolerance.\n";
+constexpr const char* kInfoUsage =
+    "usage: deli info FILE\n"
+    "\n"
+    "Summarises an H5MD trajectory (particles, frames, observables, temperature and its\n"
+    "degrees of freedom) or a deli checkpoint.\n";
+constexpr const char* kWriteDataUsage =
+    "usage: deli write-data INPUT FILE\n"
+    "\n"
+    "Writes the system INPUT builds (after its [minimize], if any) as a LAMMPS data file.\n";
+
+bool asks_for_help(const std::vector<std::string>& args) {
+  for (const std::string& a : args) {
+    if (a == "-h" || a == "--help") return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -41,6 +76,17 @@ int main(int argc, char** argv) {
       return 0;
     }
     const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (asks_for_help(rest)) {
+      const char* usage = args[0] == "run"          ? kRunUsage
+                          : args[0] == "validate"   ? kValidateUsage
+                          : args[0] == "info"       ? kInfoUsage
+                          : args[0] == "write-data" ? kWriteDataUsage
+                                                    : nullptr;
+      if (usage) {
+        std::fputs(usage, stdout);
+        return 0;
+      }
+    }
     if (args[0] == "run") return deli::command_run(rest);
     if (args[0] == "write-data") return deli::command_write_data(rest);
     if (args[0] == "validate") return deli::command_validate(rest);
