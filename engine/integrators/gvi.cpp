@@ -5,6 +5,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "core/phase_timer.hpp"
 #include "solvers/cluster_matrices.hpp"
 
 namespace deli {
@@ -19,6 +20,8 @@ Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOpti
       constrained_predictor_(options.constrained_predictor) {}
 
 void Gvi::step(System& system, bool tally) {
+  PhaseTimer& timer = phase_timer();
+  const Phase outer = timer.enter(Phase::prediction);
   Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
@@ -105,6 +108,7 @@ void Gvi::step(System& system, bool tally) {
   // Extended active set and reflection. A reflection can send a particle into a contact
   // the first prediction did not see: predict again from the reflected momenta until the
   // active set stops growing.
+  timer.enter(Phase::active_set);
   std::vector<Constraint> active;
   for (int round = 0; round < 16; ++round) {
     bool grew = false;
@@ -116,7 +120,11 @@ void Gvi::step(System& system, bool tally) {
     if (!reflections_) break;
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), active.begin(), active.end());
-    reflect_clusters(system, rows, constraints_.equalities.size(), q, p);
+    {
+      const TimedPhase reflecting(Phase::reflections);
+      reflect_clusters(system, rows, constraints_.equalities.size(), q, p);
+    }
+    const TimedPhase predicting(Phase::prediction);
     predicted = predict(p);
   }
   stats_.active += static_cast<std::int64_t>(active.size());
@@ -135,6 +143,7 @@ void Gvi::step(System& system, bool tally) {
   // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
   // impulse), with F_start = F(q) (Verlet) or F at the step's midpoint (midpoint, by fixed
   // point around the constrained solve).
+  timer.enter(Phase::position_update);
   std::vector<Vec3> half(n), f_mid;
   auto displaced = [&](const std::vector<Vec3>& impulse) {
     std::vector<Vec3> x(n);
@@ -201,6 +210,7 @@ void Gvi::step(System& system, bool tally) {
     for (std::size_t i = 0; i < n; ++i) target_energy += 0.5 * norm2(p_start[i]) / P.mass[i];
   }
 
+  timer.enter(Phase::momentum_update);
   // Momentum update: p + h/2 (F(q) + F(x)) + impulse, projected onto the equality rows and
   // the held rows still active at x (a landed row too, when the guard is inelastic).
   {
@@ -234,6 +244,7 @@ void Gvi::step(System& system, bool tally) {
     // The landed rows now touch: reflect the momenta that still approach them, at x.
     std::vector<Constraint> rows = constraints_.equalities;
     rows.insert(rows.end(), landed.begin(), landed.end());
+    const TimedPhase reflecting(Phase::reflections);
     reflect_clusters(system, rows, constraints_.equalities.size(), P.position, p);
   }
   if (feasibility_ == Feasibility::restore && !landed.empty()) {
@@ -242,12 +253,14 @@ void Gvi::step(System& system, bool tally) {
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
   previous_positions_ = q;
+  timer.enter(Phase::constraint_checks);
   // The rows that can have closed this step are among the candidates (their reach covers
   // the step's displacements): they decide overlaps; the exact minimum over every pair is
   // taken on thermo steps, where it is reported.
   candidates_for(P.position);
   record_geometry(system, nearby, tally);
   finish_step();
+  timer.enter(outer);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
