@@ -155,9 +155,15 @@ void Gvi::step(System& system, bool tally) {
   // DSI: no reflections; every row of the extended active set is a complementarity row.
   std::vector<Constraint> held = reflections_ ? smooth : active;
   std::vector<Constraint> landed;  // rows added by the guard this step
+  std::vector<Constraint> equalities_and_held;
   auto position_update = [&]() {
-    std::vector<Constraint> rows = constraints_.equalities;
-    rows.insert(rows.end(), held.begin(), held.end());
+    // The equality rows alone are passed as themselves: their clusters are prepared.
+    if (!held.empty()) {
+      equalities_and_held = constraints_.equalities;
+      equalities_and_held.insert(equalities_and_held.end(), held.begin(), held.end());
+    }
+    const std::vector<Constraint>& rows =
+        held.empty() ? constraints_.equalities : equalities_and_held;
     std::vector<bool> equality(rows.size(), false);
     std::fill_n(equality.begin(), constraints_.equalities.size(), true);
     const std::vector<Vec3>& f_start = engine_.force();
@@ -235,7 +241,11 @@ void Gvi::step(System& system, bool tally) {
       momentum_rows.push_back(c);
     }
   }
-  if (!momentum_rows.empty()) {
+  if (momentum_rows.size() == constraints_.equalities.size()) {
+    if (!momentum_rows.empty()) {
+      step_virial_ += project_momenta(system, constraints_.equalities, P.position, p);
+    }
+  } else {
     step_virial_ += project_momenta(system, momentum_rows, P.position, p);
   }
   step_virial_ += position_virial;
