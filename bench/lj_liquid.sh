@@ -7,7 +7,7 @@ deli=${DELI:-$top/build/deli}
 cd "$top/inputs/lj_liquid"
 for n in "${@:-4000 32000}"; do
   for size in $n; do
-    deli_line=$("$deli" run "lj_$size.toml" | tail -n 1)
+    deli_line=$("$deli" run "lj_$size.toml" | grep "^loop time")
     lmp -in "in.lj_$size" -log "/tmp/deli-bench-lmp-$size.log" > /dev/null
     loop=$(grep "Loop time" "/tmp/deli-bench-lmp-$size.log")
     read -r seconds steps atoms <<< "$(echo "$loop" | awk '{print $4, $9, $12}')"

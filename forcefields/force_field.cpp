@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/phase_timer.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -30,6 +31,8 @@ ForceEvaluation ForceField::compute(const System& system, const NeighborList& ne
   ForceEvaluation result;
   result.tallied = tally;
   for (const auto& term : terms_) {
+    // Terms that read the neighbour list are the pair forces; the rest are bonded terms.
+    const TimedPhase timed(term->neighbor_cutoff() > 0 ? Phase::pair : Phase::bonded);
     const double e = term->compute(system, neighbors, force, result.virial, tally);
     result.names.push_back(term->name());
     result.energies.push_back(e);

@@ -18,6 +18,7 @@
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/interrupt.hpp"
 #include "simulation/run_loop.hpp"
+#include "simulation/timing_table.hpp"
 #include "text/dump_writer.hpp"
 #include "text/thermo_output.hpp"
 
@@ -177,6 +178,7 @@ int command_run(const std::vector<std::string>& args) {
       "list builds\n",
       stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
       stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
+  std::fputs(timing_table(stats).c_str(), stdout);
   return 0;
 }
 

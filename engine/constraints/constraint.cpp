@@ -52,6 +52,12 @@ ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box) {
   return {0, {}};
 }
 
+bool same_row(const Constraint& a, const Constraint& b) {
+  return a.kind == b.kind && a.i == b.i && a.j == b.j && a.point.x == b.point.x &&
+         a.point.y == b.point.y && a.point.z == b.point.z && a.normal.x == b.normal.x &&
+         a.normal.y == b.normal.y && a.normal.z == b.normal.z && a.length == b.length;
+}
+
 Constraint linearized(const Constraint& c, const Vec3* q, const Box& box) {
   const ConstraintValue v = evaluate(c, q, box);
   Constraint l = c;

@@ -45,6 +45,9 @@ struct ConstraintValue {
 
 ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box);
 
+// The same constraint: kind, particles and every parameter equal.
+bool same_row(const Constraint& a, const Constraint& b);
+
 // The constraint's first-order expansion at positions q, as a constraint of its own: a
 // plane for a one-particle row, a linear pair for a two-particle one. Its gap agrees at q
 // and its gradient is the one at q, everywhere.

@@ -76,11 +76,48 @@ std::vector<Constraint> ConstraintSet::nearby_inequalities(const Particles& part
                                                            const Box& box, double reach,
                                                            const Vec3* linearize_about) const {
   std::vector<Constraint> nearby;
-  for_each_inequality(*this, particles, list, [&](const Constraint& original) {
-    const Constraint c =
-        linearize_about ? deli::linearized(original, linearize_about, box) : original;
-    if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
-  });
+  if (linearize_about) {
+    for_each_inequality(*this, particles, list, [&](const Constraint& original) {
+      const Constraint c = deli::linearized(original, linearize_about, box);
+      if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
+    });
+    return nearby;
+  }
+  // The same rows in the same order as visiting every inequality, but a pair is first
+  // screened by its squared distance, with a margin far above rounding so that no pair the
+  // exact test (|d| - contact <= reach) keeps is dropped; only the few pairs left take the
+  // square root and the search among bonded pairs.
+  if (hard_spheres) {
+    for (const auto& [a, b] : always_checked_pairs) {
+      const Constraint c = sphere_pair(a, b, particles);
+      if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
+    }
+    const auto& offsets = list.offsets();
+    const auto& neighbors = list.neighbors();
+    const std::vector<double>& radius = particles.radius;
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
+        const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
+        const double within = radius[a] + radius[b] + reach;
+        if (norm2(box.minimum_image(q[a] - q[b])) > within * within * (1.0 + 1e-6) + 1e-300) {
+          continue;
+        }
+        if (std::binary_search(unconstrained_pairs.begin(), unconstrained_pairs.end(),
+                               std::array<std::int32_t, 2>{a, b})) {
+          continue;
+        }
+        const Constraint c = sphere_pair(a, b, particles);
+        if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
+      }
+    }
+  }
+  for (const Wall& wall : walls) {
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      const Constraint c = wall_row(wall, static_cast<std::int32_t>(i), particles.radius[i]);
+      if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
+    }
+  }
   return nearby;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "constraints/clusters.hpp"
@@ -21,7 +22,25 @@ ConstrainedIntegrator::ConstrainedIntegrator(const ForceField& force_field,
       engine_(force_field, skin, constraints_.contact_reach(particles)),
       dt_(timestep),
       reflection_(reflection),
-      energy_(energy) {}
+      energy_(energy) {
+  equality_clusters_.prepare(constraints_.equalities, particles.mass);
+}
+
+std::size_t ConstrainedIntegrator::cluster_rows(const std::vector<Constraint>& rows,
+                                                const Particles& particles) {
+  if (!equality_clusters_.prepared_for(particles.size())) {
+    equality_clusters_.prepare(constraints_.equalities, particles.mass);
+  }
+  if (&rows == &constraints_.equalities) return equality_clusters_.all().size();
+  found_clusters_ = find_clusters(rows, particles.size());
+  return found_clusters_.size();
+}
+
+const PreparedCluster* ConstrainedIntegrator::prepared_cluster(const std::vector<Constraint>& rows,
+                                                               std::size_t index) const {
+  if (&rows == &constraints_.equalities) return &equality_clusters_.all()[index];
+  return equality_clusters_.find(found_clusters_[index], rows);
+}
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which) {
   std::vector<Vec3> out;
@@ -93,15 +112,23 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
                                               std::vector<Vec3>& impulse) {
   const Particles& particles = system.particles;
   double virial = 0.0;
-  for (const Cluster& cluster : find_clusters(rows, particles.size())) {
-    const LocalCluster local = localize(cluster, rows, particles.mass);
+  const std::size_t cluster_count = cluster_rows(rows, particles);
+  for (std::size_t index = 0; index < cluster_count; ++index) {
+    const PreparedCluster* prepared = prepared_cluster(rows, index);
+    const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    std::optional<LocalCluster> built;
+    std::optional<ClusterRows> built_structure;
+    if (!prepared) built_structure.emplace(built.emplace(localize(cluster, rows, particles.mass)));
+    const LocalCluster& local = prepared ? prepared->local : *built;
+    const ClusterRows& structure = prepared ? *prepared->structure : *built_structure;
     std::vector<bool> local_equality;
     for (std::int32_t r : cluster.rows) local_equality.push_back(equality[r]);
     const std::vector<Vec3> q_local = gather(q, cluster.particles);
     std::vector<Vec3> x0_local = gather(delta, cluster.particles);
     for (std::size_t k = 0; k < x0_local.size(); ++k) x0_local[k] += q_local[k];
-    const PositionUpdate solved = solve_position_update(
-        local, local_equality, q_local, x0_local, dt_, system.box, constraints_.tolerances.solver);
+    const PositionUpdate solved =
+        solve_position_update(structure, local_equality, q_local, x0_local, dt_, system.box,
+                              constraints_.tolerances.solver);
     ++stats_.solves;
     stats_.solver_iterations += solved.status.iterations;
     stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
@@ -133,14 +160,21 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
 double ConstrainedIntegrator::project_momenta(System& system, const std::vector<Constraint>& rows,
                                               const std::vector<Vec3>& x, std::vector<Vec3>& p) {
   double virial = 0.0;
-  for (const Cluster& cluster : find_clusters(rows, system.particles.size())) {
-    const LocalCluster local = localize(cluster, rows, system.particles.mass);
-    std::vector<int> all(local.rows.size());
-    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+  const std::size_t cluster_count = cluster_rows(rows, system.particles);
+  for (std::size_t index = 0; index < cluster_count; ++index) {
+    const PreparedCluster* prepared = prepared_cluster(rows, index);
+    const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    std::optional<LocalCluster> built;
+    std::optional<ClusterRows> built_structure;
+    if (!prepared) {
+      built_structure.emplace(built.emplace(localize(cluster, rows, system.particles.mass)));
+    }
+    const LocalCluster& local = prepared ? prepared->local : *built;
+    const ClusterRows& structure = prepared ? *prepared->structure : *built_structure;
     std::vector<Vec3> p_local = gather(p, cluster.particles);
     const std::vector<Vec3> x_local = gather(x, cluster.particles);
     Eigen::VectorXd mu;
-    const SolverStatus status = project_momentum(local, all, x_local, p_local, system.box, mu);
+    const SolverStatus status = project_momentum(structure, x_local, p_local, system.box, mu);
     for (std::size_t r = 0; r < local.rows.size(); ++r) {
       virial +=
           pair_virial(local.rows[r], mu(static_cast<Eigen::Index>(r)), x_local.data(), system.box);
@@ -188,12 +222,6 @@ void ConstrainedIntegrator::project_velocities(System& system) {
   for (std::size_t i = 0; i < P.size(); ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
 }
 
-bool same_row(const Constraint& a, const Constraint& b) {
-  return a.kind == b.kind && a.i == b.i && a.j == b.j && a.point.x == b.point.x &&
-         a.point.y == b.point.y && a.point.z == b.point.z && a.normal.x == b.normal.x &&
-         a.normal.y == b.normal.y && a.normal.z == b.normal.z && a.length == b.length;
-}
-
 bool contains(const std::vector<Constraint>& rows, const Constraint& c) {
   for (const Constraint& r : rows) {
     if (same_row(r, c)) return true;
@@ -208,19 +236,44 @@ double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec
   return v;
 }
 
-// The Hessian blocks of the potential touching a cluster, at the current positions (the
-// reflection's q), in the cluster's numbering.
-ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, const Cluster& cluster,
-                                                      const std::vector<Vec3>& p) const {
-  const Particles& P = system.particles;
-  std::vector<char> mask(P.size(), 0);
-  for (std::int32_t i : cluster.particles) mask[i] = 1;
-  std::vector<PairHessian> blocks;
-  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), mask, blocks)) {
+// The Hessian blocks of the potential touching the clusters to reflect, at the current
+// positions (the reflection's q): one scan of the neighbour list for all of them. Block k of
+// the scan goes to the clusters of its two particles, so each cluster's blocks come in the
+// order a scan masked by that cluster alone would give.
+void ConstrainedIntegrator::gather_hessian_blocks(const System& system,
+                                                  const std::vector<Cluster>& clusters,
+                                                  const std::vector<bool>& reflected) {
+  const std::size_t n = system.particles.size();
+  cluster_of_particle_.assign(n, -1);
+  std::vector<char> mask(n, 0);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (!reflected[c]) continue;
+    for (std::int32_t i : clusters[c].particles) {
+      cluster_of_particle_[i] = static_cast<std::int32_t>(c);
+      mask[i] = 1;
+    }
+  }
+  hessian_blocks_.clear();
+  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), mask, hessian_blocks_)) {
     throw SimulationError(
         "shadow-Hamiltonian reflections need a pairwise Hessian, which "
         "harmonic angles lack: use energy = \"hamiltonian\"");
   }
+  blocks_of_cluster_.assign(clusters.size(), {});
+  for (std::size_t k = 0; k < hessian_blocks_.size(); ++k) {
+    const std::int32_t a = cluster_of_particle_[hessian_blocks_[k].a];
+    const std::int32_t b = cluster_of_particle_[hessian_blocks_[k].b];
+    if (a >= 0) blocks_of_cluster_[a].push_back(k);
+    if (b >= 0 && b != a) blocks_of_cluster_[b].push_back(k);
+  }
+}
+
+// Cluster c's Hessian blocks in the cluster's numbering, with the velocities of the
+// particles outside it that its blocks reach.
+ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, const Cluster& cluster,
+                                                      std::size_t c,
+                                                      const std::vector<Vec3>& p) const {
+  const Particles& P = system.particles;
   ShadowOperator shadow;
   shadow.h = dt_;
   auto local = [&](std::int32_t g) {
@@ -229,16 +282,17 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, cons
                ? static_cast<std::int32_t>(it - cluster.particles.begin())
                : std::int32_t{-1};
   };
-  for (PairHessian b : blocks) {
-    std::int32_t a = local(b.a), c = local(b.b);
+  for (std::size_t k : blocks_of_cluster_[c]) {
+    const PairHessian& b = hessian_blocks_[k];
+    std::int32_t a = local(b.a), other = local(b.b);
     Vec3 outside_velocity;
     if (a < 0) {  // keep the cluster's particle first: the block is symmetric in a, b
-      std::swap(a, c);
+      std::swap(a, other);
       outside_velocity = p[b.a] * (1.0 / P.mass[b.a]);
-    } else if (c < 0) {
+    } else if (other < 0) {
       outside_velocity = p[b.b] * (1.0 / P.mass[b.b]);
     }
-    shadow.blocks.push_back({a, c, b.block});
+    shadow.blocks.push_back({a, other, b.block});
     shadow.outside_velocity.push_back(outside_velocity);
   }
   return shadow;
@@ -250,15 +304,26 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
                                              std::size_t first_inequality,
                                              const std::vector<Vec3>& x, std::vector<Vec3>& p) {
   const Particles& P = system.particles;
-  for (const Cluster& cluster : find_clusters(rows, P.size())) {
-    if (cluster.rows.back() < static_cast<std::int32_t>(first_inequality)) continue;
+  const std::vector<Cluster> clusters = find_clusters(rows, P.size());
+  std::vector<bool> holds_inequality(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    holds_inequality[c] = clusters[c].rows.back() >= static_cast<std::int32_t>(first_inequality);
+  }
+  const bool any =
+      std::find(holds_inequality.begin(), holds_inequality.end(), true) != holds_inequality.end();
+  if (energy_ == ReflectionEnergy::shadow && any) {
+    gather_hessian_blocks(system, clusters, holds_inequality);
+  }
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (!holds_inequality[c]) continue;
+    const Cluster& cluster = clusters[c];
     const LocalCluster local = localize(cluster, rows, P.mass);
     std::vector<bool> equality;
     for (std::int32_t r : cluster.rows)
       equality.push_back(r < static_cast<std::int32_t>(first_inequality));
     std::vector<Vec3> p_local = gather(p, cluster.particles);
     ShadowOperator shadow;
-    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, p);
+    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, c, p);
     const std::vector<Vec3> x_local = gather(x, cluster.particles);
     const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
                                       constraints_.tolerances.velocity,

@@ -7,6 +7,7 @@
 #include "constraints/constraint_set.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/reflection.hpp"
+#include "solvers/prepared_clusters.hpp"
 
 namespace deli {
 
@@ -67,7 +68,11 @@ class ConstrainedIntegrator : public Integrator {
   double solve_positions(System& system, const std::vector<Constraint>& rows,
                          const std::vector<bool>& equality, const std::vector<Vec3>& q,
                          const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
-  ShadowOperator shadow_operator(const System& system, const Cluster& cluster,
+  // The pair Hessian blocks touching the clusters marked `reflected`, in one scan; then
+  // shadow_operator(..., c, p) is cluster c's shadow-energy operator.
+  void gather_hessian_blocks(const System& system, const std::vector<Cluster>& clusters,
+                             const std::vector<bool>& reflected);
+  ShadowOperator shadow_operator(const System& system, const Cluster& cluster, std::size_t c,
                                  const std::vector<Vec3>& p) const;
   // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
   // index `first_inequality`) that holds an inequality, at positions x.
@@ -85,6 +90,12 @@ class ConstrainedIntegrator : public Integrator {
                                               std::vector<Vec3>& x);
   void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
   [[noreturn]] void midpoint_failure(const System& system, double change) const;
+  // Clusters the rows (the equality rows themselves: their prepared clusters; else
+  // find_clusters into found_clusters_) and returns how many; prepared_cluster(rows, k) is
+  // then cluster k's prepared form when it is one of the equality clusters, else null.
+  std::size_t cluster_rows(const std::vector<Constraint>& rows, const Particles& particles);
+  const PreparedCluster* prepared_cluster(const std::vector<Constraint>& rows,
+                                          std::size_t index) const;
   // Adds this step's statistics and virial to every sampler's.
   void finish_step();
 
@@ -98,12 +109,17 @@ class ConstrainedIntegrator : public Integrator {
   double step_virial_ = 0.0;              // sum of r . J over this step's constraint impulses
   std::array<double, 2> virial_sums_{};   // sum over steps of step_virial_ / h, per sampler
   std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
+  // Performance only: the equality rows' clusters, prepared once; the last clustering.
+  EqualityClusters equality_clusters_;
+  std::vector<Cluster> found_clusters_;
+  std::vector<PairHessian> hessian_blocks_;
+  std::vector<std::vector<std::size_t>> blocks_of_cluster_;
+  std::vector<std::int32_t> cluster_of_particle_;
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);
 void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& which,
              std::vector<Vec3>& all);
-bool same_row(const Constraint& a, const Constraint& b);
 bool contains(const std::vector<Constraint>& rows, const Constraint& c);
 // grad g . M^-1 p for a row with unit direction u at its particles.
 double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec3>& p,

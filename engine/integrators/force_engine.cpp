@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/phase_timer.hpp"
+
 namespace deli {
 
 ForceEngine::ForceEngine(const ForceField& force_field, double skin, double minimum_cutoff)
@@ -9,6 +11,7 @@ ForceEngine::ForceEngine(const ForceField& force_field, double skin, double mini
       neighbors_(std::max(force_field.neighbor_cutoff(), minimum_cutoff), skin) {}
 
 bool ForceEngine::ensure_neighbors(System& system, bool force) {
+  const TimedPhase timed(Phase::neighbor);
   Particles& p = system.particles;
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
   // Nothing reads a list of zero reach: keep the first one.

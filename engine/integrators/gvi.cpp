@@ -5,6 +5,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "core/phase_timer.hpp"
 #include "solvers/cluster_matrices.hpp"
 
 namespace deli {
@@ -19,235 +20,332 @@ Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOpti
       constrained_predictor_(options.constrained_predictor) {}
 
 void Gvi::step(System& system, bool tally) {
-  Particles& P = system.particles;
+  PhaseTimer& timer = phase_timer();
+  const Phase outer = timer.enter(Phase::prediction);
+  step_virial_ = 0.0;
+  start_step(system);
+  timer.enter(Phase::active_set);
+  find_active_set(system);
+  find_smooth_set(system);
+  timer.enter(Phase::position_update);
+  update_positions(system);
+  timer.enter(Phase::momentum_update);
+  update_momenta(system, tally);
+  ++stats_.steps;
+  previous_positions_ = ws_.q;  // same size: the buffer (and pointers into it) stays
+  timer.enter(Phase::constraint_checks);
+  check_constraints(system, tally);
+  finish_step();
+  timer.enter(outer);
+}
+
+// Displacement of the unconstrained forward step from (q, p): D1Ld(q, q + d) + p = 0.
+// Verlet: d = h M^-1 (p + h/2 F(q)). Midpoint: d = h M^-1 (p + h/2 F(q + d/2)), by fixed
+// point from the Verlet guess.
+void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
+                            std::vector<Vec3>& d) {
+  const Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
-  const ConstraintTolerances& tol = constraints_.tolerances;
-  std::vector<Vec3> p(n);
-  for (std::size_t i = 0; i < n; ++i) p[i] = P.velocity[i] * P.mass[i];
-  step_virial_ = 0.0;
-
-  // Displacement of the unconstrained forward step from (q, p): D1Ld(q, q + d) + p = 0.
-  // Verlet: d = h M^-1 (p + h/2 F(q)). Midpoint: d = h M^-1 (p + h/2 F(q + d/2)), by fixed
-  // point from the Verlet guess.
-  auto free_displacement = [&](const std::vector<Vec3>& momenta) {
-    const std::vector<Vec3>& f = engine_.force();
-    std::vector<Vec3> d(n);
-    for (std::size_t i = 0; i < n; ++i) d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-    if (lagrangian_ == Lagrangian::midpoint) {
-      std::vector<Vec3> mid(n), f_mid;
-      for (int k = 0;; ++k) {
-        for (std::size_t i = 0; i < n; ++i) mid[i] = P.position[i] + d[i] * 0.5;
-        engine_.forces_at(system, mid, f_mid);
-        double change = 0.0;
-        for (std::size_t i = 0; i < n; ++i) {
-          const Vec3 next = (momenta[i] + f_mid[i] * (0.5 * h)) * (h / P.mass[i]);
-          change = std::max(change, norm(next - d[i]));
-          d[i] = next;
-        }
-        if (change <= constraints_.tolerances.solver) break;
-        if (k == 200) midpoint_failure(system, change);
-      }
+  const std::vector<Vec3>& f = engine_.force();
+  d.resize(n);
+  for (std::size_t i = 0; i < n; ++i) d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+  if (lagrangian_ != Lagrangian::midpoint) return;
+  std::vector<Vec3>& mid = ws_.prediction_mid;
+  mid.resize(n);
+  for (int k = 0;; ++k) {
+    for (std::size_t i = 0; i < n; ++i) mid[i] = P.position[i] + d[i] * 0.5;
+    engine_.forces_at(system, mid, ws_.prediction_force);
+    const std::vector<Vec3>& f_mid = ws_.prediction_force;
+    double change = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 next = (momenta[i] + f_mid[i] * (0.5 * h)) * (h / P.mass[i]);
+      change = std::max(change, norm(next - d[i]));
+      d[i] = next;
     }
-    return d;
-  };
-  auto moved = [&](const std::vector<Vec3>& d) {
-    std::vector<Vec3> x(n);
-    for (std::size_t i = 0; i < n; ++i) x[i] = P.position[i] + d[i];
-    return x;
-  };
-  // The predictor: the unconstrained step, or (predictor = "constrained") that step with
-  // the equality rows (rods, strings) solved, which lands where the step will really go
-  // when rods pull, so fewer contacts are missed.
-  auto predict = [&](const std::vector<Vec3>& momenta) {
-    const std::vector<Vec3> d = free_displacement(momenta);
-    if (!constrained_predictor_ || constraints_.equalities.empty()) return moved(d);
-    std::vector<Vec3> j(n);
-    solve_positions(system, constraints_.equalities,
-                    std::vector<bool>(constraints_.equalities.size(), true), P.position, d, j);
-    std::vector<Vec3> x = moved(d);
-    for (std::size_t i = 0; i < n; ++i) x[i] += j[i] * (h / P.mass[i]);
-    return x;
-  };
-  std::vector<Vec3> predicted = moved(free_displacement(p));
+    if (change <= constraints_.tolerances.solver) break;
+    if (k == 200) midpoint_failure(system, change);
+  }
+}
+
+// The predictor: the unconstrained step, or (predictor = "constrained") that step with the
+// equality rows (rods, strings) solved, which lands where the step will really go when rods
+// pull, so fewer contacts are missed.
+void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& x,
+                  bool constrained) {
+  const Particles& P = system.particles;
+  const std::size_t n = P.size();
+  std::vector<Vec3>& d = ws_.displacement;
+  free_displacement(system, momenta, d);
+  x.resize(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = P.position[i] + d[i];
+  if (!constrained || constraints_.equalities.empty()) return;
+  std::vector<Vec3>& j = ws_.prediction_kick;
+  j.assign(n, Vec3{});
+  ws_.all_equality.assign(constraints_.equalities.size(), true);
+  solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j);
+  for (std::size_t i = 0; i < n; ++i) x[i] += j[i] * (dt_ / P.mass[i]);
+}
+
+void Gvi::start_step(System& system) {
+  Particles& P = system.particles;
+  const std::size_t n = P.size();
+  ws_.p.resize(n);
+  for (std::size_t i = 0; i < n; ++i) ws_.p[i] = P.velocity[i] * P.mass[i];
+  // The free prediction first, even with the constrained predictor: it decides whether the
+  // neighbour list still covers the step.
+  predict(system, ws_.p, ws_.predicted, false);
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
-  if (pairs_matter && !engine_.neighbors_cover(predicted)) {
+  if (pairs_matter && !engine_.neighbors_cover(ws_.predicted)) {
     engine_.ensure_neighbors(system, true);
-    predicted = moved(free_displacement(p));
-    if (!engine_.neighbors_cover(predicted)) {
+    predict(system, ws_.p, ws_.predicted, false);
+    if (!engine_.neighbors_cover(ws_.predicted)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
                             ": a particle would move more than half the neighbour skin in one "
                             "step; increase [neighbor] skin or reduce the timestep");
     }
   }
-  const std::vector<Vec3> q = P.position;
-  const std::vector<Vec3> p_start = p;
-  if (constrained_predictor_) predicted = predict(p);
-  if (previous_positions_.size() != n) previous_positions_ = q;
-  const Vec3* about = constraints_.linearized ? previous_positions_.data() : nullptr;
+  ws_.q = P.position;
+  ws_.p_start = ws_.p;
+  if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
+  if (previous_positions_.size() != n) previous_positions_ = ws_.q;
+  ws_.reach = -1.0;
+  ws_.nearby.clear();
+  ws_.nearby_gap_at_q.clear();
+}
 
-  // Candidate rows: those within reach of the largest displacement seen this step, found
-  // once and refreshed only if a later displacement outgrows the reach.
-  std::vector<Constraint> nearby;
-  double reach = -1.0;
-  auto candidates_for = [&](const std::vector<Vec3>& x) -> const std::vector<Constraint>& {
-    double largest = 0.0;
-    for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, norm(x[i] - q[i]));
-    if (2.0 * largest + tol.gap > reach) {
-      reach = 4.0 * largest + 2.0 * tol.gap;
-      nearby = constraints_.nearby_inequalities(P, q.data(), engine_.neighbors(), system.box, reach,
-                                                about);
+// Candidate rows: those within reach of the largest displacement seen this step, found once
+// and refreshed only if a later displacement outgrows the reach.
+const std::vector<Constraint>& Gvi::candidates_for(const System& system,
+                                                   const std::vector<Vec3>& x) {
+  const std::vector<Vec3>& q = ws_.q;
+  const double gap_tolerance = constraints_.tolerances.gap;
+  double largest = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) largest = std::max(largest, norm(x[i] - q[i]));
+  ws_.nearby_refreshed = false;
+  if (2.0 * largest + gap_tolerance > ws_.reach) {
+    ws_.reach = 4.0 * largest + 2.0 * gap_tolerance;
+    const Vec3* about = constraints_.linearized ? previous_positions_.data() : nullptr;
+    ws_.nearby = constraints_.nearby_inequalities(system.particles, q.data(), engine_.neighbors(),
+                                                  system.box, ws_.reach, about);
+    ws_.nearby_gap_at_q.resize(ws_.nearby.size());
+    for (std::size_t k = 0; k < ws_.nearby.size(); ++k) {
+      ws_.nearby_gap_at_q[k] = evaluate(ws_.nearby[k], q.data(), system.box).gap;
     }
-    return nearby;
-  };
+    ws_.nearby_refreshed = true;
+  }
+  return ws_.nearby;
+}
 
-  // Extended active set and reflection. A reflection can send a particle into a contact
-  // the first prediction did not see: predict again from the reflected momenta until the
-  // active set stops growing.
-  std::vector<Constraint> active;
+// Extended active set and reflection. A reflection can send a particle into a contact the
+// first prediction did not see: predict again from the reflected momenta until the active
+// set stops growing. After the first round only rows touching a particle whose prediction
+// changed can join (the others' gaps at q and at the prediction are as they were), unless
+// the candidates were refreshed: those rows alone are looked at again.
+void Gvi::find_active_set(System& system) {
+  const std::size_t n = system.particles.size();
+  const double gap_tolerance = constraints_.tolerances.gap;
+  std::vector<Constraint>& active = ws_.active;
+  active.clear();
+  ws_.prediction_changed.assign(n, 1);
   for (int round = 0; round < 16; ++round) {
+    const std::vector<Constraint>& candidates = candidates_for(system, ws_.predicted);
+    const bool every_row = round == 0 || ws_.nearby_refreshed;
     bool grew = false;
-    for (const Constraint& c : constraints_.active_among(candidates_for(predicted), q.data(),
-                                                         predicted.data(), system.box)) {
-      if (!contains(active, c)) active.push_back(c), grew = true;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      const Constraint& c = candidates[k];
+      if (!every_row && !ws_.prediction_changed[c.i] && (c.j < 0 || !ws_.prediction_changed[c.j])) {
+        continue;
+      }
+      // Active at q, or overlapping at the prediction.
+      if (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
+          evaluate(c, ws_.predicted.data(), system.box).gap <= 0.0) {
+        if (!contains(active, c)) active.push_back(c), grew = true;
+      }
     }
     if (!grew) break;
     if (!reflections_) break;
-    std::vector<Constraint> rows = constraints_.equalities;
-    rows.insert(rows.end(), active.begin(), active.end());
-    reflect_clusters(system, rows, constraints_.equalities.size(), q, p);
-    predicted = predict(p);
+    ws_.rows = constraints_.equalities;
+    ws_.rows.insert(ws_.rows.end(), active.begin(), active.end());
+    {
+      const TimedPhase reflecting(Phase::reflections);
+      reflect_clusters(system, ws_.rows, constraints_.equalities.size(), ws_.q, ws_.p);
+    }
+    const TimedPhase predicting(Phase::prediction);
+    std::swap(ws_.previous_prediction, ws_.predicted);
+    predict(system, ws_.p, ws_.predicted, constrained_predictor_);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3& a = ws_.predicted[i];
+      const Vec3& b = ws_.previous_prediction[i];
+      ws_.prediction_changed[i] = a.x != b.x || a.y != b.y || a.z != b.z;
+    }
   }
   stats_.active += static_cast<std::int64_t>(active.size());
+}
 
-  // Smooth set: active at q and tangent to the momenta after reflection.
-  std::vector<Constraint> smooth;
-  for (const Constraint& c : active) {
-    const ConstraintValue v = evaluate(c, q.data(), system.box);
+// Smooth set: active at q and tangent to the momenta after reflection.
+void Gvi::find_smooth_set(const System& system) {
+  const ConstraintTolerances& tol = constraints_.tolerances;
+  ws_.smooth.clear();
+  for (const Constraint& c : ws_.active) {
+    const ConstraintValue v = evaluate(c, ws_.q.data(), system.box);
     if (std::abs(v.gap) > tol.gap) continue;
-    if (std::abs(normal_velocity(c, v.u, p, P)) <= tol.velocity) smooth.push_back(c);
-  }
-  stats_.smooth += static_cast<std::int64_t>(smooth.size());
-
-  // Position update, then the feasibility guard: inequality rows that would still end the
-  // step overlapped join the complementarity set and the step is solved again.
-  // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
-  // impulse), with F_start = F(q) (Verlet) or F at the step's midpoint (midpoint, by fixed
-  // point around the constrained solve).
-  std::vector<Vec3> half(n), f_mid;
-  auto displaced = [&](const std::vector<Vec3>& impulse) {
-    std::vector<Vec3> x(n);
-    for (std::size_t i = 0; i < n; ++i) x[i] = q[i] + (half[i] + impulse[i]) * (h / P.mass[i]);
-    return x;
-  };
-  std::vector<Vec3> impulse(n);
-  double position_virial = 0.0;
-  // DSI: no reflections; every row of the extended active set is a complementarity row.
-  std::vector<Constraint> held = reflections_ ? smooth : active;
-  std::vector<Constraint> landed;  // rows added by the guard this step
-  auto position_update = [&]() {
-    std::vector<Constraint> rows = constraints_.equalities;
-    rows.insert(rows.end(), held.begin(), held.end());
-    std::vector<bool> equality(rows.size(), false);
-    std::fill_n(equality.begin(), constraints_.equalities.size(), true);
-    const std::vector<Vec3>& f_start = engine_.force();
-    for (std::size_t i = 0; i < n; ++i) half[i] = p[i] + f_start[i] * (0.5 * h);
-    for (int k = 0;; ++k) {
-      std::vector<Vec3> free(n);
-      for (std::size_t i = 0; i < n; ++i) free[i] = half[i] * (h / P.mass[i]);
-      std::fill(impulse.begin(), impulse.end(), Vec3{});
-      if (!rows.empty())
-        position_virial = solve_positions(system, rows, equality, q, free, impulse);
-      if (lagrangian_ == Lagrangian::verlet) return;
-      const std::vector<Vec3> x = displaced(impulse);
-      std::vector<Vec3> mid(n);
-      for (std::size_t i = 0; i < n; ++i) mid[i] = (q[i] + x[i]) * 0.5;
-      engine_.forces_at(system, mid, f_mid);
-      double change = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        const Vec3 next = p[i] + f_mid[i] * (0.5 * h);
-        change = std::max(change, norm(next - half[i]) * h / P.mass[i]);
-        half[i] = next;
-      }
-      if (change <= constraints_.tolerances.solver && k > 0) return;
-      if (k == 200) midpoint_failure(system, change);
+    if (std::abs(normal_velocity(c, v.u, ws_.p, system.particles)) <= tol.velocity) {
+      ws_.smooth.push_back(c);
     }
-  };
-  for (int round = 0;; ++round) {
-    position_update();
-    const std::vector<Vec3> x = displaced(impulse);
-    std::vector<Constraint> violated;
-    if (feasibility_ != Feasibility::none) {
-      for (const Constraint& c :
-           constraints_.active_among(candidates_for(x), q.data(), x.data(), system.box)) {
-        if (evaluate(c, x.data(), system.box).gap < -tol.gap && !contains(held, c))
-          violated.push_back(c);
-      }
+  }
+  stats_.smooth += static_cast<std::int64_t>(ws_.smooth.size());
+}
+
+void Gvi::displaced(const Particles& P) {
+  const std::size_t n = P.size();
+  const double h = dt_;
+  ws_.x.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+  }
+}
+
+// Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
+// impulse), with F_start = F(q) (Verlet) or F at the step's midpoint (midpoint, by fixed
+// point around the constrained solve).
+void Gvi::solve_held_positions(System& system) {
+  const Particles& P = system.particles;
+  const std::size_t n = P.size();
+  const double h = dt_;
+  // The equality rows alone are passed as themselves: their clusters are prepared.
+  if (!ws_.held.empty()) {
+    ws_.rows = constraints_.equalities;
+    ws_.rows.insert(ws_.rows.end(), ws_.held.begin(), ws_.held.end());
+  }
+  const std::vector<Constraint>& rows = ws_.held.empty() ? constraints_.equalities : ws_.rows;
+  ws_.equality.assign(rows.size(), false);
+  std::fill_n(ws_.equality.begin(), constraints_.equalities.size(), true);
+  const std::vector<Vec3>& f_start = engine_.force();
+  ws_.half.resize(n);
+  for (std::size_t i = 0; i < n; ++i) ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h);
+  for (int k = 0;; ++k) {
+    ws_.free.resize(n);
+    for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
+    ws_.impulse.assign(n, Vec3{});
+    if (!rows.empty()) {
+      ws_.position_virial =
+          solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse);
     }
-    if (violated.empty() || round == 8) break;
-    held.insert(held.end(), violated.begin(), violated.end());
-    landed.insert(landed.end(), violated.begin(), violated.end());
-  }
-  stats_.fallbacks += static_cast<std::int64_t>(landed.size());
-
-  // The energy to restore after a landing: H at the start of the step (the list is valid
-  // at q, so this evaluation neither rebuilds nor wraps).
-  double target_energy = 0.0;
-  if (feasibility_ == Feasibility::restore && !landed.empty()) {
-    const double potential =
-        engine_.last().tallied ? engine_.last().potential : engine_.compute(system, true).potential;
-    target_energy = potential;
-    for (std::size_t i = 0; i < n; ++i) target_energy += 0.5 * norm2(p_start[i]) / P.mass[i];
-  }
-
-  // Momentum update: p + h/2 (F(q) + F(x)) + impulse, projected onto the equality rows and
-  // the held rows still active at x (a landed row too, when the guard is inelastic).
-  {
-    const std::vector<Vec3> x = displaced(impulse);
+    if (lagrangian_ == Lagrangian::verlet) return;
+    displaced(P);
+    ws_.mid.resize(n);
+    for (std::size_t i = 0; i < n; ++i) ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5;
+    engine_.forces_at(system, ws_.mid, ws_.f_mid);
+    double change = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
-      P.position[i] = x[i];
-      p[i] = half[i] + impulse[i];
+      const Vec3 next = ws_.p[i] + ws_.f_mid[i] * (0.5 * h);
+      change = std::max(change, norm(next - ws_.half[i]) * h / P.mass[i]);
+      ws_.half[i] = next;
     }
+    if (change <= constraints_.tolerances.solver && k > 0) return;
+    if (k == 200) midpoint_failure(system, change);
+  }
+}
+
+// Position update, then the feasibility guard: inequality rows that would still end the step
+// overlapped join the complementarity set and the step is solved again.
+void Gvi::update_positions(System& system) {
+  const double gap_tolerance = constraints_.tolerances.gap;
+  ws_.position_virial = 0.0;
+  // DSI: no reflections; every row of the extended active set is a complementarity row.
+  ws_.held = reflections_ ? ws_.smooth : ws_.active;
+  ws_.landed.clear();  // rows added by the guard this step
+  for (int round = 0;; ++round) {
+    solve_held_positions(system);
+    displaced(system.particles);
+    ws_.violated.clear();
+    if (feasibility_ != Feasibility::none) {
+      // Overlapping beyond tolerance at x (such a row is also active there).
+      for (const Constraint& c : candidates_for(system, ws_.x)) {
+        if (evaluate(c, ws_.x.data(), system.box).gap < -gap_tolerance && !contains(ws_.held, c)) {
+          ws_.violated.push_back(c);
+        }
+      }
+    }
+    if (ws_.violated.empty() || round == 8) break;
+    ws_.held.insert(ws_.held.end(), ws_.violated.begin(), ws_.violated.end());
+    ws_.landed.insert(ws_.landed.end(), ws_.violated.begin(), ws_.violated.end());
+  }
+  stats_.fallbacks += static_cast<std::int64_t>(ws_.landed.size());
+}
+
+// H at the start of the step (the list is valid at q, so this evaluation neither rebuilds
+// nor wraps).
+double Gvi::start_energy(System& system) {
+  const Particles& P = system.particles;
+  const double potential =
+      engine_.last().tallied ? engine_.last().potential : engine_.compute(system, true).potential;
+  double energy = potential;
+  for (std::size_t i = 0; i < P.size(); ++i) energy += 0.5 * norm2(ws_.p_start[i]) / P.mass[i];
+  return energy;
+}
+
+// Momentum update: p + h/2 (F(q) + F(x)) + impulse, projected onto the equality rows and the
+// held rows still active at x (a landed row too, when the guard is inelastic).
+void Gvi::update_momenta(System& system, bool tally) {
+  Particles& P = system.particles;
+  const std::size_t n = P.size();
+  const double h = dt_;
+  std::vector<Vec3>& p = ws_.p;
+  const bool landed = !ws_.landed.empty();
+  const double target_energy =
+      feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    P.position[i] = ws_.x[i];
+    p[i] = ws_.half[i] + ws_.impulse[i];
   }
   system.step += 1;
   system.time += h;
-  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && !landed.empty()));
+  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed));
   // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
-  const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : f_mid;
+  const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
   for (std::size_t i = 0; i < n; ++i) p[i] += f[i] * (0.5 * h);
-  std::vector<Constraint> momentum_rows = constraints_.equalities;
-  for (const Constraint& c : held) {
-    const bool elastic_landing =
-        (feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore) &&
-        contains(landed, c);
-    if (!elastic_landing && std::abs(evaluate(c, P.position.data(), system.box).gap) <= tol.gap) {
-      momentum_rows.push_back(c);
+  const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
+  ws_.momentum_rows.clear();
+  for (const Constraint& c : ws_.held) {
+    const bool elastic_landing = elastic && contains(ws_.landed, c);
+    const double gap = evaluate(c, P.position.data(), system.box).gap;
+    if (!elastic_landing && std::abs(gap) <= constraints_.tolerances.gap) {
+      ws_.momentum_rows.push_back(c);
     }
   }
-  if (!momentum_rows.empty()) {
-    step_virial_ += project_momenta(system, momentum_rows, P.position, p);
+  if (ws_.momentum_rows.empty()) {
+    // The equality rows alone, passed as themselves: their clusters are prepared.
+    if (!constraints_.equalities.empty()) {
+      step_virial_ += project_momenta(system, constraints_.equalities, P.position, p);
+    }
+  } else {
+    ws_.rows = constraints_.equalities;
+    ws_.rows.insert(ws_.rows.end(), ws_.momentum_rows.begin(), ws_.momentum_rows.end());
+    step_virial_ += project_momenta(system, ws_.rows, P.position, p);
   }
-  step_virial_ += position_virial;
-  const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
-  if (elastic && !landed.empty()) {
+  step_virial_ += ws_.position_virial;
+  if (elastic && landed) {
     // The landed rows now touch: reflect the momenta that still approach them, at x.
-    std::vector<Constraint> rows = constraints_.equalities;
-    rows.insert(rows.end(), landed.begin(), landed.end());
-    reflect_clusters(system, rows, constraints_.equalities.size(), P.position, p);
+    ws_.rows = constraints_.equalities;
+    ws_.rows.insert(ws_.rows.end(), ws_.landed.begin(), ws_.landed.end());
+    const TimedPhase reflecting(Phase::reflections);
+    reflect_clusters(system, ws_.rows, constraints_.equalities.size(), P.position, p);
   }
-  if (feasibility_ == Feasibility::restore && !landed.empty()) {
-    restore_energy(system, landed, target_energy, p);
+  if (feasibility_ == Feasibility::restore && landed) {
+    restore_energy(system, ws_.landed, target_energy, p);
   }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
-  ++stats_.steps;
-  previous_positions_ = q;
-  // The rows that can have closed this step are among the candidates (their reach covers
-  // the step's displacements): they decide overlaps; the exact minimum over every pair is
-  // taken on thermo steps, where it is reported.
-  candidates_for(P.position);
-  record_geometry(system, nearby, tally);
-  finish_step();
+}
+
+// The rows that can have closed this step are among the candidates (their reach covers the
+// step's displacements): they decide overlaps; the exact minimum over every pair is taken on
+// thermo steps, where it is reported.
+void Gvi::check_constraints(const System& system, bool tally) {
+  candidates_for(system, system.particles.position);
+  record_geometry(system, ws_.nearby, tally);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,

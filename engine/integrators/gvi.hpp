@@ -1,6 +1,7 @@
 #pragma once
 
 #include "integrators/constrained_integrator.hpp"
+#include "integrators/gvi_workspace.hpp"
 
 namespace deli {
 
@@ -50,8 +51,40 @@ class Gvi final : public ConstrainedIntegrator {
   }
 
  private:
+  // The phases of one step, in order, over the workspace ws_ (each timed on its own).
+  // Momenta, start positions and the first prediction; rebuilds the neighbour list first
+  // if the prediction leaves it.
+  void start_step(System& system);
+  // Extended active set, reflecting the momenta and predicting again until it stops growing.
+  void find_active_set(System& system);
+  // Rows active at q and tangent to the reflected momenta.
+  void find_smooth_set(const System& system);
+  // Position update (complementarity per cluster) and the feasibility guard; leaves the end
+  // positions in ws_.x.
+  void update_positions(System& system);
+  // Moves to x, computes the new forces, kicks, projects the momenta, restores the energy of
+  // landings.
+  void update_momenta(System& system, bool tally);
+  // Overlap and rod checks for the statistics.
+  void check_constraints(const System& system, bool tally);
+
+  // The unconstrained step's displacement from the current positions for momenta `momenta`.
+  void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d);
+  // The predictor's end positions into `x`: the free step, or (`constrained`) that step with
+  // the equality rows solved.
+  void predict(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& x,
+               bool constrained);
+  // The candidate rows for a step from q to x (refreshed when x outgrows their reach).
+  const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x);
+  // One solve of the position update for the rows held, with its midpoint fixed point.
+  void solve_held_positions(System& system);
+  // End positions q + h M^-1 (half + impulse) into ws_.x.
+  void displaced(const Particles& particles);
+  double start_energy(System& system);
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
                       std::vector<Vec3>& p);
+
+  GviWorkspace ws_;
 
   Feasibility feasibility_;
   Lagrangian lagrangian_;

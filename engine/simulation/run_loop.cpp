@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "core/phase_timer.hpp"
 #include "simulation/interrupt.hpp"
 
 namespace deli {
@@ -62,7 +63,9 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   RunStatistics stats;
   stats.atoms = system.particles.size();
   const std::int64_t builds_before = integrator.forces().neighbors().builds();
+  PhaseTimer& timer = phase_timer();
   const auto start = std::chrono::steady_clock::now();
+  timer.start();
   try {
     for (std::int64_t n = 1; n <= steps; ++n) {
       const bool thermo = (thermo_every > 0 && n % thermo_every == 0) || n == steps;
@@ -71,6 +74,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       const bool frame = wants_frame();
       system.step -= 1;
       integrator.step(system, thermo || frame);
+      const TimedPhase output(Phase::output);
       for (Observer* o : observers) o->on_step(system);
       if (thermo || frame) sample(thermo, frame);
       for (Observer* o : observers) o->on_step_complete(system);
@@ -82,11 +86,14 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       stats.steps = n;
     }
   } catch (...) {
+    timer.stop();
     for (Observer* o : observers) o->on_finish(system);
     throw;
   }
+  timer.stop();
   stats.loop_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.phase_seconds = timer.seconds();
   stats.neighbor_builds = integrator.forces().neighbors().builds() - builds_before;
   for (Observer* o : observers) o->on_finish(system);
   return stats;

@@ -4,6 +4,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/phase_timer.hpp"
 #include "integrators/integrator.hpp"
 #include "simulation/degrees_of_freedom.hpp"
 #include "simulation/observer.hpp"
@@ -14,6 +15,7 @@ struct RunStatistics {
   std::int64_t steps = 0;
   std::size_t atoms = 0;
   double loop_seconds = 0;  // the step loop only: no set-up, no final output
+  std::array<double, phase_count> phase_seconds{};  // the loop's time by phase (sums to it)
   std::int64_t neighbor_builds = 0;
   bool interrupted = false;  // stopped early by SIGINT/SIGTERM, after a whole step
   double atom_steps_per_second() const;

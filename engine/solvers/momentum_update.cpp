@@ -7,9 +7,9 @@ namespace deli {
 SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int>& rows,
                               const std::vector<Vec3>& x, std::vector<Vec3>& p, const Box& box,
                               Eigen::VectorXd& mu) {
-  SolverStatus status;
-  status.iterations = 1;
   if (rows.empty()) {
+    SolverStatus status;
+    status.iterations = 1;
     status.converged = true;
     mu.resize(0);
     return status;
@@ -18,17 +18,32 @@ SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int
   LocalCluster selected = cluster;
   selected.rows.clear();
   for (int r : rows) selected.rows.push_back(cluster.rows[r]);
-  const ClusterRows structure(selected);
+  return project_momentum(ClusterRows(selected), x, p, box, mu);
+}
+
+SolverStatus project_momentum(const ClusterRows& structure, const std::vector<Vec3>& x,
+                              std::vector<Vec3>& p, const Box& box, Eigen::VectorXd& mu) {
+  SolverStatus status;
+  status.iterations = 1;
+  const LocalCluster& cluster = structure.cluster();
   const std::vector<Vec3> u = structure.directions(x, box);
   std::vector<Vec3> v(p.size());
   for (std::size_t k = 0; k < p.size(); ++k) v[k] = p[k] * cluster.inverse_mass[k];
   // (C^T M^-1 C) mu = -C^T M^-1 p.
-  const Eigen::MatrixXd A = structure.coupling(u, u);
   const Eigen::VectorXd b = -structure.project(u, v);
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
-  mu = ldlt.solve(b);
-  if (ldlt.info() != Eigen::Success || !mu.allFinite()) {
-    mu = A.completeOrthogonalDecomposition().solve(b);  // dependent rows (a rigid loop)
+  bool solved = false;
+  if (structure.tridiagonal()) {
+    Tridiagonal bands;
+    structure.coupling_bands(u, u, bands);
+    solved = solve_tridiagonal(bands, b, mu);
+  }
+  if (!solved) {
+    const Eigen::MatrixXd A = structure.coupling(u, u);
+    Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+    mu = ldlt.solve(b);
+    if (ldlt.info() != Eigen::Success || !mu.allFinite()) {
+      mu = A.completeOrthogonalDecomposition().solve(b);  // dependent rows (a rigid loop)
+    }
   }
   const std::vector<Vec3> j = structure.impulse(u, mu);
   for (std::size_t k = 0; k < p.size(); ++k) {

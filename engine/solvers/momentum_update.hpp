@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "constraints/clusters.hpp"
+#include "solvers/cluster_rows.hpp"
 #include "solvers/solver_status.hpp"
 
 namespace deli {
@@ -15,5 +16,9 @@ namespace deli {
 SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int>& rows,
                               const std::vector<Vec3>& x, std::vector<Vec3>& p, const Box& box,
                               Eigen::VectorXd& mu);
+// The same over every row of a prepared structure; a linear chain's rods (tridiagonal())
+// take an O(rows) solve instead of a dense LDLT (equal up to rounding).
+SolverStatus project_momentum(const ClusterRows& structure, const std::vector<Vec3>& x,
+                              std::vector<Vec3>& p, const Box& box, Eigen::VectorXd& mu);
 
 }  // namespace deli

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "constraints/clusters.hpp"
+#include "solvers/cluster_rows.hpp"
 #include "solvers/solver_status.hpp"
 
 namespace deli {
@@ -27,5 +28,13 @@ PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vec
                                      const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
                                      double h, const Box& box, double tolerance,
                                      int max_iterations = 50);
+// The same with the cluster's row structure prepared by the caller (reused across steps).
+// Rods only, numbered along a linear chain (structure.tridiagonal()): each Newton step is an
+// O(rows) tridiagonal solve instead of a dense LU (results differ from the dense solve only
+// by rounding; the residual tolerance is the same).
+PositionUpdate solve_position_update(const ClusterRows& structure,
+                                     const std::vector<bool>& equality, const std::vector<Vec3>& q,
+                                     const std::vector<Vec3>& x0, double h, const Box& box,
+                                     double tolerance, int max_iterations = 50);
 
 }  // namespace deli

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <vector>
+
+#include "constraints/constraint.hpp"
+#include "core/vec3.hpp"
+
+namespace deli {
+
+// What one GVI step computes, kept from step to step so that no per-particle vector is
+// allocated per step; each phase of Gvi::step reads and writes named parts of it.
+struct GviWorkspace {
+  // Prediction.
+  std::vector<Vec3> p;                                 // momenta being updated (reflections, kicks)
+  std::vector<Vec3> q;                                 // positions at the start of the step
+  std::vector<Vec3> p_start;                           // momenta at the start of the step
+  std::vector<Vec3> predicted;                         // where the step would end unconstrained
+  std::vector<Vec3> displacement;                      // the unconstrained step's displacement
+  std::vector<Vec3> prediction_kick;                   // the constrained predictor's impulses
+  std::vector<Vec3> prediction_force, prediction_mid;  // midpoint predictor's fixed point
+  std::vector<bool> all_equality;                      // one `true` per equality row
+
+  // Candidate inequality rows near q, with their gaps at q (refreshed when a displacement
+  // outgrows `reach`).
+  std::vector<Constraint> nearby;
+  std::vector<double> nearby_gap_at_q;
+  double reach = -1.0;
+  bool nearby_refreshed = false;  // by the last candidates call
+
+  // Active and smooth sets; particles whose prediction changed in the last round.
+  std::vector<Constraint> active, smooth;
+  std::vector<Vec3> previous_prediction;
+  std::vector<char> prediction_changed;
+  std::vector<Constraint> rows;  // equality rows followed by some inequality rows
+
+  // Position update: half kick, impulses, end positions; rows held as complementarity rows
+  // and those the feasibility guard landed.
+  std::vector<Vec3> half, impulse, x, free, mid, f_mid;
+  std::vector<Constraint> held, landed, violated;
+  std::vector<bool> equality;
+  double position_virial = 0.0;
+
+  // Momentum update.
+  std::vector<Constraint> momentum_rows;
+};
+
+}  // namespace deli

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "constraints/clusters.hpp"
+#include "solvers/cluster_rows.hpp"
+
+namespace deli {
+
+// A cluster in its own numbering with its row structure, ready for the solvers.
+struct PreparedCluster {
+  Cluster cluster;
+  LocalCluster local;
+  std::unique_ptr<ClusterRows> structure;  // refers to `local`
+};
+
+// The clusters of the fixed equality rows (a molecule's rods, a pendulum's strings),
+// clustered and localised once per run instead of at every solve: a step whose rows are
+// these equalities, or these plus inequalities that leave some of their clusters untouched,
+// reuses them.
+class EqualityClusters {
+ public:
+  void prepare(const std::vector<Constraint>& equalities, const std::vector<double>& mass);
+  bool prepared_for(std::size_t particle_count) const { return particles_ == particle_count; }
+  // In find_clusters' order.
+  const std::vector<PreparedCluster>& all() const { return clusters_; }
+  // The prepared cluster with the same particles and, row for row, the same constraints as
+  // `cluster` (rows indexing `rows`); null if none.
+  const PreparedCluster* find(const Cluster& cluster, const std::vector<Constraint>& rows) const;
+
+ private:
+  std::vector<PreparedCluster> clusters_;
+  std::vector<std::int32_t> cluster_from_first_particle_;  // -1: no cluster starts there
+  std::size_t particles_ = static_cast<std::size_t>(-1);
+};
+
+}  // namespace deli
