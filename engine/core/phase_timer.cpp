@@ -24,6 +24,8 @@ const char* phase_name(Phase phase) {
       return "gvi momentum update";
     case Phase::constraint_checks:
       return "constraint checks";
+    case Phase::thermostat:
+      return "thermostat";
     case Phase::output:
       return "output";
     case Phase::count:

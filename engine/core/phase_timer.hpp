@@ -22,6 +22,7 @@ enum class Phase : int {
   position_update,
   momentum_update,
   constraint_checks,
+  thermostat,
   output,
   count
 };

@@ -1,5 +1,6 @@
 #include "integrators/thermostatted_integrator.hpp"
 
+#include "core/phase_timer.hpp"
 #include "simulation/thermo.hpp"
 
 namespace deli {
@@ -23,6 +24,7 @@ std::string ThermostattedIntegrator::name() const {
 }
 
 void ThermostattedIntegrator::act(System& system, std::int64_t step, int half) {
+  const TimedPhase timed(Phase::thermostat);
   const double before = kinetic_energy(system.particles);
   thermostat_->apply(system.particles, step, half, 0.5 * inner_->timestep());
   if (thermostat_->needs_projection()) inner_->project_velocities(system);

@@ -1,7 +1,6 @@
 #include "thermostats/random_stream.hpp"
 
 #include <cmath>
-#include <numbers>
 
 namespace deli {
 
@@ -36,16 +35,27 @@ double RandomStream::uniform() {
   return (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53;
 }
 
+double RandomStream::symmetric_uniform() {
+  if (used_ > 3) refill();
+  // 32 bits in (-1, 1), never 0: ample for the polar method's pairs.
+  return (static_cast<double>(static_cast<std::int32_t>(block_[used_++])) + 0.5) * 0x1.0p-31;
+}
+
 double RandomStream::normal() {
   if (has_spare_normal_) {
     has_spare_normal_ = false;
     return spare_normal_;
   }
-  const double radius = std::sqrt(-2.0 * std::log(uniform()));
-  const double angle = 2.0 * std::numbers::pi * uniform();
-  spare_normal_ = radius * std::sin(angle);
-  has_spare_normal_ = true;
-  return radius * std::cos(angle);
+  // Marsaglia's polar method: no trigonometric functions, one logarithm per pair.
+  for (;;) {
+    const double u = symmetric_uniform(), v = symmetric_uniform();
+    const double s = u * u + v * v;
+    if (s >= 1.0) continue;
+    const double factor = std::sqrt(-2.0 * std::log(s) / s);
+    spare_normal_ = v * factor;
+    has_spare_normal_ = true;
+    return u * factor;
+  }
 }
 
 double RandomStream::gamma(double shape) {

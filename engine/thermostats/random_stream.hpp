@@ -20,13 +20,15 @@ class RandomStream {
   RandomStream(std::uint64_t seed, const PhiloxCounter& start);
   // In (0, 1): 53 random bits, never 0 (safe under log).
   double uniform();
-  // Standard normal (Box-Muller on two uniforms; the second value is kept for the next call).
+  // Standard normal (Marsaglia's polar method on pairs of uniforms in (-1, 1); the second
+  // value of a pair is kept for the next call).
   double normal();
   // Gamma(shape, 1) by Marsaglia and Tsang (2000); shape > 0.
   double gamma(double shape);
 
  private:
   void refill();
+  double symmetric_uniform();
 
   PhiloxKey key_;
   PhiloxCounter counter_;
