@@ -75,6 +75,7 @@ int command_run(const std::vector<std::string>& args) {
               input.system.topology.angles.size(), input.system.box.length().x,
               input.system.box.length().y, input.system.box.length().z, input.timestep,
               static_cast<long long>(input.steps));
+  for (const std::string& note : input.notes) std::printf("%s\n", note.c_str());
   std::printf("%s\n", input.degrees_of_freedom.describe().c_str());
   if (input.thermostat) {
     const ThermostatSettings& t = *input.thermostat;

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string_view>
 #include <utility>
@@ -180,7 +181,13 @@ class DataReader {
   std::array<double, 3> lo_{-0.5, -0.5, -0.5}, hi_{0.5, 0.5, 0.5};  // LAMMPS' defaults
   std::array<long, 3> bounds_line_{0, 0, 0};
   Section masses_, atoms_section_, velocities_, bonds_section_, angles_section_;
+  Section pair_coeffs_, pair_ij_coeffs_, bond_coeffs_, angle_coeffs_;
   std::string style_hint_;
+  std::string pair_style_, bond_style_, angle_style_;  // the coefficient sections' comments
+
+  CoefficientSection coefficients(const Section& section, const std::string& style,
+                                  const char* name, int type_columns, const Count& types,
+                                  const std::string& kind) const;
 
   std::vector<std::int64_t> sorted_ids_;
 };
@@ -322,12 +329,16 @@ Section& DataReader::section_header(long line, std::string_view content, std::st
   split(content, tokens);
   const std::string name = join(tokens, 0);
 
-  static constexpr std::array<std::pair<std::string_view, Section DataReader::*>, 5> kSections = {{
+  static constexpr std::array<std::pair<std::string_view, Section DataReader::*>, 9> kSections = {{
       {"Masses", &DataReader::masses_},
       {"Atoms", &DataReader::atoms_section_},
       {"Velocities", &DataReader::velocities_},
       {"Bonds", &DataReader::bonds_section_},
       {"Angles", &DataReader::angles_section_},
+      {"Pair Coeffs", &DataReader::pair_coeffs_},
+      {"PairIJ Coeffs", &DataReader::pair_ij_coeffs_},
+      {"Bond Coeffs", &DataReader::bond_coeffs_},
+      {"Angle Coeffs", &DataReader::angle_coeffs_},
   }};
   for (const auto& [section_name, member] : kSections) {
     if (name != section_name) continue;
@@ -337,18 +348,20 @@ Section& DataReader::section_header(long line, std::string_view content, std::st
                      std::to_string(section.line) + ")");
     }
     section.line = line;
-    if (name == "Atoms") {
-      std::vector<std::string_view> hint;
-      split(comment, hint);
-      if (!hint.empty()) style_hint_ = std::string(hint.front());
-    }
+    std::vector<std::string_view> hint;
+    split(comment, hint);
+    const std::string first = hint.empty() ? "" : std::string(hint.front());
+    if (name == "Atoms") style_hint_ = first;
+    if (name == "Pair Coeffs" || name == "PairIJ Coeffs") pair_style_ = first;
+    if (name == "Bond Coeffs") bond_style_ = first;
+    if (name == "Angle Coeffs") angle_style_ = first;
     return section;
   }
 
   if (name.ends_with("Coeffs")) {
     fail(line, "found section " + quoted(name) +
-                   "; deli reads coefficients from the TOML [forcefield] table, not the data "
-                   "file (remove this section)");
+                   "; deli reads Pair, PairIJ, Bond and Angle Coeffs (no dihedrals or "
+                   "impropers): remove this section");
   }
   static const std::vector<std::string> kUnsupported = {"Dihedrals", "Impropers", "Ellipsoids",
                                                         "Lines",     "Triangles", "Bodies"};
@@ -361,8 +374,8 @@ Section& DataReader::section_header(long line, std::string_view content, std::st
       closest_match(name, {"Masses", "Atoms", "Velocities", "Bonds", "Angles"});
   if (!suggestion.empty()) message += "; did you mean " + quoted(suggestion) + "?";
   message +=
-      "; deli reads Masses, Atoms, Velocities, Bonds and Angles, and takes coefficients from the "
-      "TOML [forcefield] table, not the data file";
+      "; deli reads Masses, Atoms, Velocities, Bonds, Angles and their Pair, PairIJ, Bond and "
+      "Angle Coeffs";
   fail(line, message);
 }
 
@@ -446,11 +459,48 @@ std::int32_t DataReader::atom_index(std::string_view token, long line, const cha
   return static_cast<std::int32_t>(it - sorted_ids_.begin());
 }
 
+CoefficientSection DataReader::coefficients(const Section& section, const std::string& style,
+                                            const char* name, int type_columns, const Count& types,
+                                            const std::string& kind) const {
+  CoefficientSection out;
+  out.line = section.line;
+  out.style = style;
+  std::vector<std::string_view> tokens;
+  std::set<std::vector<int>> seen;
+  for (const auto& [line, content] : section.lines) {
+    split(content, tokens);
+    if (tokens.size() <= static_cast<std::size_t>(type_columns)) {
+      fail(line, std::string(name) + " line has " + std::to_string(tokens.size()) +
+                     " columns; expected " + (type_columns == 1 ? "a type" : "two types") +
+                     " and the coefficients");
+    }
+    CoefficientRow row;
+    row.line = line;
+    for (int k = 0; k < type_columns; ++k) row.types.push_back(type(tokens[k], line, kind, types));
+    for (std::size_t k = static_cast<std::size_t>(type_columns); k < tokens.size(); ++k) {
+      row.values.push_back(real(tokens[k], line, std::string("a coefficient in ") + name));
+    }
+    if (!seen.insert(row.types).second) {
+      fail(line, std::string(name) + " gives type " + std::string(tokens[0]) +
+                     (type_columns == 2 ? " " + std::string(tokens[1]) : "") + " twice");
+    }
+    out.rows.push_back(std::move(row));
+  }
+  return out;
+}
+
 LammpsDataFile DataReader::read() {
   read_lines();
 
   LammpsDataFile result;
+  result.path = path_;
   result.atom_style = resolve_atom_style();
+  result.pair = coefficients(pair_coeffs_, pair_style_, "Pair Coeffs", 1, atom_types_, "atom type");
+  result.pair_ij =
+      coefficients(pair_ij_coeffs_, pair_style_, "PairIJ Coeffs", 2, atom_types_, "atom type");
+  result.bond = coefficients(bond_coeffs_, bond_style_, "Bond Coeffs", 1, bond_types_, "bond type");
+  result.angle =
+      coefficients(angle_coeffs_, angle_style_, "Angle Coeffs", 1, angle_types_, "angle type");
   const std::string& style = result.atom_style;
   if (!style_has_bonds(style) && (bonds_.value > 0 || bonds_section_.line != 0)) {
     fail(bonds_section_.line != 0 ? bonds_section_.line : bonds_.line,

@@ -57,6 +57,8 @@ struct RunInput {
   // [velocities] temperature: the velocities are drawn when the input is read and scaled
   // to it once the run has made them tangent to the rods (with degrees_of_freedom).
   std::optional<double> start_temperature;
+  // What the run should say about its input: where coefficients came from.
+  std::vector<std::string> notes;
 };
 
 // Reads and validates the input; every error is an InputError naming file:line and key.
