@@ -318,6 +318,34 @@ void check_box_fits_cutoff(const RunInput& input, const TomlTable& root) {
   }
 }
 
+// Numbers that are each finite can still combine into an infinite box (a tiny density, a
+// huge lattice) or atoms the builders placed at infinity; nothing downstream checks that.
+void check_system_is_finite(const System& system, const TomlTable& root) {
+  const Vec3 length = system.box.length();
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(length[a]) || !(length[a] > 0)) {
+      root.fail("the box length along " + std::string(1, "xyz"[a]) + " is " +
+                std::to_string(length[a]) +
+                ": not a finite positive length; check the box "
+                "bounds, the density and the number of cells");
+    }
+  }
+  if (!std::isfinite(system.box.volume())) {
+    root.fail("the box volume overflows (box " + std::to_string(length.x) + " x " +
+              std::to_string(length.y) + " x " + std::to_string(length.z) +
+              "); check the box bounds, the density and the number of cells");
+  }
+  const Particles& p = system.particles;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p.position[i][k]) || !std::isfinite(p.velocity[i][k])) {
+        root.fail("atom " + std::to_string(p.id[i]) +
+                  " has a position or velocity that is not finite; check the system's numbers");
+      }
+    }
+  }
+}
+
 // Hard spheres must not overlap even where special_bonds takes a pair out of the force
 // field's neighbour list (1-3, 1-4 neighbours): those pairs are checked on their own.
 void add_excluded_contacts(RunInput& input) {
@@ -361,6 +389,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   input.system = read_system(*system, dir);
   system->finish();
   read_velocities(root, input.system);
+  check_system_is_finite(input.system, root);
   bool rigid_bonds = false;
   input.constraints = read_constraints(root.table("constraints"), input.system, rigid_bonds);
   input.force_field_spec = read_force_field(root, input.system, rigid_bonds);
