@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <string>
 
 #include "core/error.hpp"
@@ -23,6 +24,21 @@ void check_sample_is_finite(const System& system, const ThermoSample& s,
   throw SimulationError(message +
                         ": the run blew up (a timestep too large, overlapping atoms or extreme "
                         "force-field numbers); outputs up to the previous sample are kept");
+}
+
+// Every observer finishes (closes its files) even when one fails; the first failure is
+// rethrown. On an error path (`after_error`) the original error is what the user sees, so
+// the observers' own failures are dropped.
+void finish_all(const std::vector<Observer*>& observers, const System& system, bool after_error) {
+  std::exception_ptr first;
+  for (Observer* o : observers) {
+    try {
+      o->on_finish(system);
+    } catch (...) {
+      if (!first) first = std::current_exception();
+    }
+  }
+  if (first && !after_error) std::rethrow_exception(first);
 }
 }  // namespace
 
@@ -88,13 +104,13 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       stats.steps = n;
     }
   } catch (...) {
-    for (Observer* o : observers) o->on_finish(system);
+    finish_all(observers, system, true);
     throw;
   }
   stats.loop_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.neighbor_builds = integrator.forces().neighbors().builds() - builds_before;
-  for (Observer* o : observers) o->on_finish(system);
+  finish_all(observers, system, false);
   return stats;
 }
 
