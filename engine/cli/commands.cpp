@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "h5md/checkpoint.hpp"
+#include "h5md/fingerprint.hpp"
 #include "h5md/h5md_info.hpp"
 #include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
@@ -54,10 +55,11 @@ int command_run(const std::vector<std::string>& args) {
   }
   if (path.empty()) path = DELI_DEFAULT_INPUT;
   RunInput input = load_run_input(path);
+  const std::uint64_t fingerprint = system_fingerprint(input.system, input.model_text);
   Checkpoint checkpoint;
   if (!restart.empty()) {
     checkpoint = read_checkpoint(restart);
-    apply_checkpoint(checkpoint, input.system, restart);
+    apply_checkpoint(checkpoint, input.system, restart, fingerprint);
     if (checkpoint.step >= input.steps) {
       throw InputError(restart + ": the checkpoint is at step " + std::to_string(checkpoint.step) +
                        ", already at the input's " + std::to_string(input.steps) +
@@ -111,7 +113,7 @@ int command_run(const std::vector<std::string>& args) {
   std::unique_ptr<CheckpointWriter> checkpoints;
   if (!input.checkpoint.file.empty()) {
     checkpoints = std::make_unique<CheckpointWriter>(input.checkpoint.file, input.checkpoint.every,
-                                                     *integrator);
+                                                     *integrator, fingerprint);
     observers.push_back(checkpoints.get());
   }
   install_interrupt_handlers();
@@ -128,7 +130,7 @@ int command_run(const std::vector<std::string>& args) {
   if (stats.interrupted) {
     const std::string file =
         input.checkpoint.file.empty() ? path + ".interrupted.h5" : input.checkpoint.file;
-    write_checkpoint(file, input.system, *integrator);
+    write_checkpoint(file, input.system, *integrator, fingerprint);
     std::printf(
         "interrupted after step %lld: checkpoint written to %s; continue with\n  deli run "
         "%s --restart %s\n",

@@ -550,6 +550,12 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   root.finish();
   check_box_fits_cutoff(input, root);
+  // Key order and formatting are toml++'s own, so comments and layout do not count.
+  std::ostringstream model;
+  for (const char* table : {"forcefield", "constraints"}) {
+    if (const toml::table* t = doc[table].as_table()) model << "[" << table << "]\n" << *t << "\n";
+  }
+  input.model_text = model.str();
   input.gvi.timestep = input.timestep;
   input.gvi.skin = input.skin;
   add_excluded_contacts(input);

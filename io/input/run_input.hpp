@@ -45,6 +45,7 @@ struct RunInput {
     std::int64_t every = 10000;
   } checkpoint;
   std::string source_text;    // the input as read, stored with trajectories
+  std::string model_text;     // [forcefield] and [constraints] as canonical TOML (checkpoints)
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
   GviOptions gvi;              // timestep and skin copied from above
