@@ -12,6 +12,7 @@
 #include "h5md/h5md_info.hpp"
 #include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
+#include "input/output_paths.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
@@ -58,6 +59,13 @@ int command_run(const std::vector<std::string>& args) {
   const std::uint64_t fingerprint = system_fingerprint(input.system, input.model_text);
   Checkpoint checkpoint;
   if (!restart.empty()) {
+    for (const std::string& output : {input.thermo.file, input.trajectory.file, input.dump.file}) {
+      if (!output.empty() && resolved_path(output) == resolved_path(restart)) {
+        throw InputError(restart +
+                         ": the checkpoint to restart from is also an output of the "
+                         "input (thermo, trajectory or dump); name another file");
+      }
+    }
     checkpoint = read_checkpoint(restart);
     apply_checkpoint(checkpoint, input.system, restart, fingerprint);
     if (checkpoint.step >= input.steps) {
@@ -154,6 +162,13 @@ int command_info(const std::vector<std::string>& args) {
 int command_write_data(const std::vector<std::string>& args) {
   if (args.size() != 2) throw InputError("usage: deli write-data INPUT FILE");
   RunInput input = load_run_input(args[0]);
+  for (const std::string& source : {args[0], input.data_file}) {
+    if (!source.empty() && resolved_path(source) == resolved_path(args[1])) {
+      throw InputError(args[1] + ": is the input's own " +
+                       (source == args[0] ? "input file" : "data file") +
+                       "; writing it would destroy it: name another FILE");
+    }
+  }
   minimize_if_asked(input);
   write_lammps_data(input.system, args[1], style_for(input.system),
                     "deli " DELI_VERSION " from " + args[0]);

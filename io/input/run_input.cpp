@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "input/constraints_input.hpp"
 #include "input/lammps_data.hpp"
+#include "input/output_paths.hpp"
 #include "input/toml_table.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "pair/pair_coefficients.hpp"
@@ -48,7 +49,7 @@ void set_box_periodicity(System& system, const std::array<bool, 3>& periodic) {
   system.box = Box(system.box.lo(), system.box.hi(), periodic);
 }
 
-System read_system(TomlTable& t, const fs::path& input_dir) {
+System read_system(TomlTable& t, const fs::path& input_dir, std::string& data_file) {
   const std::array<bool, 3> periodic = read_boundary(t);
   const bool from_data = t.has("data");
   auto lattice = t.table("lattice");
@@ -61,6 +62,7 @@ System read_system(TomlTable& t, const fs::path& input_dir) {
   if (from_data) {
     fs::path data = t.string("data");
     if (data.is_relative()) data = input_dir / data;
+    data_file = data.string();
     LammpsDataOptions options;
     options.periodic = periodic;
     options.atom_style =
@@ -386,7 +388,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
 
   auto system = root.table("system");
   if (!system) root.fail("missing the [system] table");
-  input.system = read_system(*system, dir);
+  input.system = read_system(*system, dir, input.data_file);
   system->finish();
   read_velocities(root, input.system);
   check_system_is_finite(input.system, root);
@@ -513,21 +515,25 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (input.steps < 0) run->fail("must not be negative", "steps");
   run->finish();
 
+  std::vector<OutputFile> output_files;
   if (auto output = root.table("output")) {
     if (auto thermo = output->table("thermo")) {
       input.thermo.every = thermo->integer("every", 100);
       if (input.thermo.every < 0) thermo->fail("must not be negative", "every");
       input.thermo.file = thermo->string("file", "");
+      output_files.push_back({"thermo", input.thermo.file, *thermo});
       thermo->finish();
     }
     if (auto checkpoint = output->table("checkpoint")) {
       input.checkpoint.file = checkpoint->string("file");
+      output_files.push_back({"checkpoint", input.checkpoint.file, *checkpoint});
       input.checkpoint.every = checkpoint->integer("every", 10000);
       if (input.checkpoint.every < 1) checkpoint->fail("must be at least 1", "every");
       checkpoint->finish();
     }
     if (auto dump = output->table("dump")) {
       input.dump.file = dump->string("file");
+      output_files.push_back({"dump", input.dump.file, *dump});
       input.dump.format = dump->choice("format", {"lammps", "xyz"}, "lammps");
       input.dump.every = dump->integer("every", 1000);
       if (input.dump.every < 1) dump->fail("must be at least 1", "every");
@@ -535,6 +541,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     }
     if (auto trajectory = output->table("trajectory")) {
       input.trajectory.file = trajectory->string("file");
+      output_files.push_back({"trajectory", input.trajectory.file, *trajectory});
       input.trajectory.every = trajectory->integer("every", 1000);
       if (input.trajectory.every < 1) trajectory->fail("must be at least 1", "every");
       input.trajectory.velocities = trajectory->boolean("velocities", true);
@@ -549,6 +556,9 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     output->finish();
   }
   root.finish();
+  std::vector<std::pair<std::string, std::string>> inputs{{"input file", path}};
+  if (!input.data_file.empty()) inputs.emplace_back("data file", input.data_file);
+  check_output_paths(output_files, inputs);
   check_box_fits_cutoff(input, root);
   // Key order and formatting are toml++'s own, so comments and layout do not count.
   std::ostringstream model;

@@ -30,6 +30,7 @@ struct ThermoOutputSpec {
 // Everything a `deli run` needs, read from a TOML input and the files it names.
 struct RunInput {
   std::string path;
+  std::string data_file;  // the LAMMPS data file read, "" for a built system
   System system;
   ForceFieldSpec force_field_spec;
   std::unique_ptr<ForceField> force_field;  // built from force_field_spec
