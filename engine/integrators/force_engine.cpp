@@ -16,11 +16,17 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
   // Rebuilds are rare, and every non-finite position triggers one (needs_rebuild): the
   // one place a blown-up run is caught on the step it happens.
-  if (const auto bad = first_non_finite_atom(p)) {
+  if (auto bad = first_non_finite_atom(p)) {
     throw SimulationError("step " + std::to_string(system.step) + ": " + *bad +
                           " is not finite: the run blew up (a timestep too large, overlapping "
                           "atoms or extreme force-field numbers); outputs up to the last sample "
                           "are kept");
+  }
+  if (auto away = first_runaway_atom(p, system.box)) {
+    throw SimulationError("step " + std::to_string(system.step) + ": " + *away +
+                          " ran away (far beyond the box): the run blew up (a timestep too "
+                          "large, overlapping atoms or extreme force-field numbers); outputs up "
+                          "to the last sample are kept");
   }
   // Nothing reads a list of zero reach: keep the first one.
   if (neighbors_.cutoff() <= 0 && neighbors_.builds() > 0) return false;

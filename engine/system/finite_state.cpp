@@ -30,4 +30,18 @@ std::optional<std::string> first_non_finite_atom(const Particles& p,
   return std::nullopt;
 }
 
+std::optional<std::string> first_runaway_atom(const Particles& p, const Box& box) {
+  constexpr double kFarthest = 1e15, kMostPeriods = 1e9;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const double from_box = p.position[i][a] - box.lo()[a];
+      const bool away =
+          !(std::abs(from_box) <= kFarthest) ||
+          (box.periodic(a) && !(std::abs(from_box * box.inverse_period()[a]) <= kMostPeriods));
+      if (away) return described(p, i, "position", p.position[i]);
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace deli
