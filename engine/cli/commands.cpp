@@ -9,9 +9,11 @@
 
 #include "core/error.hpp"
 #include "h5md/checkpoint.hpp"
+#include "h5md/fingerprint.hpp"
 #include "h5md/h5md_info.hpp"
 #include "h5md/h5md_writer.hpp"
 #include "input/lammps_data.hpp"
+#include "input/output_paths.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
@@ -58,10 +60,18 @@ int command_run(const std::vector<std::string>& args) {
   }
   if (path.empty()) path = DELI_DEFAULT_INPUT;
   RunInput input = load_run_input(path);
+  const std::uint64_t fingerprint = system_fingerprint(input.system, input.model_text);
   Checkpoint checkpoint;
   if (!restart.empty()) {
+    for (const std::string& output : {input.thermo.file, input.trajectory.file, input.dump.file}) {
+      if (!output.empty() && resolved_path(output) == resolved_path(restart)) {
+        throw InputError(restart +
+                         ": the checkpoint to restart from is also an output of the "
+                         "input (thermo, trajectory or dump); name another file");
+      }
+    }
     checkpoint = read_checkpoint(restart);
-    apply_checkpoint(checkpoint, input.system, restart);
+    apply_checkpoint(checkpoint, input.system, restart, fingerprint);
     if (checkpoint.step >= input.steps) {
       throw InputError(restart + ": the checkpoint is at step " + std::to_string(checkpoint.step) +
                        ", already at the input's " + std::to_string(input.steps) +
@@ -127,7 +137,7 @@ int command_run(const std::vector<std::string>& args) {
   std::unique_ptr<CheckpointWriter> checkpoints;
   if (!input.checkpoint.file.empty()) {
     checkpoints = std::make_unique<CheckpointWriter>(input.checkpoint.file, input.checkpoint.every,
-                                                     *integrator);
+                                                     *integrator, fingerprint);
     observers.push_back(checkpoints.get());
   }
   install_interrupt_handlers();
@@ -155,7 +165,7 @@ int command_run(const std::vector<std::string>& args) {
     std::string file, failures;
     for (const std::string& place : places) {
       try {
-        write_checkpoint(place, input.system, *integrator);
+        write_checkpoint(place, input.system, *integrator, fingerprint);
         file = place;
         break;
       } catch (const std::exception& e) {
@@ -192,6 +202,13 @@ int command_info(const std::vector<std::string>& args) {
 int command_write_data(const std::vector<std::string>& args) {
   if (args.size() != 2) throw InputError("usage: deli write-data INPUT FILE");
   RunInput input = load_run_input(args[0]);
+  for (const std::string& source : {args[0], input.data_file}) {
+    if (!source.empty() && resolved_path(source) == resolved_path(args[1])) {
+      throw InputError(args[1] + ": is the input's own " +
+                       (source == args[0] ? "input file" : "data file") +
+                       "; writing it would destroy it: name another FILE");
+    }
+  }
   minimize_if_asked(input);
   write_lammps_data(input.system, args[1], style_for(input.system),
                     "deli " DELI_VERSION " from " + args[0]);

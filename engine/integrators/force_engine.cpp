@@ -2,7 +2,9 @@
 
 #include <algorithm>
 
+#include "core/error.hpp"
 #include "core/phase_timer.hpp"
+#include "system/finite_state.hpp"
 
 namespace deli {
 
@@ -14,6 +16,20 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   const TimedPhase timed(Phase::neighbor);
   Particles& p = system.particles;
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
+  // Rebuilds are rare, and every non-finite position triggers one (needs_rebuild): the
+  // one place a blown-up run is caught on the step it happens.
+  if (auto bad = first_non_finite_atom(p)) {
+    throw SimulationError("step " + std::to_string(system.step) + ": " + *bad +
+                          " is not finite: the run blew up (a timestep too large, overlapping "
+                          "atoms or extreme force-field numbers); outputs up to the last sample "
+                          "are kept");
+  }
+  if (auto away = first_runaway_atom(p, system.box)) {
+    throw SimulationError("step " + std::to_string(system.step) + ": " + *away +
+                          " ran away (far beyond the box): the run blew up (a timestep too "
+                          "large, overlapping atoms or extreme force-field numbers); outputs up "
+                          "to the last sample are kept");
+  }
   // Nothing reads a list of zero reach: keep the first one.
   if (neighbors_.cutoff() <= 0 && neighbors_.builds() > 0) return false;
   if (neighbors_.builds() == 0) {

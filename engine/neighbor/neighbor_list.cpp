@@ -240,8 +240,10 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
 bool NeighborList::needs_rebuild(const std::vector<Vec3>& position) const {
   if (position_at_build_.size() != position.size()) return true;
   const double limit2 = 0.25 * skin_ * skin_;
+  // Written so that a NaN displacement asks for a rebuild too: the caller then finds the
+  // non-finite position (a blown-up run) at no cost to the every-step check.
   for (std::size_t i = 0; i < position.size(); ++i) {
-    if (norm2(position[i] - position_at_build_[i]) > limit2) return true;
+    if (!(norm2(position[i] - position_at_build_[i]) <= limit2)) return true;
   }
   return false;
 }

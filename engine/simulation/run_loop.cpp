@@ -1,11 +1,47 @@
 #include "simulation/run_loop.hpp"
 
 #include <chrono>
+#include <cmath>
+#include <exception>
+#include <string>
 
+#include "core/error.hpp"
 #include "core/phase_timer.hpp"
 #include "simulation/interrupt.hpp"
+#include "system/finite_state.hpp"
 
 namespace deli {
+
+namespace {
+// A sample with a NaN or infinite energy stops the run before any observer writes it: the
+// rows and frames before it stay as they are, the files are closed by on_finish.
+void check_sample_is_finite(const System& system, const ThermoSample& s,
+                            const std::vector<Vec3>& forces) {
+  if (std::isfinite(s.kinetic) && std::isfinite(s.potential) && std::isfinite(s.total)) return;
+  std::string message = "step " + std::to_string(system.step) + ": the energy is not finite " +
+                        "(kinetic " + std::to_string(s.kinetic) + ", potential " +
+                        std::to_string(s.potential) + ")";
+  if (const auto bad = first_non_finite_atom(system.particles, &forces)) message += "; " + *bad;
+  throw SimulationError(message +
+                        ": the run blew up (a timestep too large, overlapping atoms or extreme "
+                        "force-field numbers); outputs up to the previous sample are kept");
+}
+
+// Every observer finishes (closes its files) even when one fails; the first failure is
+// rethrown. On an error path (`after_error`) the original error is what the user sees, so
+// the observers' own failures are dropped.
+void finish_all(const std::vector<Observer*>& observers, const System& system, bool after_error) {
+  std::exception_ptr first;
+  for (Observer* o : observers) {
+    try {
+      o->on_finish(system);
+    } catch (...) {
+      if (!first) first = std::current_exception();
+    }
+  }
+  if (first && !after_error) std::rethrow_exception(first);
+}
+}  // namespace
 
 double RunStatistics::atom_steps_per_second() const {
   return loop_seconds > 0 ? static_cast<double>(atoms) * static_cast<double>(steps) / loop_seconds
@@ -40,6 +76,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   };
   auto sample = [&](bool thermo, bool frame) {
     ThermoSample s = measure_thermo(system, integrator.forces().last(), dof);
+    check_sample_is_finite(system, s, integrator.forces().force());
     s.shadow_energy = integrator.shadow_energy(system);
     s.bath_energy = integrator.bath_energy();
     if (s.bath_energy) s.conserved = s.total - *s.bath_energy;
@@ -57,20 +94,23 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     s.integrator = integrator.take_statistics(Sampler::thermo);
     for (Observer* o : observers) o->on_thermo(s);
   };
-  // A restart's first step was sampled by the run that wrote the checkpoint.
-  if (set_up) sample(true, wants_frame());
-
   RunStatistics stats;
   stats.atoms = system.particles.size();
   const std::int64_t builds_before = integrator.forces().neighbors().builds();
   PhaseTimer& timer = phase_timer();
-  const auto start = std::chrono::steady_clock::now();
-  timer.start();
+  auto start = std::chrono::steady_clock::now();
   try {
+    // A restart's first step was sampled by the run that wrote the checkpoint.
+    if (set_up) sample(true, wants_frame());
+    start = std::chrono::steady_clock::now();
+    timer.start();
     for (std::int64_t n = 1; n <= steps; ++n) {
-      const bool thermo = (thermo_every > 0 && n % thermo_every == 0) || n == steps;
+      // Rows at absolute multiples of thermo_every, as frames: a restart from any step
+      // writes the rows of the uninterrupted run.
+      const std::int64_t next = system.step + 1;
+      const bool thermo = (thermo_every > 0 && next % thermo_every == 0) || n == steps;
       // Observers ask about the step the integrator is about to reach.
-      system.step += 1;
+      system.step = next;
       const bool frame = wants_frame();
       system.step -= 1;
       integrator.step(system, thermo || frame);
@@ -87,7 +127,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     }
   } catch (...) {
     timer.stop();
-    for (Observer* o : observers) o->on_finish(system);
+    finish_all(observers, system, true);
     throw;
   }
   timer.stop();
@@ -95,7 +135,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.phase_seconds = timer.seconds();
   stats.neighbor_builds = integrator.forces().neighbors().builds() - builds_before;
-  for (Observer* o : observers) o->on_finish(system);
+  finish_all(observers, system, false);
   return stats;
 }
 

@@ -13,64 +13,71 @@ namespace {
 void check(herr_t status, const std::string& file, const char* what) {
   if (status < 0) {
     throw SimulationError(file + ": HDF5 failed to " + std::string(what) +
-                          " (disk full or not writable?)");
+                          " (disk full or not writable?); the frames written before are kept");
   }
 }
-hid_t checked(hid_t id, const std::string& file, const char* what) {
-  if (id < 0) check(-1, file, what);
-  return id;
+H5Handle checked(H5Handle handle, const std::string& file, const char* what) {
+  if (!handle.valid()) check(-1, file, what);
+  return handle;
 }
 
-void string_attribute(hid_t object, const char* name, const std::string& value) {
-  const hid_t type = H5Tcopy(H5T_C_S1);
+void write_attribute(hid_t object, const char* name, hid_t type, hid_t space, const void* data,
+                     const std::string& file) {
+  H5Handle attr =
+      checked(h5_attribute(H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT)), file,
+              "create an attribute");
+  check(H5Awrite(attr, type, data), file, "write an attribute");
+  check(attr.close(), file, "close an attribute");
+}
+
+void string_attribute(hid_t object, const char* name, const std::string& value,
+                      const std::string& file) {
+  H5Handle type = h5_type(H5Tcopy(H5T_C_S1));
   H5Tset_size(type, value.size() + 1);
   H5Tset_strpad(type, H5T_STR_NULLTERM);
-  const hid_t space = H5Screate(H5S_SCALAR);
-  const hid_t attr = H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(attr, type, value.c_str());
-  H5Aclose(attr);
-  H5Sclose(space);
-  H5Tclose(type);
+  H5Handle space = h5_space(H5Screate(H5S_SCALAR));
+  write_attribute(object, name, type, space, value.c_str(), file);
 }
 
-void strings_attribute(hid_t object, const char* name, const std::vector<std::string>& values) {
+void strings_attribute(hid_t object, const char* name, const std::vector<std::string>& values,
+                       const std::string& file) {
   std::size_t width = 1;
   for (const std::string& v : values) width = std::max(width, v.size() + 1);
   std::vector<char> buffer(width * values.size(), '\0');
   for (std::size_t k = 0; k < values.size(); ++k)
     values[k].copy(&buffer[k * width], values[k].size());
-  const hid_t type = H5Tcopy(H5T_C_S1);
+  H5Handle type = h5_type(H5Tcopy(H5T_C_S1));
   H5Tset_size(type, width);
   const hsize_t n = values.size();
-  const hid_t space = H5Screate_simple(1, &n, nullptr);
-  const hid_t attr = H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(attr, type, buffer.data());
-  H5Aclose(attr);
-  H5Sclose(space);
-  H5Tclose(type);
+  H5Handle space = h5_space(H5Screate_simple(1, &n, nullptr));
+  write_attribute(object, name, type, space, buffer.data(), file);
 }
 
-void int_attribute(hid_t object, const char* name, const std::vector<int>& values) {
+void int_attribute(hid_t object, const char* name, const std::vector<int>& values,
+                   const std::string& file) {
   const hsize_t n = values.size();
-  const hid_t space = values.size() == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr);
-  const hid_t attr = H5Acreate2(object, name, H5T_NATIVE_INT, space, H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(attr, H5T_NATIVE_INT, values.data());
-  H5Aclose(attr);
-  H5Sclose(space);
+  H5Handle space =
+      h5_space(values.size() == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr));
+  write_attribute(object, name, H5T_NATIVE_INT, space, values.data(), file);
 }
 
 template <class T>
 void fixed_dataset(hid_t parent, const char* name, hid_t type, const std::vector<hsize_t>& shape,
-                   const std::vector<T>& data) {
-  const hid_t space = H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr);
-  const hid_t set = H5Dcreate2(parent, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (!data.empty()) H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data());
-  H5Dclose(set);
-  H5Sclose(space);
+                   const std::vector<T>& data, const std::string& file) {
+  H5Handle space =
+      h5_space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr));
+  H5Handle set = checked(
+      h5_dataset(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)),
+      file, "create a dataset");
+  if (!data.empty()) {
+    check(H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()), file, "write a dataset");
+  }
+  check(set.close(), file, "close a dataset");
 }
 
-hid_t group(hid_t parent, const char* name) {
-  return H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+H5Handle group(hid_t parent, const char* name, const std::string& file) {
+  return checked(h5_group(H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)), file,
+                 "create a group");
 }
 
 }  // namespace
@@ -80,14 +87,10 @@ H5mdWriter::H5mdWriter(const TrajectorySpec& spec, const System& system,
                        const std::vector<std::pair<std::int32_t, std::int32_t>>& rods,
                        TrajectoryContinuation continuation)
     : spec_(spec), atoms_(system.particles.size()) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors come back as codes, reported by us
+  prepare_hdf5();
+  // On an error the handles close what was opened (the destructors).
   if (continuation.step >= 0 && H5Fis_hdf5(spec.file.c_str()) > 0) {
-    try {
-      reopen(system, continuation.step);
-    } catch (...) {
-      close();
-      throw;
-    }
+    reopen(system, continuation.step);
     return;
   }
   create(system, input_text, author, rods);
@@ -96,96 +99,94 @@ H5mdWriter::H5mdWriter(const TrajectorySpec& spec, const System& system,
 void H5mdWriter::create(const System& system, const std::string& input_text,
                         const std::string& author,
                         const std::vector<std::pair<std::int32_t, std::int32_t>>& rods) {
-  file_ = H5Fcreate(spec_.file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (file_ < 0) {
-    throw InputError(spec_.file +
+  const std::string& f = spec_.file;
+  file_ = h5_file(H5Fcreate(f.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  if (!file_.valid()) {
+    throw InputError(f +
                      ": cannot create the trajectory file; check that the "
                      "directory exists and is writable");
   }
-  const hid_t h5md = group(file_, "h5md");
-  int_attribute(h5md, "version", {1, 1});
-  const hid_t author_group = group(h5md, "author");
-  string_attribute(author_group, "name", author);
-  H5Gclose(author_group);
-  const hid_t creator = group(h5md, "creator");
-  string_attribute(creator, "name", "deli");
-  string_attribute(creator, "version", DELI_VERSION);
-  H5Gclose(creator);
-  H5Gclose(h5md);
+  {
+    H5Handle h5md = group(file_, "h5md", f);
+    int_attribute(h5md, "version", {1, 1}, f);
+    H5Handle author_group = group(h5md, "author", f);
+    string_attribute(author_group, "name", author, f);
+    H5Handle creator = group(h5md, "creator", f);
+    string_attribute(creator, "name", "deli", f);
+    string_attribute(creator, "version", DELI_VERSION, f);
+  }
 
   const Particles& p = system.particles;
-  const hid_t particles = group(file_, "particles");
-  const hid_t all = group(particles, "all");
-  const hsize_t n = p.size();
-  std::vector<int> species(p.type.begin(), p.type.end());
-  for (int& t : species) t += 1;  // LAMMPS type numbers
-  fixed_dataset(all, "species", H5T_NATIVE_INT, {n}, species);
-  fixed_dataset(all, "mass", H5T_NATIVE_DOUBLE, {n}, p.mass);
-  fixed_dataset(all, "id", H5T_NATIVE_INT64, {n}, p.id);
-  const hid_t box = group(all, "box");
-  int_attribute(box, "dimension", {3});
-  std::vector<std::string> boundary;
-  for (int a = 0; a < 3; ++a) boundary.push_back(system.box.periodic(a) ? "periodic" : "none");
-  strings_attribute(box, "boundary", boundary);
-  edges_ = make_series(box, "edges", H5T_NATIVE_DOUBLE, {3, 3});
-  H5Gclose(box);
-  position_ = make_series(all, "position", H5T_NATIVE_DOUBLE, {n, 3});
-  if (spec_.velocities) velocity_ = make_series(all, "velocity", H5T_NATIVE_DOUBLE, {n, 3});
-  if (spec_.forces) force_ = make_series(all, "force", H5T_NATIVE_DOUBLE, {n, 3});
-  if (spec_.images) image_ = make_series(all, "image", H5T_NATIVE_INT, {n, 3});
-  H5Gclose(all);
-  H5Gclose(particles);
+  {
+    H5Handle particles = group(file_, "particles", f);
+    H5Handle all = group(particles, "all", f);
+    const hsize_t n = p.size();
+    std::vector<int> species(p.type.begin(), p.type.end());
+    for (int& t : species) t += 1;  // LAMMPS type numbers
+    fixed_dataset(all, "species", H5T_NATIVE_INT, {n}, species, f);
+    fixed_dataset(all, "mass", H5T_NATIVE_DOUBLE, {n}, p.mass, f);
+    fixed_dataset(all, "id", H5T_NATIVE_INT64, {n}, p.id, f);
+    H5Handle box = group(all, "box", f);
+    int_attribute(box, "dimension", {3}, f);
+    std::vector<std::string> boundary;
+    for (int a = 0; a < 3; ++a) boundary.push_back(system.box.periodic(a) ? "periodic" : "none");
+    strings_attribute(box, "boundary", boundary, f);
+    edges_ = make_series(box, "edges", H5T_NATIVE_DOUBLE, {3, 3});
+    position_ = make_series(all, "position", H5T_NATIVE_DOUBLE, {n, 3});
+    if (spec_.velocities) velocity_ = make_series(all, "velocity", H5T_NATIVE_DOUBLE, {n, 3});
+    if (spec_.forces) force_ = make_series(all, "force", H5T_NATIVE_DOUBLE, {n, 3});
+    if (spec_.images) image_ = make_series(all, "image", H5T_NATIVE_INT, {n, 3});
+  }
 
-  observables_group_ = group(file_, "observables");
+  observables_group_ = group(file_, "observables", f);
 
   if (!system.topology.bonds.empty() || !rods.empty()) {
-    const hid_t connectivity = group(file_, "connectivity");
+    H5Handle connectivity = group(file_, "connectivity", f);
     // Indices into /particles/all (0-based), as the H5MD connectivity module specifies.
     auto pair_list = [&](const char* name, const std::vector<std::int64_t>& pairs) {
       if (pairs.empty()) return;
-      fixed_dataset(connectivity, name, H5T_NATIVE_INT64, {pairs.size() / 2, 2}, pairs);
-      const hid_t set = H5Dopen2(connectivity, name, H5P_DEFAULT);
+      fixed_dataset(connectivity, name, H5T_NATIVE_INT64, {pairs.size() / 2, 2}, pairs, f);
+      H5Handle set =
+          checked(h5_dataset(H5Dopen2(connectivity, name, H5P_DEFAULT)), f, "open a dataset");
       hobj_ref_t reference;
-      H5Rcreate(&reference, file_, "/particles/all", H5R_OBJECT, -1);
-      const hid_t space = H5Screate(H5S_SCALAR);
-      const hid_t attr =
-          H5Acreate2(set, "particles_group", H5T_STD_REF_OBJ, space, H5P_DEFAULT, H5P_DEFAULT);
-      H5Awrite(attr, H5T_STD_REF_OBJ, &reference);
-      H5Aclose(attr);
-      H5Sclose(space);
-      H5Dclose(set);
+      check(H5Rcreate(&reference, file_, "/particles/all", H5R_OBJECT, -1), f,
+            "create a reference");
+      H5Handle space = h5_space(H5Screate(H5S_SCALAR));
+      write_attribute(set, "particles_group", H5T_STD_REF_OBJ, space, &reference, f);
+      check(set.close(), f, "close a dataset");
     };
     std::vector<std::int64_t> bonds, rod_pairs;
     for (const Bond& b : system.topology.bonds) bonds.push_back(b.i), bonds.push_back(b.j);
     for (const auto& [i, j] : rods) rod_pairs.push_back(i), rod_pairs.push_back(j);
     pair_list("bonds", bonds);
     pair_list("rods", rod_pairs);
-    H5Gclose(connectivity);
   }
 
-  const hid_t parameters = group(file_, "parameters");
-  string_attribute(parameters, "input", input_text);
-  H5Gclose(parameters);
-  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), spec_.file, "flush the file");
+  {
+    H5Handle parameters = group(file_, "parameters", f);
+    string_attribute(parameters, "input", input_text, f);
+  }
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), f, "flush the file");
 }
 
 H5mdWriter::Series H5mdWriter::continue_series(hid_t parent, const std::string& name,
                                                std::int64_t step) {
   Series s;
-  s.group = H5Gopen2(parent, name.c_str(), H5P_DEFAULT);
-  if (s.group >= 0) {
-    s.step = H5Dopen2(s.group, "step", H5P_DEFAULT);
-    s.time = H5Dopen2(s.group, "time", H5P_DEFAULT);
-    s.value = H5Dopen2(s.group, "value", H5P_DEFAULT);
+  s.group = h5_group(H5Gopen2(parent, name.c_str(), H5P_DEFAULT));
+  if (s.group.valid()) {
+    s.step = h5_dataset(H5Dopen2(s.group, "step", H5P_DEFAULT));
+    s.time = h5_dataset(H5Dopen2(s.group, "time", H5P_DEFAULT));
+    s.value = h5_dataset(H5Dopen2(s.group, "value", H5P_DEFAULT));
   }
-  if (s.group < 0 || s.step < 0 || s.time < 0 || s.value < 0) {
+  if (!s.group.valid() || !s.step.valid() || !s.time.valid() || !s.value.valid()) {
     throw InputError(spec_.file + ": cannot continue this trajectory: it has no readable " + name +
                      " series; move the file aside to start a new one");
   }
-  hid_t space = H5Dget_space(s.step);
   hsize_t frames = 0;
-  H5Sget_simple_extent_dims(space, &frames, nullptr);
-  H5Sclose(space);
+  {
+    H5Handle space = h5_space(H5Dget_space(s.step));
+    H5Sget_simple_extent_dims(space, &frames, nullptr);
+  }
   std::vector<std::int64_t> steps(frames);
   if (frames > 0) {
     check(H5Dread(s.step, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, steps.data()),
@@ -193,11 +194,13 @@ H5mdWriter::Series H5mdWriter::continue_series(hid_t parent, const std::string& 
   }
   const auto keep =
       static_cast<hsize_t>(std::upper_bound(steps.begin(), steps.end(), step) - steps.begin());
-  for (hid_t set : {s.step, s.time, s.value}) {
-    space = H5Dget_space(set);
-    std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-    H5Sclose(space);
+  for (hid_t set : {s.step.get(), s.time.get(), s.value.get()}) {
+    std::vector<hsize_t> dims;
+    {
+      H5Handle space = h5_space(H5Dget_space(set));
+      dims.resize(static_cast<std::size_t>(std::max(H5Sget_simple_extent_ndims(space), 1)));
+      H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+    }
     dims[0] = keep;
     check(H5Dset_extent(set, dims.data()), spec_.file, "cut the trajectory back to the checkpoint");
   }
@@ -205,13 +208,13 @@ H5mdWriter::Series H5mdWriter::continue_series(hid_t parent, const std::string& 
 }
 
 void H5mdWriter::reopen(const System& system, std::int64_t step) {
-  file_ = H5Fopen(spec_.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
-  if (file_ < 0) {
+  file_ = h5_file(H5Fopen(spec_.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+  if (!file_.valid()) {
     throw InputError(spec_.file +
                      ": cannot open the trajectory to continue it; check that it is writable");
   }
-  const hid_t all = H5Gopen2(file_, "/particles/all", H5P_DEFAULT);
-  if (all < 0) {
+  H5Handle all = h5_group(H5Gopen2(file_, "/particles/all", H5P_DEFAULT));
+  if (!all.valid()) {
     throw InputError(spec_.file +
                      ": not a deli H5MD trajectory (no /particles/all); move it aside or name "
                      "another trajectory file");
@@ -221,19 +224,18 @@ void H5mdWriter::reopen(const System& system, std::int64_t step) {
        {std::pair{"velocity", spec_.velocities}, std::pair{"force", spec_.forces},
         std::pair{"image", spec_.images}}) {
     if (has(name) != wanted) {
-      H5Gclose(all);
       throw InputError(spec_.file + ": the trajectory " + (wanted ? "lacks" : "has") + " " + name +
                        " frames, the input " + (wanted ? "asks for" : "does not ask for") +
                        " them; keep [output] trajectory as it was to continue the file");
     }
   }
   position_ = continue_series(all, "position", step);
-  hid_t space = H5Dget_space(position_.value);
   hsize_t dims[3] = {0, 0, 0};
-  H5Sget_simple_extent_dims(space, dims, nullptr);
-  H5Sclose(space);
+  {
+    H5Handle space = h5_space(H5Dget_space(position_.value));
+    if (H5Sget_simple_extent_ndims(space) == 3) H5Sget_simple_extent_dims(space, dims, nullptr);
+  }
   if (dims[1] != system.particles.size()) {
-    H5Gclose(all);
     throw InputError(spec_.file + ": the trajectory holds " + std::to_string(dims[1]) +
                      " atoms, the run " + std::to_string(system.particles.size()) +
                      "; it belongs to another system");
@@ -241,11 +243,21 @@ void H5mdWriter::reopen(const System& system, std::int64_t step) {
   if (spec_.velocities) velocity_ = continue_series(all, "velocity", step);
   if (spec_.forces) force_ = continue_series(all, "force", step);
   if (spec_.images) image_ = continue_series(all, "image", step);
-  const hid_t box = H5Gopen2(all, "box", H5P_DEFAULT);
-  edges_ = continue_series(box, "edges", step);
-  H5Gclose(box);
-  H5Gclose(all);
-  observables_group_ = H5Gopen2(file_, "observables", H5P_DEFAULT);
+  {
+    H5Handle box = h5_group(H5Gopen2(all, "box", H5P_DEFAULT));
+    if (!box.valid()) {
+      throw InputError(spec_.file +
+                       ": cannot continue this trajectory: it has no box; move the "
+                       "file aside to start a new one");
+    }
+    edges_ = continue_series(box, "edges", step);
+  }
+  observables_group_ = h5_group(H5Gopen2(file_, "observables", H5P_DEFAULT));
+  if (!observables_group_.valid()) {
+    throw InputError(spec_.file +
+                     ": cannot continue this trajectory: it has no /observables; move the file "
+                     "aside to start a new one");
+  }
   hsize_t count = 0;
   H5Gget_num_objs(observables_group_, &count);
   for (hsize_t k = 0; k < count; ++k) {
@@ -256,20 +268,20 @@ void H5mdWriter::reopen(const System& system, std::int64_t step) {
   check(H5Fflush(file_, H5F_SCOPE_GLOBAL), spec_.file, "flush the file");
 }
 
-H5mdWriter::~H5mdWriter() {
-  close();
-}
+// An error path (a frame that failed, an exception elsewhere): close without reporting.
+H5mdWriter::~H5mdWriter() = default;
 
 H5mdWriter::Series H5mdWriter::make_series(hid_t parent, const std::string& name, hid_t type,
                                            const std::vector<hsize_t>& frame_shape) {
   Series s;
-  s.group = checked(group(parent, name.c_str()), spec_.file, "create a group");
-  const hsize_t zero = 0, unlimited = H5S_UNLIMITED, one = 1;
+  s.group = group(parent, name.c_str(), spec_.file);
+  const hsize_t unlimited = H5S_UNLIMITED, one = 1;
   auto series_dataset = [&](const char* dname, hid_t dtype, const std::vector<hsize_t>& shape) {
     std::vector<hsize_t> dims{0}, max{unlimited}, chunk{one};
     for (hsize_t d : shape) dims.push_back(d), max.push_back(d), chunk.push_back(d);
-    const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), max.data());
-    const hid_t properties = H5Pcreate(H5P_DATASET_CREATE);
+    H5Handle space =
+        h5_space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), max.data()));
+    H5Handle properties = h5_properties(H5Pcreate(H5P_DATASET_CREATE));
     // One frame per chunk: appending never rewrites earlier chunks.
     if (shape.empty()) chunk[0] = 1024;
     H5Pset_chunk(properties, static_cast<int>(chunk.size()), chunk.data());
@@ -277,13 +289,10 @@ H5mdWriter::Series H5mdWriter::make_series(hid_t parent, const std::string& name
       H5Pset_shuffle(properties);
       H5Pset_deflate(properties, static_cast<unsigned>(spec_.compression));
     }
-    const hid_t set =
-        H5Dcreate2(s.group, dname, dtype, space, H5P_DEFAULT, properties, H5P_DEFAULT);
-    H5Pclose(properties);
-    H5Sclose(space);
-    return checked(set, spec_.file, "create a dataset");
+    return checked(
+        h5_dataset(H5Dcreate2(s.group, dname, dtype, space, H5P_DEFAULT, properties, H5P_DEFAULT)),
+        spec_.file, "create a dataset");
   };
-  (void)zero;
   s.step = series_dataset("step", H5T_NATIVE_INT64, {});
   s.time = series_dataset("time", H5T_NATIVE_DOUBLE, {});
   s.value = series_dataset("value", type, frame_shape);
@@ -294,22 +303,24 @@ void H5mdWriter::append(Series& s, std::int64_t step, double time, const void* d
                         hid_t memory_type, const std::vector<hsize_t>& frame_shape) {
   auto grow_and_write = [&](hid_t set, hid_t type, const void* values,
                             const std::vector<hsize_t>& shape) {
-    hid_t space = H5Dget_space(set);
-    std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-    H5Sclose(space);
+    std::vector<hsize_t> dims;
+    {
+      H5Handle space = h5_space(H5Dget_space(set));
+      dims.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
+      H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+    }
     const hsize_t at = dims[0];
     dims[0] = at + 1;
     check(H5Dset_extent(set, dims.data()), spec_.file, "extend a dataset");
-    space = H5Dget_space(set);
+    H5Handle space = h5_space(H5Dget_space(set));
     std::vector<hsize_t> start(dims.size(), 0), count{1};
     start[0] = at;
     for (hsize_t d : shape) count.push_back(d);
-    H5Sselect_hyperslab(space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr);
-    const hid_t memory = H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr);
+    check(H5Sselect_hyperslab(space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
+          spec_.file, "select a frame");
+    H5Handle memory =
+        h5_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));
     check(H5Dwrite(set, type, memory, space, H5P_DEFAULT, values), spec_.file, "write a frame");
-    H5Sclose(memory);
-    H5Sclose(space);
   };
   grow_and_write(s.step, H5T_NATIVE_INT64, &step, {});
   grow_and_write(s.time, H5T_NATIVE_DOUBLE, &time, {});
@@ -370,12 +381,11 @@ void H5mdWriter::on_finish(const System&) {
 }
 
 void H5mdWriter::close() {
-  if (file_ < 0) return;
-  auto close_series = [](Series& s) {
-    for (hid_t* id : {&s.step, &s.time, &s.value}) {
-      if (*id >= 0) H5Dclose(*id), *id = -1;
-    }
-    if (s.group >= 0) H5Gclose(s.group), s.group = -1;
+  if (!file_.valid()) return;
+  herr_t status = 0;
+  auto close_series = [&status](Series& s) {
+    for (H5Handle* h : {&s.step, &s.time, &s.value, &s.group})
+      status = std::min(status, h->close());
   };
   close_series(position_);
   close_series(velocity_);
@@ -383,9 +393,9 @@ void H5mdWriter::close() {
   close_series(image_);
   close_series(edges_);
   for (auto& [name, s] : observables_) close_series(s);
-  if (observables_group_ >= 0) H5Gclose(observables_group_);
-  H5Fclose(file_);
-  file_ = -1;
+  status = std::min(status, observables_group_.close());
+  status = std::min(status, file_.close());
+  check(status, spec_.file, "close the trajectory");
 }
 
 }  // namespace deli

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "h5md/h5_handle.hpp"
 #include "h5md/trajectory_spec.hpp"
 #include "simulation/observer.hpp"
 
@@ -44,7 +45,7 @@ class H5mdWriter final : public Observer {
 
  private:
   struct Series {
-    hid_t group = -1, step = -1, time = -1, value = -1;
+    H5Handle group, step, time, value;
   };
   Series make_series(hid_t parent, const std::string& name, hid_t type,
                      const std::vector<hsize_t>& frame_shape);
@@ -55,13 +56,14 @@ class H5mdWriter final : public Observer {
   Series continue_series(hid_t parent, const std::string& name, std::int64_t step);
   void append(Series& s, std::int64_t step, double time, const void* data, hid_t memory_type,
               const std::vector<hsize_t>& frame_shape);
+  // Closes every dataset and the file; throws when HDF5 could not write what it cached.
   void close();
 
   TrajectorySpec spec_;
-  hid_t file_ = -1;
+  H5Handle file_;
   Series position_, velocity_, force_, image_, edges_;
   std::map<std::string, Series> observables_;
-  hid_t observables_group_ = -1;
+  H5Handle observables_group_;
   std::int64_t frames_ = 0;
   std::size_t atoms_ = 0;
 };

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "input/constraints_input.hpp"
 #include "input/lammps_data.hpp"
+#include "input/output_paths.hpp"
 #include "input/thermostat_input.hpp"
 #include "input/toml_table.hpp"
 #include "integrators/thermostatted_integrator.hpp"
@@ -440,6 +441,34 @@ void check_box_fits_cutoff(const RunInput& input, const TomlTable& root) {
   }
 }
 
+// Numbers that are each finite can still combine into an infinite box (a tiny density, a
+// huge lattice) or atoms the builders placed at infinity; nothing downstream checks that.
+void check_system_is_finite(const System& system, const TomlTable& root) {
+  const Vec3 length = system.box.length();
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(length[a]) || !(length[a] > 0)) {
+      root.fail("the box length along " + std::string(1, "xyz"[a]) + " is " +
+                std::to_string(length[a]) +
+                ": not a finite positive length; check the box "
+                "bounds, the density and the number of cells");
+    }
+  }
+  if (!std::isfinite(system.box.volume())) {
+    root.fail("the box volume overflows (box " + std::to_string(length.x) + " x " +
+              std::to_string(length.y) + " x " + std::to_string(length.z) +
+              "); check the box bounds, the density and the number of cells");
+  }
+  const Particles& p = system.particles;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p.position[i][k]) || !std::isfinite(p.velocity[i][k])) {
+        root.fail("atom " + std::to_string(p.id[i]) +
+                  " has a position or velocity that is not finite; check the system's numbers");
+      }
+    }
+  }
+}
+
 // Hard spheres must not overlap even where special_bonds takes a pair out of the force
 // field's neighbour list (1-3, 1-4 neighbours): those pairs are checked on their own.
 void add_excluded_contacts(RunInput& input) {
@@ -482,8 +511,10 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (!system) root.fail("missing the [system] table");
   DataCoefficients data_coefficients;
   input.system = read_system(*system, dir, data_coefficients);
+  input.data_file = data_coefficients.file;
   system->finish();
   input.start_temperature = read_velocities(root, input.system);
+  check_system_is_finite(input.system, root);
   bool rigid_bonds = false;
   input.constraints = read_constraints(root.table("constraints"), input.system, rigid_bonds);
   input.force_field_spec =
@@ -608,21 +639,25 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (input.steps < 0) run->fail("must not be negative", "steps");
   run->finish();
 
+  std::vector<OutputFile> output_files;
   if (auto output = root.table("output")) {
     if (auto thermo = output->table("thermo")) {
       input.thermo.every = thermo->integer("every", 100);
       if (input.thermo.every < 0) thermo->fail("must not be negative", "every");
       input.thermo.file = thermo->string("file", "");
+      output_files.push_back({"thermo", input.thermo.file, *thermo});
       thermo->finish();
     }
     if (auto checkpoint = output->table("checkpoint")) {
       input.checkpoint.file = checkpoint->string("file");
+      output_files.push_back({"checkpoint", input.checkpoint.file, *checkpoint});
       input.checkpoint.every = checkpoint->integer("every", 10000);
       if (input.checkpoint.every < 1) checkpoint->fail("must be at least 1", "every");
       checkpoint->finish();
     }
     if (auto dump = output->table("dump")) {
       input.dump.file = dump->string("file");
+      output_files.push_back({"dump", input.dump.file, *dump});
       input.dump.format = dump->choice("format", {"lammps", "xyz"}, "lammps");
       input.dump.every = dump->integer("every", 1000);
       if (input.dump.every < 1) dump->fail("must be at least 1", "every");
@@ -630,6 +665,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     }
     if (auto trajectory = output->table("trajectory")) {
       input.trajectory.file = trajectory->string("file");
+      output_files.push_back({"trajectory", input.trajectory.file, *trajectory});
       input.trajectory.every = trajectory->integer("every", 1000);
       if (input.trajectory.every < 1) trajectory->fail("must be at least 1", "every");
       input.trajectory.velocities = trajectory->boolean("velocities", true);
@@ -645,9 +681,18 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   }
   input.thermostat = read_thermostat(root.table("thermostat"));
   root.finish();
+  std::vector<std::pair<std::string, std::string>> inputs{{"input file", path}};
+  if (!input.data_file.empty()) inputs.emplace_back("data file", input.data_file);
+  check_output_paths(output_files, inputs);
   check_box_fits_cutoff(input, root);
   input.degrees_of_freedom = run_degrees_of_freedom(input.system, input.constraints,
                                                     input.force_field_spec, input.thermostat);
+  // Key order and formatting are toml++'s own, so comments and layout do not count.
+  std::ostringstream model;
+  for (const char* table : {"forcefield", "constraints"}) {
+    if (const toml::table* t = doc[table].as_table()) model << "[" << table << "]\n" << *t << "\n";
+  }
+  input.model_text = model.str();
   input.gvi.timestep = input.timestep;
   input.gvi.skin = input.skin;
   add_excluded_contacts(input);

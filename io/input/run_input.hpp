@@ -32,6 +32,7 @@ struct ThermoOutputSpec {
 // Everything a `deli run` needs, read from a TOML input and the files it names.
 struct RunInput {
   std::string path;
+  std::string data_file;  // the LAMMPS data file read, "" for a built system
   System system;
   ForceFieldSpec force_field_spec;
   std::unique_ptr<ForceField> force_field;  // built from force_field_spec
@@ -47,6 +48,7 @@ struct RunInput {
     std::int64_t every = 10000;
   } checkpoint;
   std::string source_text;    // the input as read, stored with trajectories
+  std::string model_text;     // [forcefield] and [constraints] as canonical TOML (checkpoints)
   MinimizeSettings minimize;  // max_steps 0: none
   ConstraintSet constraints;
   GviOptions gvi;              // timestep and skin copied from above

@@ -1,5 +1,7 @@
 #include "input/toml_table.hpp"
 
+#include <cmath>
+
 #include "core/error.hpp"
 
 namespace deli {
@@ -22,6 +24,12 @@ std::string type_name(const toml::node& node) {
     default:
       return "a date or time";
   }
+}
+// TOML accepts nan and inf; no quantity of a run may be either (NaN passes every `< 0`
+// check, so this is the one place that keeps it out).
+std::string not_finite(double v) {
+  return std::string("expected a finite number, found ") + (std::isnan(v) ? "nan" : "inf") +
+         "; give a finite value";
 }
 }  // namespace
 
@@ -69,8 +77,10 @@ double TomlTable::number(const std::string& key, std::optional<double> fallback)
   used_.insert(key);
   if (!table_->contains(key) && fallback) return *fallback;
   const toml::node& node = require(key);
-  if (auto v = node.value<double>(); v && (node.is_floating_point() || node.is_integer()))
+  if (auto v = node.value<double>(); v && (node.is_floating_point() || node.is_integer())) {
+    if (!std::isfinite(*v)) fail(not_finite(*v), key);
     return *v;
+  }
   fail("expected a number, found " + type_name(node), key);
 }
 
@@ -125,6 +135,9 @@ std::vector<double> TomlTable::numbers(const std::string& key, std::size_t size)
     auto v = element.value<double>();
     if (!v || !(element.is_floating_point() || element.is_integer())) {
       fail("expected numbers, found " + type_name(element), key);
+    }
+    if (!std::isfinite(*v)) {
+      fail("element " + std::to_string(values.size() + 1) + ": " + not_finite(*v), key);
     }
     values.push_back(*v);
   }

@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "text/continuation.hpp"
+#include "text/write_failure.hpp"
 
 namespace deli {
 
@@ -32,6 +33,7 @@ DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t ever
                      ": cannot open the dump file for writing; check that the directory "
                      "exists and is writable");
   }
+  written_ = bytes_in_file(path);
   out_.precision(10);
 }
 
@@ -61,6 +63,19 @@ void DumpWriter::on_frame(const System& system, const ThermoSample&, const std::
     }
   }
   out_.flush();
+  if (!out_) {
+    drop_partial_record(out_, path_, written_);
+    throw SimulationError(path_ + ": could not write the frame of step " +
+                          std::to_string(system.step) +
+                          " (disk full or not writable?); the frames before it are kept");
+  }
+  written_ = bytes_in_file(path_);
+}
+
+void DumpWriter::on_finish(const System&) {
+  if (!out_.is_open()) return;
+  out_.close();
+  if (!out_) throw SimulationError(path_ + ": could not close the dump file (disk full?)");
 }
 
 }  // namespace deli

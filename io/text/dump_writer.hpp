@@ -21,10 +21,13 @@ class DumpWriter final : public Observer {
 
   bool wants_frame(std::int64_t step) const override { return step % every_ == 0; }
   void on_frame(const System& system, const ThermoSample&, const std::vector<Vec3>&) override;
+  // Closes the file, throwing when it could not be written.
+  void on_finish(const System&) override;
 
  private:
   std::string path_;
   std::ofstream out_;
+  std::uintmax_t written_ = 0;  // bytes of whole records in the file
   Format format_;
   std::int64_t every_;
 };

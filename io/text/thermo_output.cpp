@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "text/continuation.hpp"
+#include "text/write_failure.hpp"
 
 namespace deli {
 
@@ -32,7 +33,11 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
     if (shown(name)) std::fprintf(out_, " %12.4g", value);
   }
   std::fprintf(out_, "\n");
-  std::fflush(out_);
+  // A full disk behind a redirected stdout: stop rather than run on without a log.
+  if (std::fflush(out_) != 0 || std::ferror(out_)) {
+    throw SimulationError("could not write the thermo table to standard output at step " +
+                          std::to_string(s.step) + " (disk full?)");
+  }
 }
 
 ThermoCsv::ThermoCsv(const std::string& path, std::int64_t continue_from) : path_(path) {
@@ -49,6 +54,7 @@ ThermoCsv::ThermoCsv(const std::string& path, std::int64_t continue_from) : path
     throw InputError(path +
                      ": cannot open the thermo file for writing; check the "
                      "directory exists and is writable");
+  written_ = bytes_in_file(path);
   out_.precision(17);
 }
 
@@ -76,6 +82,21 @@ void ThermoCsv::on_thermo(const ThermoSample& s) {
   for (const auto& [name, value] : s.integrator) out_ << ',' << value;
   out_ << '\n';
   out_.flush();
+  if (!out_) {
+    drop_partial_record(out_, path_, written_);
+    throw SimulationError(path_ + ": could not write the thermo row of step " +
+                          std::to_string(s.step) +
+                          " (disk full or not writable?); the rows before it are kept");
+  }
+  written_ = bytes_in_file(path_);
+}
+
+void ThermoCsv::on_finish(const System&) {
+  if (!out_.is_open()) return;
+  out_.close();
+  if (!out_) {
+    throw SimulationError(path_ + ": could not close the thermo file (disk full?)");
+  }
 }
 
 void ProgressLine::on_start(const System& system, std::int64_t steps) {

@@ -29,10 +29,13 @@ class ThermoCsv final : public Observer {
   // up to it.
   explicit ThermoCsv(const std::string& path, std::int64_t continue_from = -1);
   void on_thermo(const ThermoSample& s) override;
+  // Closes the file, throwing when it could not be written.
+  void on_finish(const System&) override;
 
  private:
   std::string path_;
   std::ofstream out_;
+  std::uintmax_t written_ = 0;  // bytes of whole records in the file
   bool header_written_ = false;
 };
 

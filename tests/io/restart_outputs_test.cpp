@@ -87,3 +87,72 @@ TEST(Restart, OutputsContinueBitForBit) {
 
 }  // namespace
 }  // namespace deli
+
+namespace deli {
+namespace {
+
+// An input of the repository with its data file made absolute and its [run] and [output]
+// replaced: thermo rows every 20 steps, H5MD frames every 25, dump frames every 30 and a
+// checkpoint every 37 (so that the checkpoint's step, 74, is a multiple of none of them).
+std::string with_outputs(const std::string& source, const std::string& dir, int steps) {
+  std::string text = slurp(std::string(DELI_SOURCE_DIR) + "/" + source);
+  text = text.substr(0, text.find("[run]"));
+  const std::string source_dir =
+      std::string(DELI_SOURCE_DIR) + "/" + source.substr(0, source.rfind('/') + 1);
+  const auto data = text.find("data = \"");
+  if (data != std::string::npos) text.insert(data + 8, source_dir);
+  const std::string path = dir + "/run" + std::to_string(steps) + ".toml";
+  std::ofstream(path) << text << "[run]\nsteps = " << steps << "\n[output]\n"
+                      << "thermo = { every = 20, file = \"" << dir << "/out.csv\" }\n"
+                      << "trajectory = { file = \"" << dir << "/out.h5\", every = 25 }\n"
+                      << "dump = { file = \"" << dir << "/out.dump\", every = 30 }\n"
+                      << "checkpoint = { file = \"" << dir << "/out.chk\", every = 37 }\n";
+  return path;
+}
+
+// A restart from a step that is a multiple of no output interval (74) writes the rows and
+// frames of the uninterrupted run, for every integrator: rows at absolute multiples of
+// `every` (and the last step), not counted from the restart.
+class RestartFromAnyStep : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
+  const std::string name = GetParam().substr(GetParam().rfind('/') + 1);
+  const std::string root = ::testing::TempDir() + "/restart_any_" + name;
+  std::string log;
+  ASSERT_EQ(
+      shell("rm -rf " + root + " && mkdir -p " + root + "/straight " + root + "/stopped", log), 0);
+  const std::string deli = DELI_BINARY;
+  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), root + "/straight", 150), log), 0)
+      << log;
+  const std::string stopped = root + "/stopped";
+  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 90), log), 0) << log;
+  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 150) + " --restart " +
+                      stopped + "/out.chk",
+                  log),
+            0)
+      << log;
+  EXPECT_NE(log.find("for 76 steps"), std::string::npos) << log;  // from 74 to 150
+  const std::string csv = slurp(root + "/straight/out.csv");
+  EXPECT_NE(csv.find("\n140,"), std::string::npos);  // rows at multiples of 20, and 150
+  EXPECT_NE(csv.find("\n150,"), std::string::npos);
+  EXPECT_EQ(csv, slurp(stopped + "/out.csv"));
+  EXPECT_EQ(slurp(root + "/straight/out.dump"), slurp(stopped + "/out.dump"));
+  EXPECT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/compare_h5md.py " + root +
+                      "/straight/out.h5 " + stopped + "/out.h5 7",
+                  log),
+            0)
+      << log;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryIntegrator, RestartFromAnyStep,
+    ::testing::Values("inputs/lj_chains/melt.toml", "inputs/lj_chains/rigid_slit.toml",
+                      "inputs/paper/baselines/newtons_cradle_direct_endpoint.toml",
+                      "inputs/paper/baselines/pogo_stick_collision.toml"),
+    [](const ::testing::TestParamInfo<std::string>& info) {
+      const std::string file = info.param.substr(info.param.rfind('/') + 1);
+      return file.substr(0, file.find('.'));
+    });
+
+}  // namespace
+}  // namespace deli
