@@ -99,7 +99,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   }
   command("compute deli_virial all pressure NULL virial");
   command("compute deli_unwrapped all property/atom xu yu zu");
-  command("thermo_style custom step pe evdwl ebond eangle press vol c_deli_virial");
+  command("thermo_style custom step pe ke evdwl ebond eangle press vol c_deli_virial");
   command("thermo_modify norm no");
 }
 
@@ -157,6 +157,29 @@ std::vector<Vec3> LammpsBridge::run_nve(int steps, double dt) {
   command("run " + std::to_string(steps));
   command("unfix deli_nve");
   return per_atom("deli_unwrapped", true);
+}
+
+EnergySeries LammpsBridge::run_langevin(const LangevinRun& run) {
+  command("timestep " + number(run.timestep));
+  command("fix deli_nve all nve");
+  // zero no (the default): the random forces are not made to sum to zero, so that every
+  // one of the 3N degrees of freedom, the centre of mass included, is thermalised as in
+  // OpenMM's and deli's Langevin (with zero yes the drag alone acts on the centre of mass,
+  // which then comes to rest: 3 degrees of freedom fewer).
+  command("fix deli_langevin all langevin " + number(run.temperature) + " " +
+          number(run.temperature) + " " + number(run.damping) + " " + std::to_string(run.seed) +
+          " zero no");
+  command("run " + std::to_string(run.equilibration));
+  EnergySeries series;
+  for (int s = 0; s < run.samples; ++s) {
+    // The thermo keywords are evaluated at the last step of every run.
+    command("run " + std::to_string(run.every) + " pre no post no");
+    series.potential.push_back(lammps_get_thermo(lammps_, "pe"));
+    series.kinetic.push_back(lammps_get_thermo(lammps_, "ke"));
+  }
+  command("unfix deli_langevin");
+  command("unfix deli_nve");
+  return series;
 }
 
 }  // namespace deli

@@ -28,6 +28,12 @@ class LammpsBridge {
   EngineEvaluation evaluate();
   // Unwrapped positions after `steps` of fix nve from the data file's state.
   std::vector<Vec3> run_nve(int steps, double dt);
+  // Potential and kinetic energy series of fix nve + fix langevin (T, damp = damping,
+  // seed; zero no) from the data file's state, or from where the previous run ended.
+  // LAMMPS adds the drag -m v / damp and a uniform random force of the same variance to
+  // the forces, which velocity Verlet integrates; its kinetic energy is that of the
+  // full-step velocities.
+  EnergySeries run_langevin(const LangevinRun& run);
 
  private:
   void command(const std::string& line);

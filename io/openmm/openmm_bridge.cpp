@@ -3,6 +3,7 @@
 #include <OpenMM.h>
 
 #include <cmath>
+#include <stdexcept>
 
 namespace deli {
 
@@ -25,6 +26,9 @@ std::vector<Vec3> from_openmm(const std::vector<OpenMM::Vec3>& v) {
 // Force groups, one per deli term, so that each term's energy can be read alone.
 constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup = 3;
 
+// k_B N_A in kJ/mol/K, exactly as OpenMM's BOLTZ (SI 2019 constants).
+constexpr double kBoltzmannKJPerMolK = 1.380649e-23 * 6.02214076e23 / 1000.0;
+
 const char* kLennardJones = "4*eps*((sig/r)^12 - (sig/r)^6) - shift";
 
 }  // namespace
@@ -34,6 +38,8 @@ struct OpenMMBridge::Impl {
   std::unique_ptr<OpenMM::Integrator> integrator;
   std::unique_ptr<OpenMM::Context> context;
   std::string platform_name;
+  OpenMM::Platform* platform = nullptr;
+  std::map<std::string, std::string> properties;
   bool periodic = false;
   Vec3 box_length;
   std::vector<double> mass;
@@ -171,15 +177,12 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
                            " platform is not available (install libopenmm-plugins)");
   }
   m.platform_name = name;
+  m.platform = chosen;
+  if (platform == Platform::cpu) m.properties = {{"Threads", "1"}};
   for (const Constraint& rod : rods) m.system.addConstraint(rod.i, rod.j, rod.length);
   m.integrator = std::make_unique<OpenMM::VerletIntegrator>(0.001);
   m.integrator->setConstraintTolerance(constraint_tolerance);
-  if (platform == Platform::cpu) {
-    m.context = std::make_unique<OpenMM::Context>(
-        m.system, *m.integrator, *chosen, std::map<std::string, std::string>{{"Threads", "1"}});
-  } else {
-    m.context = std::make_unique<OpenMM::Context>(m.system, *m.integrator, *chosen);
-  }
+  m.context = std::make_unique<OpenMM::Context>(m.system, *m.integrator, *chosen, m.properties);
 }
 
 OpenMMBridge::~OpenMMBridge() = default;
@@ -236,6 +239,29 @@ std::vector<Vec3> OpenMMBridge::run_nve(const std::vector<Vec3>& position,
   m.context->setVelocities(to_openmm(half_step_back));
   verlet->step(steps);
   return from_openmm(m.context->getState(OpenMM::State::Positions).getPositions());
+}
+
+EnergySeries OpenMMBridge::run_langevin(const std::vector<Vec3>& position,
+                                        const std::vector<Vec3>& velocity, const LangevinRun& run) {
+  Impl& m = *impl_;
+  if (run.seed <= 0) throw std::invalid_argument("OpenMM's seed must be positive (0: random)");
+  // A context of its own: the Verlet one stays as it was.
+  OpenMM::LangevinMiddleIntegrator langevin(run.temperature / kBoltzmannKJPerMolK,
+                                            1.0 / run.damping, run.timestep);
+  langevin.setRandomNumberSeed(run.seed);
+  langevin.setConstraintTolerance(m.integrator->getConstraintTolerance());
+  OpenMM::Context context(m.system, langevin, *m.platform, m.properties);
+  context.setPositions(to_openmm(position));
+  context.setVelocities(to_openmm(velocity));
+  langevin.step(run.equilibration);
+  EnergySeries series;
+  for (int s = 0; s < run.samples; ++s) {
+    langevin.step(run.every);
+    const OpenMM::State state = context.getState(OpenMM::State::Energy);
+    series.potential.push_back(state.getPotentialEnergy());
+    series.kinetic.push_back(state.getKineticEnergy());
+  }
+  return series;
 }
 
 }  // namespace deli

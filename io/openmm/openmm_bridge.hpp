@@ -34,6 +34,13 @@ class OpenMMBridge {
   // of velocity Verlet.
   std::vector<Vec3> run_nve(const std::vector<Vec3>& position, const std::vector<Vec3>& velocity,
                             int steps, double dt);
+  // Potential and kinetic energy series of LangevinMiddleIntegrator (Zhang et al., J. Phys.
+  // Chem. A 123, 6056, 2019: a leapfrog form of BAOAB) from (x, v), rods held as
+  // constraints. OpenMM takes the bath in kelvin: kT = 1 kJ/mol = epsilon at T = 1 / (k_B
+  // N_A in kJ/mol/K), and friction 1 / damping per ps. Its kinetic energy is that of the
+  // velocities it holds, half a step from the positions (after the O part of the step).
+  EnergySeries run_langevin(const std::vector<Vec3>& position, const std::vector<Vec3>& velocity,
+                            const LangevinRun& run);
 
  private:
   struct Impl;
