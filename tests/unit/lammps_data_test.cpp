@@ -407,13 +407,44 @@ Masses
 1 1
 )";
 
-TEST_F(LammpsDataTest, CoefficientSectionIsAnError) {
+// Coefficient sections as LAMMPS write_data writes them are read as written (the force
+// field reader gives them meaning); dihedral coefficients have no model here.
+TEST_F(LammpsDataTest, PairCoefficientsAreRead) {
   const std::string path = write_file(std::string(kPreamble) + R"(
 Pair Coeffs # lj/cut
 
-1 1.0 1.0
+1 1.0 1.1
+
+Atoms # atomic
+
+1 1 1 1 1
+2 1 2 2 2
+3 1 3 3 3
 )");
-  expect_error_at(read_error(path), path, 12, {"Pair Coeffs", "TOML", "[forcefield]"});
+  const LammpsDataFile file = read_lammps_data(path, {});
+  EXPECT_EQ(file.pair.style, "lj/cut");
+  EXPECT_EQ(file.pair.line, 12);
+  ASSERT_EQ(file.pair.rows.size(), 1u);
+  EXPECT_EQ(file.pair.rows[0].types, std::vector<int>{0});
+  EXPECT_EQ(file.pair.rows[0].values, (std::vector<double>{1.0, 1.1}));
+}
+
+TEST_F(LammpsDataTest, CoefficientsOfATypeOutsideTheHeaderAreAnError) {
+  const std::string path = write_file(std::string(kPreamble) + R"(
+Pair Coeffs # lj/cut
+
+2 1.0 1.0
+)");
+  expect_error_at(read_error(path), path, 14, {"atom type 2", "outside"});
+}
+
+TEST_F(LammpsDataTest, DihedralCoefficientSectionIsAnError) {
+  const std::string path = write_file(std::string(kPreamble) + R"(
+Dihedral Coeffs # harmonic
+
+1 1.0 1 2
+)");
+  expect_error_at(read_error(path), path, 12, {"Dihedral Coeffs", "remove this section"});
 }
 
 TEST_F(LammpsDataTest, BondNamingUnknownAtomIsAnError) {
