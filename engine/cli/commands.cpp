@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "cli/exit_status.hpp"
 #include "core/error.hpp"
 #include "h5md/checkpoint.hpp"
 #include "h5md/fingerprint.hpp"
@@ -22,6 +23,7 @@
 #include "simulation/run_loop.hpp"
 #include "simulation/timing_table.hpp"
 #include "text/dump_writer.hpp"
+#include "text/run_log.hpp"
 #include "text/thermo_output.hpp"
 
 namespace deli {
@@ -29,10 +31,10 @@ namespace deli {
 namespace {
 namespace fs = std::filesystem;
 
-void minimize_if_asked(RunInput& input) {
+void minimize_if_asked(RunInput& input, RunLog& out) {
   if (input.minimize.max_steps == 0) return;
   const MinimizeResult r = quickmin(input.system, *input.force_field, input.skin, input.minimize);
-  std::printf(
+  out.print(
       "minimize (quickmin): %lld steps, energy %.10g -> %.10g, largest force component "
       "%.3g (%s)\n",
       static_cast<long long>(r.steps), r.initial_energy, r.final_energy, r.max_force,
@@ -44,6 +46,9 @@ std::string style_for(const System& system) {
   if (!system.topology.bonds.empty()) return "bond";
   return "atomic";
 }
+
+int run_with_output(RunInput& input, const std::string& path, const std::string& restart,
+                    const Checkpoint& checkpoint, std::uint64_t fingerprint, RunLog& out);
 }  // namespace
 
 int command_run(const std::vector<std::string>& args) {
@@ -79,34 +84,55 @@ int command_run(const std::vector<std::string>& args) {
     }
   }
 
-  std::printf("deli %s: %s\n", DELI_VERSION, path.c_str());
-  std::printf("%zu atoms, %zu bonds, %zu angles; box %g x %g x %g; dt %g, %lld steps\n",
-              input.system.particles.size(), input.system.topology.bonds.size(),
-              input.system.topology.angles.size(), input.system.box.length().x,
-              input.system.box.length().y, input.system.box.length().z, input.timestep,
-              static_cast<long long>(input.steps));
-  for (const std::string& note : input.notes) std::printf("%s\n", note.c_str());
-  std::printf("%s\n", input.degrees_of_freedom.describe().c_str());
+  RunLog out;
+  if (!input.log.empty()) out.open(input.log, !restart.empty());
+  try {
+    const int status = run_with_output(input, path, restart, checkpoint, fingerprint, out);
+    out.close();
+    return status;
+  } catch (const std::exception& e) {
+    // The log gets the message the terminal gets (from main) before the run ends.
+    if (out.file()) std::fprintf(out.file(), "deli: %s\n", e.what());
+    throw;
+  }
+}
+
+namespace {
+int run_with_output(RunInput& input, const std::string& path, const std::string& restart,
+                    const Checkpoint& checkpoint, std::uint64_t fingerprint, RunLog& out) {
+  out.print("deli %s: %s\n", DELI_VERSION, path.c_str());
+  out.print("%zu atoms, %zu bonds, %zu angles; box %g x %g x %g; dt %g, %lld steps\n",
+            input.system.particles.size(), input.system.topology.bonds.size(),
+            input.system.topology.angles.size(), input.system.box.length().x,
+            input.system.box.length().y, input.system.box.length().z, input.timestep,
+            static_cast<long long>(input.steps));
+  for (const std::string& note : input.notes) out.print("%s\n", note.c_str());
+  out.print("%s\n", input.degrees_of_freedom.describe().c_str());
   if (input.thermostat) {
     const ThermostatSettings& t = *input.thermostat;
-    std::printf("thermostat %s: T %g, damping %g, seed %llu%s\n",
-                t.kind == ThermostatKind::langevin ? "langevin" : "csvr", t.temperature, t.damping,
-                static_cast<unsigned long long>(t.seed),
-                t.until_step < 0 ? ""
-                                 : (", for steps before " + std::to_string(t.until_step) +
-                                    ", then constant energy")
-                                       .c_str());
+    out.print("thermostat %s: T %g, damping %g, seed %llu%s\n",
+              t.kind == ThermostatKind::langevin ? "langevin" : "csvr", t.temperature, t.damping,
+              static_cast<unsigned long long>(t.seed),
+              t.until_step < 0 ? ""
+                               : (", for steps before " + std::to_string(t.until_step) +
+                                  ", then constant energy")
+                                     .c_str());
   }
 
-  if (restart.empty()) minimize_if_asked(input);
+  if (restart.empty()) minimize_if_asked(input, out);
   const std::unique_ptr<Integrator> integrator = make_integrator(input);
   // A restart appends to the run's outputs, cut back to what precedes the checkpoint.
   const std::int64_t continue_from = restart.empty() ? -1 : checkpoint.step;
   ThermoTable table(stdout);
   std::vector<Observer*> observers{&table};
+  std::unique_ptr<ThermoTable> logged_table;
+  if (out.file()) {
+    logged_table = std::make_unique<ThermoTable>(out.file());
+    observers.push_back(logged_table.get());
+  }
   std::unique_ptr<ThermoCsv> csv;
   if (!input.thermo.file.empty()) {
-    csv = std::make_unique<ThermoCsv>(input.thermo.file, continue_from);
+    csv = std::make_unique<ThermoCsv>(input.thermo.file, continue_from, input.thermo.every);
     observers.push_back(csv.get());
   }
   std::unique_ptr<H5mdWriter> trajectory;
@@ -177,21 +203,35 @@ int command_run(const std::vector<std::string>& args) {
       throw SimulationError("interrupted after step " + std::to_string(input.system.step) +
                             ", but no checkpoint could be written" + failures);
     }
-    std::printf(
+    out.print(
         "interrupted after step %lld: checkpoint written to %s; continue with\n  deli run "
         "%s --restart %s\n",
         static_cast<long long>(input.system.step), fs::absolute(file).c_str(), path.c_str(),
         fs::absolute(file).c_str());
-    return 130;
+    return kExitInterrupted;
   }
-  std::printf(
+  // The end of every run is a checkpoint when the run has them, and the final state a data
+  // file when asked for.
+  if (!input.checkpoint.file.empty() && input.system.step % input.checkpoint.every != 0) {
+    write_checkpoint(input.checkpoint.file, input.system, *integrator, fingerprint);
+    out.print("final checkpoint at step %lld: %s\n", static_cast<long long>(input.system.step),
+              input.checkpoint.file.c_str());
+  }
+  if (!input.final_data.empty()) {
+    write_lammps_data(
+        input.system, input.final_data, style_for(input.system),
+        "deli " DELI_VERSION " from " + path + " at step " + std::to_string(input.system.step));
+    out.print("final state written to %s (LAMMPS data file)\n", input.final_data.c_str());
+  }
+  out.print(
       "loop time %.3f s for %lld steps of %zu atoms: %.4g atom-steps/s, %lld neighbour "
       "list builds\n",
       stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
       stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
-  std::fputs(timing_table(stats).c_str(), stdout);
+  out.print("%s", timing_table(stats).c_str());
   return 0;
 }
+}  // namespace
 
 int command_info(const std::vector<std::string>& args) {
   if (args.size() != 1) throw InputError("usage: deli info FILE (an H5MD trajectory)");
@@ -209,7 +249,8 @@ int command_write_data(const std::vector<std::string>& args) {
                        "; writing it would destroy it: name another FILE");
     }
   }
-  minimize_if_asked(input);
+  RunLog out;
+  minimize_if_asked(input, out);
   write_lammps_data(input.system, args[1], style_for(input.system),
                     "deli " DELI_VERSION " from " + args[0]);
   std::printf("wrote %zu atoms to %s\n", input.system.particles.size(), args[1].c_str());

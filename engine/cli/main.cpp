@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/exit_status.hpp"
 #include "core/error.hpp"
 
 namespace {
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
   try {
     if (args.empty() || args[0] == "-h" || args[0] == "--help" || args[0] == "help") {
       std::fputs(kUsage, stdout);
-      return args.empty() ? 2 : 0;
+      return args.empty() ? deli::kExitUsage : deli::kExitSuccess;
     }
     if (args[0] == "--version") {
       std::printf("deli %s\n", DELI_VERSION);
@@ -93,13 +94,15 @@ int main(int argc, char** argv) {
     if (args[0] == "info") return deli::command_info(rest);
     std::fprintf(stderr, "deli: unknown command '%s'; run 'deli --help' for the commands\n",
                  args[0].c_str());
-    return 2;
+    return deli::kExitUsage;
   } catch (const deli::InputError& e) {
     std::fprintf(stderr, "deli: input error: %s\n", e.what());
+    return deli::kExitInputError;
   } catch (const deli::SimulationError& e) {
     std::fprintf(stderr, "deli: simulation stopped: %s\n", e.what());
+    return deli::kExitSimulationStopped;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "deli: error: %s\n", e.what());
   }
-  return 1;
+  return deli::kExitInputError;
 }

@@ -1,6 +1,7 @@
 #include <cstdio>
 
 #include "cli/commands.hpp"
+#include "cli/exit_status.hpp"
 #include "core/error.hpp"
 #include "crosscheck/validate.hpp"
 #include "simulation/thermo.hpp"
@@ -133,7 +134,7 @@ int command_validate(const std::vector<std::string>& args) {
   std::fprintf(stderr, "deli validate: disagreement: %s %s differs by %.3e (tolerance %.1e)%s%s\n",
                worst->engine.c_str(), worst->quantity.c_str(), worst->difference, worst->tolerance,
                worst->where.empty() ? "" : " at ", worst->where.c_str());
-  return 1;
+  return kExitDisagreement;
 }
 
 }  // namespace deli

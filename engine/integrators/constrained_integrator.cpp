@@ -457,19 +457,19 @@ void ConstrainedIntegrator::restore_state(const std::vector<double>& state, cons
   }
 }
 
-double ConstrainedIntegrator::take_constraint_virial(Sampler sampler) {
+double ConstrainedIntegrator::take_constraint_virial(Sampler sampler, bool keep) {
   const auto k = static_cast<std::size_t>(sampler);
   const std::int64_t steps = sampled_[k].steps;
   const double average = steps > 0 ? virial_sums_[k] / static_cast<double>(steps) : 0.0;
-  virial_sums_[k] = 0.0;
+  if (!keep) virial_sums_[k] = 0.0;
   return average;
 }
 
-std::vector<std::pair<std::string, double>> ConstrainedIntegrator::take_statistics(
-    Sampler sampler) {
+std::vector<std::pair<std::string, double>> ConstrainedIntegrator::take_statistics(Sampler sampler,
+                                                                                   bool keep) {
   const auto k = static_cast<std::size_t>(sampler);
   const ConstraintStatistics s = sampled_[k];
-  sampled_[k] = ConstraintStatistics{};
+  if (!keep) sampled_[k] = ConstraintStatistics{};
   const double steps = std::max<double>(1.0, static_cast<double>(s.steps));
   return {{"min_gap", std::isfinite(s.min_gap) ? s.min_gap : 0.0},
           {"max_rod_violation", s.max_rod_violation},

@@ -47,9 +47,9 @@ class ConstrainedIntegrator : public Integrator {
   void setup(System& system) override;
   ForceEngine& engine() override { return engine_; }
   const ForceEngine& forces() const override { return engine_; }
-  std::vector<std::pair<std::string, double>> take_statistics(
-      Sampler sampler = Sampler::thermo) override;
-  double take_constraint_virial(Sampler sampler = Sampler::thermo) override;
+  std::vector<std::pair<std::string, double>> take_statistics(Sampler sampler = Sampler::thermo,
+                                                              bool keep = false) override;
+  double take_constraint_virial(Sampler sampler = Sampler::thermo, bool keep = false) override;
   std::vector<double> saved_state() const override;
   void restore_state(const std::vector<double>& state, const System& system) override;
   // RATTLE's velocity projection onto the equality rows; its impulses count in no virial.

@@ -44,12 +44,18 @@ class Integrator {
   virtual void step(System& system, bool tally = true) = 0;
   virtual const ForceEngine& forces() const = 0;
   // Named figures accumulated since the sampler's last call (constraint statistics).
-  virtual std::vector<std::pair<std::string, double>> take_statistics(Sampler = Sampler::thermo) {
+  // `keep`: report them without starting a new span, for a sample that is not one of the
+  // sampler's regular ones (a run's last step), so that a checkpoint taken there carries
+  // what the next regular sample must still count.
+  virtual std::vector<std::pair<std::string, double>> take_statistics(Sampler = Sampler::thermo,
+                                                                      bool /*keep*/ = false) {
     return {};
   }
   // The constraint impulses' virial, sum of r . J / h per step, averaged over the steps
   // since the sampler's last call: impulses are instantaneous, one step's would be noise.
-  virtual double take_constraint_virial(Sampler = Sampler::thermo) { return 0.0; }
+  virtual double take_constraint_virial(Sampler = Sampler::thermo, bool /*keep*/ = false) {
+    return 0.0;
+  }
   // Verlet's modified energy H - h^2/24 F.M^-1.F + h^2/12 v.d2V.v (potential forces only),
   // for Verlet-based integrators whose force field has pairwise Hessians.
   virtual std::optional<double> shadow_energy(const System&) const { return std::nullopt; }

@@ -24,11 +24,11 @@ class ThermostattedIntegrator final : public Integrator {
   ForceEngine& engine() override { return inner_->engine(); }
   const ForceEngine& forces() const override { return inner_->forces(); }
   void step(System& system, bool tally = true) override;
-  std::vector<std::pair<std::string, double>> take_statistics(Sampler sampler) override {
-    return inner_->take_statistics(sampler);
+  std::vector<std::pair<std::string, double>> take_statistics(Sampler sampler, bool keep) override {
+    return inner_->take_statistics(sampler, keep);
   }
-  double take_constraint_virial(Sampler sampler) override {
-    return inner_->take_constraint_virial(sampler);
+  double take_constraint_virial(Sampler sampler, bool keep) override {
+    return inner_->take_constraint_virial(sampler, keep);
   }
   std::optional<double> shadow_energy(const System& system) const override {
     return inner_->shadow_energy(system);

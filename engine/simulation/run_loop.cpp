@@ -74,7 +74,10 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     }
     return false;
   };
-  auto sample = [&](bool thermo, bool frame) {
+  // `regular`: a thermo row at a multiple of thermo_every (or the start); the last step's
+  // row is not, and leaves the integrator's figures to the next regular row (a restart from
+  // a checkpoint taken there writes the uninterrupted run's rows).
+  auto sample = [&](bool thermo, bool frame, bool regular) {
     ThermoSample s = measure_thermo(system, integrator.forces().last(), dof);
     check_sample_is_finite(system, s, integrator.forces().force());
     s.shadow_energy = integrator.shadow_energy(system);
@@ -90,8 +93,8 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       }
     }
     if (!thermo) return;
-    s.pressure += integrator.take_constraint_virial(Sampler::thermo) / (3.0 * volume);
-    s.integrator = integrator.take_statistics(Sampler::thermo);
+    s.pressure += integrator.take_constraint_virial(Sampler::thermo, !regular) / (3.0 * volume);
+    s.integrator = integrator.take_statistics(Sampler::thermo, !regular);
     for (Observer* o : observers) o->on_thermo(s);
   };
   RunStatistics stats;
@@ -101,14 +104,15 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   auto start = std::chrono::steady_clock::now();
   try {
     // A restart's first step was sampled by the run that wrote the checkpoint.
-    if (set_up) sample(true, wants_frame());
+    if (set_up) sample(true, wants_frame(), true);
     start = std::chrono::steady_clock::now();
     timer.start();
     for (std::int64_t n = 1; n <= steps; ++n) {
       // Rows at absolute multiples of thermo_every, as frames: a restart from any step
       // writes the rows of the uninterrupted run.
       const std::int64_t next = system.step + 1;
-      const bool thermo = (thermo_every > 0 && next % thermo_every == 0) || n == steps;
+      const bool regular = thermo_every > 0 && next % thermo_every == 0;
+      const bool thermo = regular || n == steps;
       // Observers ask about the step the integrator is about to reach.
       system.step = next;
       const bool frame = wants_frame();
@@ -116,7 +120,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
       integrator.step(system, thermo || frame);
       const TimedPhase output(Phase::output);
       for (Observer* o : observers) o->on_step(system);
-      if (thermo || frame) sample(thermo, frame);
+      if (thermo || frame) sample(thermo, frame, regular);
       for (Observer* o : observers) o->on_step_complete(system);
       if (interrupt_requested()) {
         stats.interrupted = true;

@@ -9,9 +9,10 @@ namespace deli {
 
 // One output file an input names, with the table that names it (for file:line messages).
 struct OutputFile {
-  std::string role;  // "thermo", "trajectory", "dump", "checkpoint"
+  std::string role;  // "thermo", "trajectory", "dump", "checkpoint", "final data", "log"
   std::string path;
-  TomlTable table;  // holds the key "file"
+  TomlTable table;           // holds `key`
+  std::string key = "file";  // the key naming the path, for messages
 };
 
 // The path with symlinks, "." and ".." resolved, so that two names of one file compare equal.

@@ -677,6 +677,10 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       }
       trajectory->finish();
     }
+    input.final_data = output->string("final_data", "");
+    output_files.push_back({"final data", input.final_data, *output, "final_data"});
+    input.log = output->string("log", "");
+    output_files.push_back({"log", input.log, *output, "log"});
     output->finish();
   }
   input.thermostat = read_thermostat(root.table("thermostat"));

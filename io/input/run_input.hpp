@@ -47,6 +47,8 @@ struct RunInput {
     std::string file;  // "" = none
     std::int64_t every = 10000;
   } checkpoint;
+  std::string final_data;     // [output] final_data: the last state as a LAMMPS data file
+  std::string log;            // [output] log: a copy of what the run prints
   std::string source_text;    // the input as read, stored with trajectories
   std::string model_text;     // [forcefield] and [constraints] as canonical TOML (checkpoints)
   MinimizeSettings minimize;  // max_steps 0: none

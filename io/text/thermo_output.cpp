@@ -40,10 +40,14 @@ void ThermoTable::on_thermo(const ThermoSample& s) {
   }
 }
 
-ThermoCsv::ThermoCsv(const std::string& path, std::int64_t continue_from) : path_(path) {
+ThermoCsv::ThermoCsv(const std::string& path, std::int64_t continue_from, std::int64_t every)
+    : path_(path) {
   if (continue_from >= 0) {
+    // A row at the checkpoint's step is the stopped run's own last row unless the step is a
+    // regular one (the start, a multiple of `every`): the uninterrupted run has no such row.
+    const bool regular = continue_from == 0 || (every > 0 && continue_from % every == 0);
     header_written_ = cut_back_after_step(
-        path, continue_from,
+        path, regular ? continue_from : continue_from - 1,
         [](const std::vector<std::string>& lines, std::size_t k) -> std::optional<std::int64_t> {
           if (k == 0 || lines[k].empty()) return std::nullopt;  // the header
           return std::stoll(lines[k].substr(0, lines[k].find(',')));

@@ -26,8 +26,10 @@ class ThermoTable final : public Observer {
 class ThermoCsv final : public Observer {
  public:
   // continue_from >= 0: a restart at that step appends to the file, cut back to the rows
-  // up to it.
-  explicit ThermoCsv(const std::string& path, std::int64_t continue_from = -1);
+  // up to it, rows at multiples of `every` (a row at a step that is not, the stopped run's
+  // last, is dropped).
+  explicit ThermoCsv(const std::string& path, std::int64_t continue_from = -1,
+                     std::int64_t every = 0);
   void on_thermo(const ThermoSample& s) override;
   // Closes the file, throwing when it could not be written.
   void on_finish(const System&) override;

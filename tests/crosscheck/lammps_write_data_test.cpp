@@ -19,7 +19,8 @@ const std::string kSource = DELI_SOURCE_DIR;
 // The Kremer-Grest melt (FENE + WCA, special_bonds fene) handed to LAMMPS, which writes it
 // back with `write_data FILE [pair ij]`; returns LAMMPS' potential energy.
 double lammps_write_data(const System& system, const std::string& out, bool pair_ij) {
-  const std::string in = ::testing::TempDir() + "/deli_for_lammps.data";
+  // ctest runs the cases in parallel: one file per case.
+  const std::string in = out + ".deli_for_lammps";
   write_lammps_data(system, in, "bond", "deli melt for LAMMPS");
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
   void* lmp = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
@@ -49,7 +50,8 @@ class LammpsWrittenData : public ::testing::TestWithParam<bool> {};
 TEST_P(LammpsWrittenData, RunsWithItsCoefficients) {
   const RunInput reference = load_run_input(kSource + "/inputs/lj_chains/melt.toml");
   const double deli_reference = testing::evaluate(reference).evaluation.potential;
-  const std::string data = ::testing::TempDir() + "/written_by_lammps.data";
+  const std::string data =
+      ::testing::TempDir() + "/written_by_lammps_" + (GetParam() ? "pair_ij" : "pair") + ".data";
   const double lammps = lammps_write_data(reference.system, data, GetParam());
   {
     std::ifstream file(data);

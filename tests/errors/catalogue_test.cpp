@@ -19,9 +19,9 @@ namespace {
 
 struct Case {
   std::string name;
-  std::string toml;                           // written to DIR/in.toml; @DIR@ becomes the directory
-  std::string data;                           // written to DIR/in.data when not empty
-  int status = 1;                             // the expected exit status
+  std::string toml;  // written to DIR/in.toml; @DIR@ becomes the directory
+  std::string data;  // written to DIR/in.data when not empty
+  int status = 1;    // the expected exit status: 1 input error, 3 simulation stopped (README)
   std::vector<std::string> messages;          // each must appear in the output
   std::string command = "run @DIR@/in.toml";  // deli's arguments
   std::string setup;                          // shell run in DIR first
@@ -369,7 +369,7 @@ void run_time_cases(std::vector<Case>& cases) {
       {"blowup_huge_timestep",
        with(with(kLj, "timestep = 0.005", "timestep = 0.5"), "steps = 20", "steps = 5000"),
        "",
-       1,
+       3,  // the simulation stopped
        {stopped, "atom ", "the run blew up", "timestep"},
        "run @DIR@/in.toml",
        "",
@@ -379,28 +379,28 @@ void run_time_cases(std::vector<Case>& cases) {
        with(with(with(kLj, "timestep = 0.005", "timestep = 0.5"), "steps = 20", "steps = 5000"),
             "every = 5,", "every = 0,"),
        "",
-       1,
+       3,  // the simulation stopped
        {stopped, "atom ", "the run blew up"}});
   cases.push_back({"blowup_verlet_dt_2",
                    with(kLj, "timestep = 0.005", "timestep = 2.0"),
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {stopped, "ran away (far beyond the box)"}});
   // Two atoms on top of each other: the pair force at r = 0 is not finite at step 0.
   cases.push_back({"blowup_overlapping_atoms",
                    kLjData,
                    with(kSmallData, "2 1 1.6 0.5 0.5", "2 1 0.5 0.5 0.5"),
-                   1,
+                   3,  // the simulation stopped
                    {"simulation stopped: step 0", "energy is not finite", "atom 1"}});
   cases.push_back({"blowup_huge_epsilon",
                    with(kLj, "epsilon = 1.0", "epsilon = 1e308"),
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {"simulation stopped: step 0", "energy is not finite"}});
   cases.push_back({"blowup_huge_gravity",
                    with(kLj, "gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, 0.0, 1e307]"),
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {stopped, "not finite"}});
   cases.push_back({"blowup_huge_temperature",
                    with(kLj, "temperature = 1.0", "temperature = 1e308"),
@@ -411,7 +411,7 @@ void run_time_cases(std::vector<Case>& cases) {
                    with(with(kLj, "timestep = 0.005", "timestep = 0.5"), "[output]\n",
                         "[output]\ntrajectory = { file = \"@DIR@/out.h5\", every = 1 }\n"),
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {stopped, "the run blew up"},
                    "run @DIR@/in.toml",
                    "",
@@ -425,13 +425,13 @@ void write_failure_cases(std::vector<Case>& cases) {
   cases.push_back({"full_thermo_csv",
                    with(kLj, "@DIR@/out.csv", "/dev/full"),
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {"/dev/full: could not write the thermo row of step 0", "disk full"}});
   cases.push_back(
       {"full_dump",
        with(kLj, "[output]\n", "[output]\ndump = { file = \"/dev/full\", every = 5 }\n"),
        "",
-       1,
+       3,  // the simulation stopped
        {"/dev/full: could not write the frame of step 0", "disk full"}});
   cases.push_back({"full_stdout",
                    kLj,
@@ -454,7 +454,7 @@ void write_failure_cases(std::vector<Case>& cases) {
                    with(kLj, "[output]\n",
                         "[output]\ncheckpoint = { file = \"@DIR@/missing/c.h5\", every = 5 }\n"),
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {"cannot create the checkpoint file"}});
 
   // A small tmpfs that fills up during the run. Exit 1 with the message, never a crash
@@ -464,7 +464,7 @@ void write_failure_cases(std::vector<Case>& cases) {
   cases.push_back({"tmpfs_full_thermo_csv",
                    csv_full,
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {"full/out.csv: could not write the thermo row of step", "disk full"},
                    "run @DIR@/in.toml",
                    "dd if=/dev/zero of=full/ballast bs=1k count=1150 2>/dev/null",
@@ -475,7 +475,7 @@ void write_failure_cases(std::vector<Case>& cases) {
         {"tmpfs_full_trajectory_" + size + "k",
          kMelt + "\n[output]\ntrajectory = { file = \"@DIR@/full/out.h5\", every = 10 }\n",
          "",
-         1,
+         3,  // the simulation stopped
          {"full/out.h5: HDF5 failed to", "disk full"},
          "run @DIR@/in.toml",
          "dd if=/dev/zero of=full/ballast bs=1k count=" + std::string(size) + " 2>/dev/null",
@@ -485,7 +485,7 @@ void write_failure_cases(std::vector<Case>& cases) {
   cases.push_back({"tmpfs_full_dump",
                    kMelt + "\n[output]\ndump = { file = \"@DIR@/full/out.dump\", every = 10 }\n",
                    "",
-                   1,
+                   3,  // the simulation stopped
                    {"full/out.dump: could not write the frame of step", "disk full"},
                    "run @DIR@/in.toml",
                    "",
@@ -497,7 +497,7 @@ void write_failure_cases(std::vector<Case>& cases) {
       {"tmpfs_full_checkpoint_keeps_previous",
        kMelt + "\n[output]\ncheckpoint = { file = \"@DIR@/full/out.chk\", every = 100 }\n",
        "",
-       1,
+       3,  // the simulation stopped
        {"full/out.chk.partial: could not write the checkpoint", "the previous checkpoint",
         "is kept"},
        "run @DIR@/in.toml",

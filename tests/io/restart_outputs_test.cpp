@@ -93,7 +93,8 @@ namespace {
 
 // An input of the repository with its data file made absolute and its [run] and [output]
 // replaced: thermo rows every 20 steps, H5MD frames every 25, dump frames every 30 and a
-// checkpoint every 37 (so that the checkpoint's step, 74, is a multiple of none of them).
+// checkpoint every 37 and at the end (a run of 91 steps ends with one at 91, a multiple of
+// none of them).
 std::string with_outputs(const std::string& source, const std::string& dir, int steps) {
   std::string text = slurp(std::string(DELI_SOURCE_DIR) + "/" + source);
   text = text.substr(0, text.find("[run]"));
@@ -110,9 +111,10 @@ std::string with_outputs(const std::string& source, const std::string& dir, int 
   return path;
 }
 
-// A restart from a step that is a multiple of no output interval (74) writes the rows and
-// frames of the uninterrupted run, for every integrator: rows at absolute multiples of
-// `every` (and the last step), not counted from the restart.
+// A restart from a step that is a multiple of no output interval (91, the end of the
+// stopped run) writes the rows and frames of the uninterrupted run, for every integrator:
+// rows at absolute multiples of `every` (and the last step), not counted from the restart,
+// and the stopped run's last row (at 91) dropped.
 class RestartFromAnyStep : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
@@ -125,13 +127,14 @@ TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
   ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), root + "/straight", 150), log), 0)
       << log;
   const std::string stopped = root + "/stopped";
-  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 90), log), 0) << log;
+  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 91), log), 0) << log;
+  EXPECT_NE(slurp(stopped + "/out.csv").find("\n91,"), std::string::npos);
   ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 150) + " --restart " +
                       stopped + "/out.chk",
                   log),
             0)
       << log;
-  EXPECT_NE(log.find("for 76 steps"), std::string::npos) << log;  // from 74 to 150
+  EXPECT_NE(log.find("for 59 steps"), std::string::npos) << log;  // from 91 to 150
   const std::string csv = slurp(root + "/straight/out.csv");
   EXPECT_NE(csv.find("\n140,"), std::string::npos);  // rows at multiples of 20, and 150
   EXPECT_NE(csv.find("\n150,"), std::string::npos);

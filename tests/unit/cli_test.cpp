@@ -116,3 +116,68 @@ TEST(Cli, ConstrainedRunStartsAtItsTemperatureWithItsDegreesOfFreedom) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// README "Exit status": one status per kind of outcome.
+TEST(Cli, ExitStatusTellsTheKindOfOutcome) {
+  EXPECT_EQ(run_deli("").status, 2);                       // usage
+  EXPECT_EQ(run_deli("rnu").status, 2);                    // unknown command
+  EXPECT_EQ(run_deli("run /nonexistent.toml").status, 1);  // input error
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/blowup.toml")
+      << "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]\n"
+         "[velocities]\ntemperature = 1.0\nseed = 1\n[forcefield.pair]\nstyle = \"lj/cut\"\n"
+         "cutoff = 2.5\ncoeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+         "[integrator]\ntimestep = 0.5\n[run]\nsteps = 100\n";
+  const Result blowup = run_deli("run " + dir + "/blowup.toml");
+  EXPECT_EQ(blowup.status, 3) << blowup.output;  // the simulation stopped
+  EXPECT_THAT(blowup.output, HasSubstr("simulation stopped"));
+}
+
+// What LAMMPS users expect at the end of a run: a checkpoint when the run has them (here
+// every 7 steps, the run ends at 10), the final state as a data file that deli reads back,
+// and a log holding what the terminal showed.
+TEST(Cli, RunEndsWithCheckpointFinalDataAndLog) {
+  const std::string dir = ::testing::TempDir() + "/run_end";
+  ASSERT_EQ(deli::testing::run_shell("rm -rf " + dir + " && mkdir -p " + dir).status, 0);
+  const std::string system =
+      "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]\n"
+      "[velocities]\ntemperature = 1.0\nseed = 1\n";
+  const std::string model =
+      "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\n"
+      "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]\n"
+      "[integrator]\ntimestep = 0.005\n";
+  std::ofstream(dir + "/in.toml") << system << model << "[run]\nsteps = 10\n[output]\n"
+                                  << "thermo = { every = 5 }\ncheckpoint = { file = \"" << dir
+                                  << "/c.h5\", every = 7 }\nfinal_data = \"" << dir
+                                  << "/final.data\"\nlog = \"" << dir << "/run.log\"\n";
+  const Result r = run_deli("run " + dir + "/in.toml");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("final checkpoint at step 10"));
+  const Result info = run_deli("info " + dir + "/c.h5");
+  EXPECT_THAT(info.output, HasSubstr("at step 10")) << info.output;
+  // The log is the terminal's output (stdout), line for line.
+  EXPECT_EQ(slurp(dir + "/run.log"), r.output);
+  // The final state read back: a 0-step run from it starts where the first run ended.
+  std::ofstream(dir + "/again.toml") << "[system]\ndata = \"final.data\"\n"
+                                     << model << "[run]\nsteps = 0\n";
+  const Result again = run_deli("run " + dir + "/again.toml");
+  ASSERT_EQ(again.status, 0) << again.output;
+  // Kinetic and potential energy of the first run's last row and the second run's first.
+  auto energies = [](const std::string& output, const std::string& step) {
+    std::istringstream row(
+        output.substr(output.find("\n" + std::string(10 - step.size(), ' ') + step + " ")));
+    std::string s, time, kinetic, potential;
+    row >> s >> time >> kinetic >> potential;
+    return kinetic + " " + potential;
+  };
+  EXPECT_EQ(energies(again.output, "0"), energies(r.output, "10"));
+}
+
+}  // namespace
