@@ -25,6 +25,22 @@ bool ForceField::pair_hessians(const System& system, const NeighborList& neighbo
   return true;
 }
 
+bool ForceField::pair_curvature(const System& system, const NeighborList& neighbors,
+                                const std::vector<Vec3>& velocity, double& sum) const {
+  for (const auto& term : terms_) {
+    if (!term->pair_curvature(system, neighbors, velocity, sum)) return false;
+  }
+  return true;
+}
+
+bool ForceTerm::pair_curvature(const System& system, const NeighborList& neighbors,
+                               const std::vector<Vec3>& velocity, double& sum) const {
+  std::vector<PairHessian> blocks;
+  if (!pair_hessians(system, neighbors, {}, blocks)) return false;
+  for (const PairHessian& b : blocks) sum += block_curvature(b.block, velocity[b.a], velocity[b.b]);
+  return true;
+}
+
 ForceEvaluation ForceField::compute(const System& system, const NeighborList& neighbors,
                                     std::vector<Vec3>& force, bool tally) const {
   force.assign(system.particles.size(), Vec3{});

@@ -33,6 +33,9 @@ class ForceField {
   // false when some term has no pairwise Hessian (angles).
   bool pair_hessians(const System& system, const NeighborList& neighbors,
                      const std::vector<char>& mask, std::vector<PairHessian>& out) const;
+  // v^T H v over every term (false as pair_hessians), without storing the blocks.
+  bool pair_curvature(const System& system, const NeighborList& neighbors,
+                      const std::vector<Vec3>& velocity, double& sum) const;
 
   // LAMMPS special_bonds lj factors for 1-2, 1-3, 1-4 neighbours.
   std::array<double, 3> special_lj{0.0, 0.0, 0.0};

@@ -48,6 +48,18 @@ class ForceTerm {
                              std::vector<PairHessian>& /*out*/) const {
     return false;
   }
+  // Adds v^T H v = sum over blocks of (v_a - v_b)^T B (v_a - v_b) to `sum`, block by block
+  // in pair_hessians' order (the same sum as from its blocks, bit for bit). This default
+  // goes through pair_hessians; pair styles override it to skip storing the blocks.
+  virtual bool pair_curvature(const System& system, const NeighborList& neighbors,
+                              const std::vector<Vec3>& velocity, double& sum) const;
 };
+
+// (v_a - v_b)^T B (v_a - v_b) for one block.
+inline double block_curvature(const Eigen::Matrix3d& block, const Vec3& va, const Vec3& vb) {
+  const Vec3 dv = va - vb;
+  const Eigen::Vector3d v(dv.x, dv.y, dv.z);
+  return v.dot(block * v);
+}
 
 }  // namespace deli

@@ -116,6 +116,20 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
   for (std::size_t index = 0; index < cluster_count; ++index) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    if (prepared && prepared->chain) {
+      // A chain of rods held as equalities: the chain kernel (same numbers, no gathering).
+      bool held = true;
+      for (std::int32_t r : cluster.rows) held = held && equality[r];
+      SolverStatus status;
+      if (held && prepared->chain->solve_positions(q.data(), delta.data(), dt_, system.box,
+                                                   constraints_.tolerances.solver, 50, chain_work_,
+                                                   impulse.data(), virial, status)) {
+        ++stats_.solves;
+        stats_.solver_iterations += status.iterations;
+        stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, status.iterations);
+        continue;
+      }
+    }
     std::optional<LocalCluster> built;
     std::optional<ClusterRows> built_structure;
     if (!prepared) built_structure.emplace(built.emplace(localize(cluster, rows, particles.mass)));
@@ -164,6 +178,10 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
   for (std::size_t index = 0; index < cluster_count; ++index) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    if (prepared && prepared->chain &&
+        prepared->chain->project_momenta(x.data(), p.data(), system.box, chain_work_, virial)) {
+      continue;
+    }
     std::optional<LocalCluster> built;
     std::optional<ClusterRows> built_structure;
     if (!prepared) {

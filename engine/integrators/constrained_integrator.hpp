@@ -112,6 +112,7 @@ class ConstrainedIntegrator : public Integrator {
   // Performance only: the equality rows' clusters, prepared once; the last clustering.
   EqualityClusters equality_clusters_;
   std::vector<Cluster> found_clusters_;
+  RodChainWorkspace chain_work_;
   std::vector<PairHessian> hessian_blocks_;
   std::vector<std::vector<std::size_t>> blocks_of_cluster_;
   std::vector<std::int32_t> cluster_of_particle_;

@@ -64,18 +64,12 @@ void ForceEngine::forces_at(System& system, const std::vector<Vec3>& x,
 
 std::optional<double> ForceEngine::verlet_shadow_energy(const System& system, double h) const {
   if (!last_.tallied) return std::nullopt;
-  std::vector<PairHessian> blocks;
-  if (!force_field_.pair_hessians(system, neighbors_, {}, blocks)) return std::nullopt;
   const Particles& p = system.particles;
   double kinetic = 0, force_term = 0, curvature = 0;
+  if (!force_field_.pair_curvature(system, neighbors_, p.velocity, curvature)) return std::nullopt;
   for (std::size_t i = 0; i < p.size(); ++i) {
     kinetic += 0.5 * p.mass[i] * norm2(p.velocity[i]);
     force_term += norm2(force_[i]) / p.mass[i];
-  }
-  for (const PairHessian& b : blocks) {
-    const Vec3 dv = p.velocity[b.a] - p.velocity[b.b];
-    const Eigen::Vector3d v(dv.x, dv.y, dv.z);
-    curvature += v.dot(b.block * v);
   }
   return kinetic + last_.potential - h * h / 24.0 * force_term + h * h / 12.0 * curvature;
 }

@@ -126,9 +126,14 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system,
   ws_.nearby_refreshed = false;
   if (2.0 * largest + gap_tolerance > ws_.reach) {
     ws_.reach = 4.0 * largest + 2.0 * gap_tolerance;
-    const Vec3* about = constraints_.linearized ? previous_positions_.data() : nullptr;
-    ws_.nearby = constraints_.nearby_inequalities(system.particles, q.data(), engine_.neighbors(),
-                                                  system.box, ws_.reach, about);
+    if (constraints_.linearized) {
+      ws_.nearby =
+          constraints_.nearby_inequalities(system.particles, q.data(), engine_.neighbors(),
+                                           system.box, ws_.reach, previous_positions_.data());
+    } else {
+      nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(),
+                           system.box, ws_.reach, ws_.nearby);
+    }
     ws_.nearby_gap_at_q.resize(ws_.nearby.size());
     for (std::size_t k = 0; k < ws_.nearby.size(); ++k) {
       ws_.nearby_gap_at_q[k] = evaluate(ws_.nearby[k], q.data(), system.box).gap;

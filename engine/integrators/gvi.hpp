@@ -1,5 +1,6 @@
 #pragma once
 
+#include "constraints/nearby_rows.hpp"
 #include "integrators/constrained_integrator.hpp"
 #include "integrators/gvi_workspace.hpp"
 
@@ -85,6 +86,7 @@ class Gvi final : public ConstrainedIntegrator {
                       std::vector<Vec3>& p);
 
   GviWorkspace ws_;
+  NearbyRows nearby_rows_;  // candidate rows from a short list kept between steps
 
   Feasibility feasibility_;
   Lagrangian lagrangian_;

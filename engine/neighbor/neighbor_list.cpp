@@ -27,13 +27,6 @@ void NeighborList::set_exclusions(std::vector<std::array<std::int32_t, 2>> exclu
   position_at_build_.clear();  // force a rebuild
 }
 
-bool NeighborList::is_excluded(std::int32_t i, std::int32_t j) const {
-  if (i > j) std::swap(i, j);
-  const auto begin = excluded_.begin() + static_cast<std::ptrdiff_t>(excluded_offsets_[i]);
-  const auto end = excluded_.begin() + static_cast<std::ptrdiff_t>(excluded_offsets_[i + 1]);
-  return begin != end && std::binary_search(begin, end, std::array<std::int32_t, 2>{i, j});
-}
-
 // Cells half a reach wide (a 5^3 stencil, of which half is scanned) cover about half the
 // volume of cells a full reach wide; small periodic boxes fall back to the latter and,
 // below three cells along a periodic axis, to minimum-image separations over the distinct
@@ -133,6 +126,17 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     excluded_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
     for (const auto& pair : excluded_) ++excluded_offsets_[pair[0] + 1];
     std::partial_sum(excluded_offsets_.begin(), excluded_offsets_.end(), excluded_offsets_.begin());
+    // Every particle's excluded partners, either side of it, for the build's check.
+    partner_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
+    for (const auto& pair : excluded_)
+      ++partner_offsets_[pair[0] + 1], ++partner_offsets_[pair[1] + 1];
+    std::partial_sum(partner_offsets_.begin(), partner_offsets_.end(), partner_offsets_.begin());
+    partners_.resize(partner_offsets_.back());
+    std::vector<std::size_t> fill(partner_offsets_.begin(), partner_offsets_.end() - 1);
+    for (const auto& pair : excluded_) {
+      partners_[fill[pair[0]]++] = pair[1];
+      partners_[fill[pair[1]]++] = pair[0];
+    }
   }
   for (int code = 0; code < 27; ++code) {
     const int k[3] = {code % 3 - 1, (code / 3) % 3 - 1, code / 9 - 1};
@@ -223,10 +227,14 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       const std::int32_t cell = stencil_cells_[s];
       scan(cell_start[cell], cell_start[cell + 1], stencil_codes_[s]);
     }
+    // i's excluded partners (a chain bead's one or two bonded neighbours): a linear scan.
+    const std::int32_t* partners = partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
+    const std::int32_t* partners_end =
+        partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
     for (std::size_t h = 0; h < hits; ++h) {
       const std::int32_t j = member[hit_slot[h]];
       if (!grid.shifted && j <= i) continue;
-      if (any_exclusions && is_excluded(i, j)) continue;
+      if (std::find(partners, partners_end, j) != partners_end) continue;
       neighbors_.push_back(j);
       if (grid.shifted) image_codes_.push_back(pair_code(hit_code[h], i, j));
     }

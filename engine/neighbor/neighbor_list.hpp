@@ -56,11 +56,12 @@ class NeighborList {
   };
   Grid make_grid(const std::vector<Vec3>& inside, const Box& box) const;
   void make_stencils(const Grid& grid, const Box& box);
-  bool is_excluded(std::int32_t i, std::int32_t j) const;
 
   double cutoff_, skin_;
   std::vector<std::array<std::int32_t, 2>> excluded_;  // sorted, i < j
   std::vector<std::size_t> excluded_offsets_;          // by first index
+  std::vector<std::size_t> partner_offsets_;           // by particle, built with the above
+  std::vector<std::int32_t> partners_;                 // each particle's excluded partners
 
   // Per cell, the neighbouring cells to scan and their periodic shift codes; kept while
   // the grid is unchanged (always, for a fixed periodic box).

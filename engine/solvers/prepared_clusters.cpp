@@ -15,6 +15,8 @@ void EqualityClusters::prepare(const std::vector<Constraint>& equalities,
   // The structures refer to their clusters: made once the vector no longer moves.
   for (std::size_t k = 0; k < clusters_.size(); ++k) {
     clusters_[k].structure = std::make_unique<ClusterRows>(clusters_[k].local);
+    if (clusters_[k].structure->tridiagonal())
+      clusters_[k].chain = RodChain::make(clusters_[k].local);
     cluster_from_first_particle_[clusters_[k].cluster.particles.front()] =
         static_cast<std::int32_t>(k);
   }

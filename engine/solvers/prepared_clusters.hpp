@@ -5,6 +5,7 @@
 
 #include "constraints/clusters.hpp"
 #include "solvers/cluster_rows.hpp"
+#include "solvers/rod_chain.hpp"
 
 namespace deli {
 
@@ -13,6 +14,7 @@ struct PreparedCluster {
   Cluster cluster;
   LocalCluster local;
   std::unique_ptr<ClusterRows> structure;  // refers to `local`
+  std::unique_ptr<RodChain> chain;         // its chain form, when it is a chain of rods
 };
 
 // The clusters of the fixed equality rows (a molecule's rods, a pendulum's strings),

@@ -5,11 +5,17 @@
 namespace deli {
 
 bool solve_tridiagonal(const Tridiagonal& a, const Eigen::VectorXd& rhs, Eigen::VectorXd& x) {
+  Eigen::VectorXd c;
+  return solve_tridiagonal(a, rhs, x, c);
+}
+
+bool solve_tridiagonal(const Tridiagonal& a, const Eigen::VectorXd& rhs, Eigen::VectorXd& x,
+                       Eigen::VectorXd& c) {
   const Eigen::Index n = a.size();
   x.resize(n);
   if (n == 0) return true;
   // Forward sweep: c'(k) = upper(k) / pivot(k), x holds d'(k); back substitution in place.
-  Eigen::VectorXd c(n);
+  c.resize(n);
   // A pivot lost to cancellation (relative to its diagonal entry) means dependent rows.
   auto vanishes = [&](double pivot, Eigen::Index k) {
     return !(std::abs(pivot) > 1e-12 * std::abs(a.diagonal(k)));

@@ -39,32 +39,19 @@ class PairForce final : public ForceTerm {
 
   bool pair_hessians(const System& system, const NeighborList& neighbors,
                      const std::vector<char>& mask, std::vector<PairHessian>& out) const override {
-    const std::vector<Vec3>& x = system.particles.position;
-    const std::vector<int>& type = system.particles.type;
-    auto add = [&](std::int32_t i, std::int32_t j, double factor) {
-      const Vec3 d = system.box.minimum_image(x[i] - x[j]);
-      const double r2 = norm2(d);
-      const Params& p = table_[static_cast<std::size_t>(type[i] * type_count_ + type[j])];
-      if (r2 >= p.cutoff2) return;
-      double f_over_r, e;
-      Evaluator::evaluate(p, r2, f_over_r, e);
-      out.push_back(
-          {i, j,
-           factor * pair_hessian_block(d, r2, f_over_r, Evaluator::second_derivative(p, r2))});
-    };
-    const auto& list = neighbors.neighbors();
-    const auto& offsets = neighbors.offsets();
-    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
-      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
-        const std::int32_t j = list[k];
-        if (!mask.empty() && !mask[i] && !mask[j]) continue;
-        add(static_cast<std::int32_t>(i), j, 1.0);
-      }
-    }
-    for (const ScaledPair& s : scaled_pairs_) {
-      if (!mask.empty() && !mask[s.i] && !mask[s.j]) continue;
-      add(s.i, s.j, s.factor);
-    }
+    for_each_hessian(system, neighbors, mask,
+                     [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
+                       out.push_back({i, j, block});
+                     });
+    return true;
+  }
+
+  bool pair_curvature(const System& system, const NeighborList& neighbors,
+                      const std::vector<Vec3>& velocity, double& sum) const override {
+    for_each_hessian(system, neighbors, {},
+                     [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
+                       sum += block_curvature(block, velocity[i], velocity[j]);
+                     });
     return true;
   }
 
@@ -83,6 +70,39 @@ class PairForce final : public ForceTerm {
   }
 
  private:
+  // Visits the Hessian block of every pair in reach touching a masked particle (all with an
+  // empty mask): the list's pairs in order, then the scaled pairs.
+  template <class Visit>
+  void for_each_hessian(const System& system, const NeighborList& neighbors,
+                        const std::vector<char>& mask, Visit&& visit) const {
+    const std::vector<Vec3>& x = system.particles.position;
+    const std::vector<int>& type = system.particles.type;
+    auto add = [&](std::int32_t i, std::int32_t j, double factor) {
+      const Vec3 d = system.box.minimum_image(x[i] - x[j]);
+      const double r2 = norm2(d);
+      const Params& p = table_[static_cast<std::size_t>(type[i] * type_count_ + type[j])];
+      if (r2 >= p.cutoff2) return;
+      double f_over_r, e;
+      Evaluator::evaluate(p, r2, f_over_r, e);
+      const Eigen::Matrix3d block =
+          factor * pair_hessian_block(d, r2, f_over_r, Evaluator::second_derivative(p, r2));
+      visit(i, j, block);
+    };
+    const auto& list = neighbors.neighbors();
+    const auto& offsets = neighbors.offsets();
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const std::int32_t j = list[k];
+        if (!mask.empty() && !mask[i] && !mask[j]) continue;
+        add(static_cast<std::int32_t>(i), j, 1.0);
+      }
+    }
+    for (const ScaledPair& s : scaled_pairs_) {
+      if (!mask.empty() && !mask[s.i] && !mask[s.j]) continue;
+      add(s.i, s.j, s.factor);
+    }
+  }
+
   // kTally: accumulate energy and virial. kCoded: periodic shifts from the list's image
   // codes instead of minimum-image rounding.
   template <bool kTally, bool kCoded>

@@ -1,0 +1,37 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "constraints/constraint_set.hpp"
+
+namespace deli {
+
+// ConstraintSet::nearby_inequalities (without linearisation), the same rows in the same
+// order, from a short list kept between calls: the neighbour list's hard-sphere pairs (not
+// bonded) within contact + margin at the positions where the short list was made. A pair
+// within contact + reach at q was within contact + reach + 2 s of its anchor positions, s the
+// largest displacement since: the short list serves while reach + 2 s <= margin and the
+// neighbour list is the one it was made from; otherwise it is made again. The neighbour
+// list reaches a force cutoff (LJ 2.5 + skin) far beyond contact: the short list holds a
+// fraction of its pairs, and no bonded-pair search is left per call.
+class NearbyRows {
+ public:
+  explicit NearbyRows(double margin = 0.5) : margin_(margin) {}
+  void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
+               const NeighborList& list, const Box& box, double reach,
+               std::vector<Constraint>& out);
+
+ private:
+  void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
+            const NeighborList& list, const Box& box);
+
+  double margin_;
+  std::vector<std::array<std::int32_t, 2>> pairs_;  // a < b, in the neighbour list's order
+  std::vector<Vec3> anchor_;
+  const NeighborList* list_ = nullptr;
+  std::int64_t list_builds_ = -1;
+};
+
+}  // namespace deli

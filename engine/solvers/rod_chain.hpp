@@ -1,0 +1,84 @@
+#pragma once
+
+#include <Eigen/Dense>
+#include <memory>
+#include <vector>
+
+#include "constraints/clusters.hpp"
+#include "solvers/solver_status.hpp"
+#include "solvers/tridiagonal.hpp"
+
+namespace deli {
+
+// Scratch space of the rod-chain kernels, kept by the caller from solve to solve (no
+// allocation once it has grown to the longest chain). Eigen vectors where the generic
+// solvers use Eigen reductions, so that those reductions see the same alignment and sum in
+// the same order.
+struct RodChainWorkspace {
+  std::vector<Vec3> q, x0, uq, x, ux, xt, uxt, v;
+  std::vector<double> rq, rx, rxt;
+  Eigen::VectorXd z, step, trial, phi, pt, rhs, pivots;
+  Tridiagonal bands;
+};
+
+// A cluster of rods only, numbered along a linear chain (consecutive rows share exactly
+// one particle, other rows none): the molecules of a chain melt. Its position update
+// (SHAKE as a tridiagonal Newton with a line search) and momentum projection (RATTLE's
+// velocity step) run here on flat arrays, with each rod's direction and length computed
+// once per position instead of through the generic row evaluation, and without gathering
+// into per-cluster containers. Every number is computed by the same operations in the same
+// order as the generic solvers (solve_position_update, project_momentum over ClusterRows):
+// the results agree bit for bit. When a pivot vanishes (where the generic solvers switch to
+// a dense solve) or the Newton iteration does not converge, the kernels return false and
+// the caller takes the generic path, which redoes the solve and reports a failure.
+class RodChain {
+ public:
+  // The chain form of a cluster, or null when its rows are not such a chain.
+  static std::unique_ptr<RodChain> make(const LocalCluster& cluster);
+
+  std::size_t rows() const { return length_.size(); }
+
+  // Position update: x = x0 + h M^-1 C(q) z with every rod held (|f(x)| <= tolerance), for
+  // x0 = q + delta. Positions and displacements indexed globally; adds the impulses C(q) z
+  // into `impulse` (global, entries of the chain's particles overwritten) and
+  // sum z_k |q_i - q_j| to `virial`. Returns false (nothing written) when the generic path
+  // must take over.
+  bool solve_positions(const Vec3* q, const Vec3* delta, double h, const Box& box, double tolerance,
+                       int max_iterations, RodChainWorkspace& ws, Vec3* impulse, double& virial,
+                       SolverStatus& status) const;
+
+  // Momentum projection at positions x: p <- p + C(x) mu with C(x)^T M^-1 p = 0; adds
+  // sum mu_k |x_i - x_j| to `virial`. Returns false (p untouched) when the generic path must
+  // take over.
+  bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
+                       double& virial) const;
+
+ private:
+  RodChain() = default;
+  // Directions and lengths of every rod at local positions x.
+  void directions(const std::vector<Vec3>& x, const Box& box, std::vector<Vec3>& u,
+                  std::vector<double>& r) const;
+  // Per particle: sum over its rods of s u z (the impulse C z).
+  Vec3 impulse_on(std::size_t p, const std::vector<Vec3>& u, const Eigen::VectorXd& z) const {
+    Vec3 out{};
+    out += u[first_row_[p]] * (first_sign_[p] * z(first_row_[p]));
+    if (second_row_[p] >= 0) out += u[second_row_[p]] * (second_sign_[p] * z(second_row_[p]));
+    return out;
+  }
+  // The Newton (and RATTLE) matrix sum_p w_p s_k s_l a_k . b_l in band form.
+  void coupling_bands(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
+                      Tridiagonal& out) const;
+
+  std::vector<std::int32_t> particles_;  // local -> global
+  std::vector<double> inverse_mass_;
+  // Per rod: particles i (+u) and j (-u), length; the lower and higher numbered of the two
+  // with their signs (sums over particles run in particle order); the particle shared with
+  // the next rod and the product of its signs in the two rods.
+  std::vector<std::int32_t> i_, j_, low_, high_, shared_;
+  std::vector<double> length_, low_sign_, high_sign_, shared_sign_;
+  // Per particle: its rods in row order with their signs (second_row_ -1: none).
+  std::vector<std::int32_t> first_row_, second_row_;
+  std::vector<double> first_sign_, second_sign_;
+};
+
+}  // namespace deli

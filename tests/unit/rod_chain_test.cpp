@@ -1,0 +1,148 @@
+// The rod-chain kernels hold every rod to the solver tolerance and give, bit for bit, the
+// generic solvers' positions, impulses, virial and projected momenta (a chain across a
+// periodic boundary, unequal masses, rods numbered either way round); clusters that are
+// not linear chains of rods have no chain form.
+#include "solvers/rod_chain.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "solvers/momentum_update.hpp"
+#include "solvers/position_update.hpp"
+
+namespace deli {
+namespace {
+
+struct Chain {
+  LocalCluster cluster;
+  std::vector<Vec3> q, delta, p;
+};
+
+// A random walk of n beads with unit steps starting near the box's upper x face (so that it
+// crosses the periodic boundary), wrapped into the box; a random step and momenta.
+Chain random_chain(std::size_t n, const Box& box, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> mass(0.5, 2.0);
+  Chain c;
+  Vec3 x{box.hi().x - 1.5, 0.3, -0.2};
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k > 0) {
+      Vec3 step{normal(rng), normal(rng), normal(rng)};
+      x += step * (1.0 / norm(step));
+    }
+    Vec3 wrapped = x;
+    std::array<int, 3> image{};
+    box.wrap(wrapped, image);
+    c.q.push_back(wrapped);
+    c.delta.push_back(Vec3{normal(rng), normal(rng), normal(rng)} * 0.02);
+    c.p.push_back(Vec3{normal(rng), normal(rng), normal(rng)});
+    c.cluster.particles.push_back(static_cast<std::int32_t>(k));
+    c.cluster.inverse_mass.push_back(1.0 / mass(rng));
+  }
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    Constraint rod;
+    rod.kind = ConstraintKind::rod;
+    // Every other rod written from its higher-numbered bead.
+    rod.i = static_cast<std::int32_t>(k % 2 ? k + 1 : k);
+    rod.j = static_cast<std::int32_t>(k % 2 ? k : k + 1);
+    rod.length = 1.0;
+    c.cluster.rows.push_back(rod);
+    c.cluster.global_rows.push_back(static_cast<std::int32_t>(k));
+  }
+  return c;
+}
+
+TEST(RodChain, SameNumbersAsTheGenericSolvers) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const double h = 0.005, tolerance = 1e-12;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const Chain c = random_chain(40, box, seed);
+    const std::unique_ptr<RodChain> chain = RodChain::make(c.cluster);
+    ASSERT_NE(chain, nullptr);
+    const ClusterRows structure(c.cluster);
+    const std::vector<bool> equality(c.cluster.rows.size(), true);
+
+    std::vector<Vec3> x0 = c.delta;
+    for (std::size_t k = 0; k < x0.size(); ++k) x0[k] += c.q[k];
+    const PositionUpdate generic =
+        solve_position_update(structure, equality, c.q, x0, h, box, tolerance);
+    ASSERT_TRUE(generic.status.converged);
+    RodChainWorkspace work;
+    std::vector<Vec3> impulse(c.q.size());
+    double virial = 0.0;
+    SolverStatus status;
+    ASSERT_TRUE(chain->solve_positions(c.q.data(), c.delta.data(), h, box, tolerance, 50, work,
+                                       impulse.data(), virial, status));
+    EXPECT_EQ(status.iterations, generic.status.iterations);
+    double generic_virial = 0.0;
+    for (std::size_t r = 0; r < c.cluster.rows.size(); ++r) {
+      const Constraint& rod = c.cluster.rows[r];
+      generic_virial += generic.z(static_cast<Eigen::Index>(r)) *
+                        norm(box.minimum_image(c.q[rod.i] - c.q[rod.j]));
+    }
+    EXPECT_EQ(virial, generic_virial);
+    for (std::size_t k = 0; k < impulse.size(); ++k) {
+      EXPECT_EQ(impulse[k].x, generic.impulse[k].x);
+      EXPECT_EQ(impulse[k].y, generic.impulse[k].y);
+      EXPECT_EQ(impulse[k].z, generic.impulse[k].z);
+    }
+    // The rods are held at the end positions.
+    std::vector<Vec3> x(c.q.size());
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      x[k] = x0[k] + impulse[k] * (h * c.cluster.inverse_mass[k]);
+    }
+    for (const Constraint& rod : c.cluster.rows) {
+      EXPECT_LE(std::abs(norm(box.minimum_image(x[rod.i] - x[rod.j])) - 1.0), tolerance);
+    }
+
+    // Momentum projection at x.
+    std::vector<Vec3> p_generic = c.p, p_chain = c.p;
+    Eigen::VectorXd mu;
+    ASSERT_TRUE(project_momentum(structure, x, p_generic, box, mu).converged);
+    double momentum_virial = 0.0;
+    ASSERT_TRUE(chain->project_momenta(x.data(), p_chain.data(), box, work, momentum_virial));
+    double generic_momentum_virial = 0.0;
+    for (std::size_t r = 0; r < c.cluster.rows.size(); ++r) {
+      const Constraint& rod = c.cluster.rows[r];
+      generic_momentum_virial +=
+          mu(static_cast<Eigen::Index>(r)) * norm(box.minimum_image(x[rod.i] - x[rod.j]));
+    }
+    EXPECT_EQ(momentum_virial, generic_momentum_virial);
+    for (std::size_t k = 0; k < p_chain.size(); ++k) {
+      EXPECT_EQ(p_chain[k].x, p_generic[k].x);
+      EXPECT_EQ(p_chain[k].y, p_generic[k].y);
+      EXPECT_EQ(p_chain[k].z, p_generic[k].z);
+    }
+    // Tangent to every rod.
+    for (const Constraint& rod : c.cluster.rows) {
+      const Vec3 d = box.minimum_image(x[rod.i] - x[rod.j]);
+      const Vec3 v = p_chain[rod.i] * c.cluster.inverse_mass[rod.i] -
+                     p_chain[rod.j] * c.cluster.inverse_mass[rod.j];
+      EXPECT_LE(std::abs(dot(d, v)), 1e-12);
+    }
+  }
+}
+
+TEST(RodChain, OnlyLinearChainsOfRods) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  Chain c = random_chain(6, box, 4);
+  EXPECT_NE(RodChain::make(c.cluster), nullptr);
+  LocalCluster branched = c.cluster;
+  branched.rows[2].i = 1;  // rods 0 and 2 share bead 1: a branch
+  EXPECT_EQ(RodChain::make(branched), nullptr);
+  LocalCluster contact = c.cluster;
+  contact.rows[1].kind = ConstraintKind::sphere_pair;
+  EXPECT_EQ(RodChain::make(contact), nullptr);
+  LocalCluster loop = c.cluster;
+  Constraint closing = loop.rows[0];
+  closing.i = 0;
+  closing.j = 5;
+  loop.rows.push_back(closing);
+  EXPECT_EQ(RodChain::make(loop), nullptr);
+}
+
+}  // namespace
+}  // namespace deli
