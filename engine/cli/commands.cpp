@@ -116,9 +116,9 @@ int command_run(const std::vector<std::string>& args) {
     for (const Constraint& c : input.constraints.equalities) {
       if (c.kind == ConstraintKind::rod) rods.emplace_back(c.i, c.j);
     }
-    trajectory = std::make_unique<H5mdWriter>(input.trajectory, input.system, input.source_text,
-                                              user ? user : "deli user", rods,
-                                              TrajectoryContinuation{continue_from});
+    trajectory = std::make_unique<H5mdWriter>(
+        input.trajectory, input.system, input.source_text, user ? user : "deli user", rods,
+        input.constraints.hard_spheres, TrajectoryContinuation{continue_from});
     observers.push_back(trajectory.get());
   }
   std::unique_ptr<DumpWriter> dump;
@@ -126,7 +126,7 @@ int command_run(const std::vector<std::string>& args) {
     dump = std::make_unique<DumpWriter>(
         input.dump.file,
         input.dump.format == "xyz" ? DumpWriter::Format::xyz : DumpWriter::Format::lammps,
-        input.dump.every, continue_from);
+        input.dump.every, continue_from, input.constraints.hard_spheres);
     observers.push_back(dump.get());
   }
   std::unique_ptr<ProgressLine> progress;
