@@ -63,6 +63,51 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
   EXPECT_EQ(r.status, 0) << r.output;
 }
 
+// Series sampled at every frame share the position's step and time, extended once per
+// frame; an observable that first appears at a later frame keeps a step and time of its
+// own. A continuation cuts both back and extends them again.
+TEST(H5md, SharedAndOwnStepAndTimeAcrossAContinuation) {
+  const std::string dir = ::testing::TempDir();
+  RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
+  System& system = input.system;
+  const std::vector<Vec3> forces(system.particles.size());
+  const TrajectorySpec spec{dir + "/late.h5", 10, true, true, 0, false};
+  auto write = [&](H5mdWriter& writer, std::int64_t from, std::int64_t to) {
+    for (std::int64_t step = from; step <= to; step += 10) {
+      system.step = step;
+      system.time = 0.005 * static_cast<double>(step);
+      ThermoSample sample;
+      if (step >= 20) sample.integrator = {{"late", static_cast<double>(step)}};
+      writer.on_frame(system, sample, forces);
+    }
+    writer.on_finish(system);
+  };
+  {
+    H5mdWriter writer(spec, system, input.source_text, "t");
+    write(writer, 0, 40);
+  }
+  {
+    H5mdWriter writer(spec, system, input.source_text, "t", {}, false,
+                      TrajectoryContinuation{25});  // frames 30 and 40 cut, then again
+    write(writer, 30, 50);
+  }
+  testing::ShellResult r =
+      testing::run_shell("/usr/bin/python3 " + std::string(DELI_SOURCE_DIR) +
+                         "/tests/io/h5md_conformance.py --deli " + dir + "/late.h5");
+  EXPECT_EQ(r.status, 0) << r.output;
+  r = testing::run_shell("/usr/bin/python3 -c \"import h5py; f = h5py.File('" + dir +
+                         "/late.h5'); a = f['particles/all']; o = f['observables']; "
+                         "print(a['position/step'][:].tolist(), o['late/step'][:].tolist(), "
+                         "o['late/value'][:].tolist(), o['late/step'] == a['position/step'], "
+                         "o['temperature/time'] == a['position/time'], "
+                         "a['box/edges/value'].shape[0])\"");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("[0, 10, 20, 30, 40, 50] [20, 30, 40, 50] [20.0, 30.0, 40.0, 50.0] "
+                          "False True 6"),
+            std::string::npos)
+      << r.output;
+}
+
 // The plot tool turns the same kind of file into a PNG.
 TEST(H5md, PlotToolWritesAPng) {
   const std::string dir = ::testing::TempDir();
