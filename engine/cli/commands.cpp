@@ -142,9 +142,9 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
     for (const Constraint& c : input.constraints.equalities) {
       if (c.kind == ConstraintKind::rod) rods.emplace_back(c.i, c.j);
     }
-    trajectory = std::make_unique<H5mdWriter>(input.trajectory, input.system, input.source_text,
-                                              user ? user : "deli user", rods,
-                                              TrajectoryContinuation{continue_from});
+    trajectory = std::make_unique<H5mdWriter>(
+        input.trajectory, input.system, input.source_text, user ? user : "deli user", rods,
+        input.constraints.hard_spheres, TrajectoryContinuation{continue_from});
     observers.push_back(trajectory.get());
   }
   std::unique_ptr<DumpWriter> dump;
@@ -152,7 +152,7 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
     dump = std::make_unique<DumpWriter>(
         input.dump.file,
         input.dump.format == "xyz" ? DumpWriter::Format::xyz : DumpWriter::Format::lammps,
-        input.dump.every, continue_from);
+        input.dump.every, continue_from, input.constraints.hard_spheres);
     observers.push_back(dump.get());
   }
   std::unique_ptr<ProgressLine> progress;

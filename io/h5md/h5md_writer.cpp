@@ -75,6 +75,15 @@ void fixed_dataset(hid_t parent, const char* name, hid_t type, const std::vector
   check(set.close(), file, "close a dataset");
 }
 
+// The length of a dataset's first (time) dimension.
+hsize_t first_extent(hid_t set) {
+  H5Handle space = h5_space(H5Dget_space(set));
+  std::vector<hsize_t> dims(
+      static_cast<std::size_t>(std::max(H5Sget_simple_extent_ndims(space), 1)));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  return dims[0];
+}
+
 H5Handle group(hid_t parent, const char* name, const std::string& file) {
   return checked(h5_group(H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)), file,
                  "create a group");
@@ -85,7 +94,7 @@ H5Handle group(hid_t parent, const char* name, const std::string& file) {
 H5mdWriter::H5mdWriter(const TrajectorySpec& spec, const System& system,
                        const std::string& input_text, const std::string& author,
                        const std::vector<std::pair<std::int32_t, std::int32_t>>& rods,
-                       TrajectoryContinuation continuation)
+                       bool hard_spheres, TrajectoryContinuation continuation)
     : spec_(spec), atoms_(system.particles.size()) {
   prepare_hdf5();
   // On an error the handles close what was opened (the destructors).
@@ -93,12 +102,13 @@ H5mdWriter::H5mdWriter(const TrajectorySpec& spec, const System& system,
     reopen(system, continuation.step);
     return;
   }
-  create(system, input_text, author, rods);
+  create(system, input_text, author, rods, hard_spheres);
 }
 
 void H5mdWriter::create(const System& system, const std::string& input_text,
                         const std::string& author,
-                        const std::vector<std::pair<std::int32_t, std::int32_t>>& rods) {
+                        const std::vector<std::pair<std::int32_t, std::int32_t>>& rods,
+                        bool hard_spheres) {
   const std::string& f = spec_.file;
   file_ = h5_file(H5Fcreate(f.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
   if (!file_.valid()) {
@@ -126,23 +136,35 @@ void H5mdWriter::create(const System& system, const std::string& input_text,
     fixed_dataset(all, "species", H5T_NATIVE_INT, {n}, species, f);
     fixed_dataset(all, "mass", H5T_NATIVE_DOUBLE, {n}, p.mass, f);
     fixed_dataset(all, "id", H5T_NATIVE_INT64, {n}, p.id, f);
+    // Hard-sphere diameters (not an H5MD 1.1 element: the specification allows others; the
+    // name is GSD's and HOOMD's). Point particles have none.
+    if (hard_spheres) {
+      std::vector<double> diameter(p.radius.size());
+      for (std::size_t i = 0; i < p.size(); ++i) diameter[i] = 2 * p.radius[i];
+      fixed_dataset(all, "diameter", H5T_NATIVE_DOUBLE, {n}, diameter, f);
+    }
     H5Handle box = group(all, "box", f);
     int_attribute(box, "dimension", {3}, f);
     std::vector<std::string> boundary;
     for (int a = 0; a < 3; ++a) boundary.push_back(system.box.periodic(a) ? "periodic" : "none");
     strings_attribute(box, "boundary", boundary, f);
-    edges_ = make_series(box, "edges", H5T_NATIVE_DOUBLE, {3, 3});
+    // Every series is sampled at the position's frames: their step and time are hard links
+    // to the position's (H5MD 1.1 requires it of box/edges and image, allows it elsewhere).
     position_ = make_series(all, "position", H5T_NATIVE_DOUBLE, {n, 3});
-    if (spec_.velocities) velocity_ = make_series(all, "velocity", H5T_NATIVE_DOUBLE, {n, 3});
-    if (spec_.forces) force_ = make_series(all, "force", H5T_NATIVE_DOUBLE, {n, 3});
-    if (spec_.images) image_ = make_series(all, "image", H5T_NATIVE_INT, {n, 3});
+    edges_ = make_series(box, "edges", H5T_NATIVE_DOUBLE, {3, 3}, &position_);
+    if (spec_.velocities) {
+      velocity_ = make_series(all, "velocity", H5T_NATIVE_DOUBLE, {n, 3}, &position_);
+    }
+    if (spec_.forces) force_ = make_series(all, "force", H5T_NATIVE_DOUBLE, {n, 3}, &position_);
+    if (spec_.images) image_ = make_series(all, "image", H5T_NATIVE_INT, {n, 3}, &position_);
   }
 
   observables_group_ = group(file_, "observables", f);
 
   if (!system.topology.bonds.empty() || !rods.empty()) {
     H5Handle connectivity = group(file_, "connectivity", f);
-    // Indices into /particles/all (0-based), as the H5MD connectivity module specifies.
+    // Pairs of particle ids: H5MD 1.1 reads the tuples of a list whose particles_group has
+    // an `id` element as values of that `id` (as indices only where it has none).
     auto pair_list = [&](const char* name, const std::vector<std::int64_t>& pairs) {
       if (pairs.empty()) return;
       fixed_dataset(connectivity, name, H5T_NATIVE_INT64, {pairs.size() / 2, 2}, pairs, f);
@@ -156,8 +178,9 @@ void H5mdWriter::create(const System& system, const std::string& input_text,
       check(set.close(), f, "close a dataset");
     };
     std::vector<std::int64_t> bonds, rod_pairs;
-    for (const Bond& b : system.topology.bonds) bonds.push_back(b.i), bonds.push_back(b.j);
-    for (const auto& [i, j] : rods) rod_pairs.push_back(i), rod_pairs.push_back(j);
+    for (const Bond& b : system.topology.bonds)
+      bonds.push_back(p.id[b.i]), bonds.push_back(p.id[b.j]);
+    for (const auto& [i, j] : rods) rod_pairs.push_back(p.id[i]), rod_pairs.push_back(p.id[j]);
     pair_list("bonds", bonds);
     pair_list("rods", rod_pairs);
   }
@@ -272,7 +295,8 @@ void H5mdWriter::reopen(const System& system, std::int64_t step) {
 H5mdWriter::~H5mdWriter() = default;
 
 H5mdWriter::Series H5mdWriter::make_series(hid_t parent, const std::string& name, hid_t type,
-                                           const std::vector<hsize_t>& frame_shape) {
+                                           const std::vector<hsize_t>& frame_shape,
+                                           const Series* clock) {
   Series s;
   s.group = group(parent, name.c_str(), spec_.file);
   const hsize_t unlimited = H5S_UNLIMITED, one = 1;
@@ -293,8 +317,19 @@ H5mdWriter::Series H5mdWriter::make_series(hid_t parent, const std::string& name
         h5_dataset(H5Dcreate2(s.group, dname, dtype, space, H5P_DEFAULT, properties, H5P_DEFAULT)),
         spec_.file, "create a dataset");
   };
-  s.step = series_dataset("step", H5T_NATIVE_INT64, {});
-  s.time = series_dataset("time", H5T_NATIVE_DOUBLE, {});
+  if (clock != nullptr) {
+    for (const char* link : {"step", "time"}) {
+      check(H5Lcreate_hard(clock->group, link, s.group, link, H5P_DEFAULT, H5P_DEFAULT), spec_.file,
+            "link a series to the position's step and time");
+    }
+    s.step =
+        checked(h5_dataset(H5Dopen2(s.group, "step", H5P_DEFAULT)), spec_.file, "open a dataset");
+    s.time =
+        checked(h5_dataset(H5Dopen2(s.group, "time", H5P_DEFAULT)), spec_.file, "open a dataset");
+  } else {
+    s.step = series_dataset("step", H5T_NATIVE_INT64, {});
+    s.time = series_dataset("time", H5T_NATIVE_DOUBLE, {});
+  }
   s.value = series_dataset("value", type, frame_shape);
   return s;
 }
@@ -322,8 +357,16 @@ void H5mdWriter::append(Series& s, std::int64_t step, double time, const void* d
         h5_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));
     check(H5Dwrite(set, type, memory, space, H5P_DEFAULT, values), spec_.file, "write a frame");
   };
-  grow_and_write(s.step, H5T_NATIVE_INT64, &step, {});
-  grow_and_write(s.time, H5T_NATIVE_DOUBLE, &time, {});
+  // A step and time shared with other series (hard links) are extended by the first of
+  // them to write the frame: once, whichever series comes first.
+  const hsize_t frames = first_extent(s.value);
+  const hsize_t stamped = first_extent(s.step);
+  if (stamped == frames) {
+    grow_and_write(s.step, H5T_NATIVE_INT64, &step, {});
+    grow_and_write(s.time, H5T_NATIVE_DOUBLE, &time, {});
+  } else if (stamped != frames + 1) {
+    check(-1, spec_.file, "keep a series' step and value the same length");
+  }
   grow_and_write(s.value, memory_type, data, frame_shape);
 }
 
@@ -367,7 +410,12 @@ void H5mdWriter::on_frame(const System& system, const ThermoSample& sample,
   for (const auto& [name, value] : values) {
     auto it = observables_.find(name);
     if (it == observables_.end()) {
-      it = observables_.emplace(name, make_series(observables_group_, name, H5T_NATIVE_DOUBLE, {}))
+      // An observable from the file's first frame on shares the position's step and time;
+      // one that appears later has its own.
+      const bool from_first_frame = first_extent(position_.step) == 1;
+      it = observables_
+               .emplace(name, make_series(observables_group_, name, H5T_NATIVE_DOUBLE, {},
+                                          from_first_frame ? &position_ : nullptr))
                .first;
     }
     append(it->second, system.step, system.time, &value, H5T_NATIVE_DOUBLE, {});

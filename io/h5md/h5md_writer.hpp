@@ -20,11 +20,13 @@ struct TrajectoryContinuation {
 };
 
 // An H5MD 1.1 trajectory (HDF5 C API): /h5md metadata, /particles/all with position,
-// velocity, force and image as time series (step, time, value), species, mass, id and the
-// box (edges as a D x D matrix series, as MDAnalysis reads them), /observables for the
-// thermo quantities and constraint statistics at every frame (MDAnalysis reads observables
-// by frame index, so every observable has one entry per frame), /connectivity/bonds and
-// /connectivity/rods, and the input under /parameters.
+// velocity, force and image as time series (step, time, value), species, mass, id, the
+// hard-sphere diameters (when there are hard spheres) and the box (edges as a D x D matrix
+// series, as MDAnalysis reads them), /observables for the thermo quantities and constraint
+// statistics at every frame (MDAnalysis reads observables by frame index, so every
+// observable has one entry per frame), /connectivity/bonds and /connectivity/rods (pairs of
+// particle ids), and the input under /parameters. Series sampled at the position's frames
+// share its step and time datasets (hard links), extended once per frame.
 // Series are chunked, compressed and extended frame by frame; the file is flushed after
 // every frame, so a run killed at any moment leaves every frame written before.
 class H5mdWriter final : public Observer {
@@ -32,7 +34,7 @@ class H5mdWriter final : public Observer {
   H5mdWriter(const TrajectorySpec& spec, const System& system, const std::string& input_text,
              const std::string& author,
              const std::vector<std::pair<std::int32_t, std::int32_t>>& rods = {},
-             TrajectoryContinuation continuation = {});
+             bool hard_spheres = false, TrajectoryContinuation continuation = {});
   ~H5mdWriter() override;
   H5mdWriter(const H5mdWriter&) = delete;
   H5mdWriter& operator=(const H5mdWriter&) = delete;
@@ -47,10 +49,11 @@ class H5mdWriter final : public Observer {
   struct Series {
     H5Handle group, step, time, value;
   };
+  // A new time series; with `clock`, its step and time are hard links to clock's.
   Series make_series(hid_t parent, const std::string& name, hid_t type,
-                     const std::vector<hsize_t>& frame_shape);
+                     const std::vector<hsize_t>& frame_shape, const Series* clock = nullptr);
   void create(const System& system, const std::string& input_text, const std::string& author,
-              const std::vector<std::pair<std::int32_t, std::int32_t>>& rods);
+              const std::vector<std::pair<std::int32_t, std::int32_t>>& rods, bool hard_spheres);
   void reopen(const System& system, std::int64_t step);
   // Opens an existing series and cuts it back to its frames up to `step`.
   Series continue_series(hid_t parent, const std::string& name, std::int64_t step);

@@ -659,6 +659,13 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       input.dump.file = dump->string("file");
       output_files.push_back({"dump", input.dump.file, *dump});
       input.dump.format = dump->choice("format", {"lammps", "xyz"}, "lammps");
+      // Extended XYZ names type k by the element of atomic number k (ASE reads no others).
+      if (input.dump.format == "xyz" && input.system.atom_types.size() > 118) {
+        dump->fail("names atom types by element symbols, 118 at most; this system has " +
+                       std::to_string(input.system.atom_types.size()) +
+                       " types: use format = \"lammps\"",
+                   "format");
+      }
       input.dump.every = dump->integer("every", 1000);
       if (input.dump.every < 1) dump->fail("must be at least 1", "every");
       dump->finish();

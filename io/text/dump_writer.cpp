@@ -1,31 +1,61 @@
 #include "text/dump_writer.hpp"
 
+#include <array>
+
 #include "core/error.hpp"
 #include "text/continuation.hpp"
 #include "text/write_failure.hpp"
 
 namespace deli {
 
+namespace {
+
+// Extended XYZ species are chemical symbols for ASE (it builds Atoms from them) and names
+// for OVITO: type k is the element of atomic number k, as ASE's LAMMPS readers map types,
+// so that `atoms.numbers` gives the type numbers back.
+const std::array<const char*, 118> elements{
+    "H",  "He", "Li", "Be", "B",  "C",  "N",  "O",  "F",  "Ne", "Na", "Mg", "Al", "Si", "P",
+    "S",  "Cl", "Ar", "K",  "Ca", "Sc", "Ti", "V",  "Cr", "Mn", "Fe", "Co", "Ni", "Cu", "Zn",
+    "Ga", "Ge", "As", "Se", "Br", "Kr", "Rb", "Sr", "Y",  "Zr", "Nb", "Mo", "Tc", "Ru", "Rh",
+    "Pd", "Ag", "Cd", "In", "Sn", "Sb", "Te", "I",  "Xe", "Cs", "Ba", "La", "Ce", "Pr", "Nd",
+    "Pm", "Sm", "Eu", "Gd", "Tb", "Dy", "Ho", "Er", "Tm", "Yb", "Lu", "Hf", "Ta", "W",  "Re",
+    "Os", "Ir", "Pt", "Au", "Hg", "Tl", "Pb", "Bi", "Po", "At", "Rn", "Fr", "Ra", "Ac", "Th",
+    "Pa", "U",  "Np", "Pu", "Am", "Cm", "Bk", "Cf", "Es", "Fm", "Md", "No", "Lr", "Rf", "Db",
+    "Sg", "Bh", "Hs", "Mt", "Ds", "Rg", "Cn", "Nh", "Fl", "Mc", "Lv", "Ts", "Og"};
+
+}  // namespace
+
+const char* xyz_species(int type) {
+  if (type < 0 || type >= static_cast<int>(elements.size())) {
+    throw InputError("the XYZ dump names atom types 1 to 118 as elements; type " +
+                     std::to_string(type + 1) + " has no name: use format = \"lammps\"");
+  }
+  return elements[static_cast<std::size_t>(type)];
+}
+
 DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t every,
-                       std::int64_t continue_from)
-    : path_(path), format_(format), every_(every) {
+                       std::int64_t continue_from, bool hard_spheres)
+    : path_(path), format_(format), every_(every), radii_(hard_spheres) {
   bool kept = false;
   if (continue_from >= 0) {
-    // LAMMPS: "ITEM: TIMESTEP" then the step; XYZ: the atom count, then "step N ...".
-    kept = cut_back_after_step(
-        path, continue_from,
-        [format](const std::vector<std::string>& lines,
-                 std::size_t k) -> std::optional<std::int64_t> {
-          if (k + 1 >= lines.size()) return std::nullopt;
-          if (format == Format::lammps) {
-            if (lines[k] != "ITEM: TIMESTEP") return std::nullopt;
-            return std::stoll(lines[k + 1]);
-          }
-          if (lines[k + 1].rfind("step ", 0) != 0 || lines[k].find(' ') != std::string::npos) {
-            return std::nullopt;
-          }
-          return std::stoll(lines[k + 1].substr(5));
-        });
+    // LAMMPS: "ITEM: TIMESTEP" then the step; XYZ: the atom count, then the comment line
+    // with "Step=N".
+    kept = cut_back_after_step(path, continue_from,
+                               [format](const std::vector<std::string>& lines,
+                                        std::size_t k) -> std::optional<std::int64_t> {
+                                 if (k + 1 >= lines.size()) return std::nullopt;
+                                 if (format == Format::lammps) {
+                                   if (lines[k] != "ITEM: TIMESTEP") return std::nullopt;
+                                   return std::stoll(lines[k + 1]);
+                                 }
+                                 const std::size_t at = lines[k + 1].find(" Step=");
+                                 if (lines[k + 1].rfind("Lattice=", 0) != 0 ||
+                                     at == std::string::npos ||
+                                     lines[k].find(' ') != std::string::npos) {
+                                   return std::nullopt;
+                                 }
+                                 return std::stoll(lines[k + 1].substr(at + 6));
+                               });
   }
   out_.open(path, kept ? std::ios::app : std::ios::trunc);
   if (!out_) {
@@ -41,11 +71,23 @@ void DumpWriter::on_frame(const System& system, const ThermoSample&, const std::
   const Particles& p = system.particles;
   const Box& box = system.box;
   if (format_ == Format::xyz) {
-    out_ << p.size() << "\nstep " << system.step << " time " << system.time << " box "
-         << box.length().x << ' ' << box.length().y << ' ' << box.length().z << '\n';
+    // Extended XYZ (ASE, OVITO): the cell's edge vectors as rows (Lattice), its corner
+    // (Origin, OVITO's key), the periodic axes (pbc), then species, position, id, and the
+    // hard-sphere radius where particles have one.
+    const Vec3 l = box.length();
+    const Vec3 lo = box.lo();
+    const bool radii = radii_;
+    out_ << p.size() << "\nLattice=\"" << l.x << " 0 0 0 " << l.y << " 0 0 0 " << l.z
+         << "\" Origin=\"" << lo.x << ' ' << lo.y << ' ' << lo.z
+         << "\" Properties=species:S:1:pos:R:3:id:I:1" << (radii ? ":radius:R:1" : "") << " pbc=\""
+         << (box.periodic(0) ? 'T' : 'F') << ' ' << (box.periodic(1) ? 'T' : 'F') << ' '
+         << (box.periodic(2) ? 'T' : 'F') << "\" Time=" << system.time << " Step=" << system.step
+         << '\n';
     for (std::size_t i = 0; i < p.size(); ++i) {
-      out_ << p.type[i] + 1 << ' ' << p.position[i].x << ' ' << p.position[i].y << ' '
-           << p.position[i].z << '\n';
+      out_ << xyz_species(p.type[i]) << ' ' << p.position[i].x << ' ' << p.position[i].y << ' '
+           << p.position[i].z << ' ' << p.id[i];
+      if (radii) out_ << ' ' << p.radius[i];
+      out_ << '\n';
     }
   } else {
     out_ << "ITEM: TIMESTEP\n"

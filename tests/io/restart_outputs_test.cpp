@@ -1,5 +1,6 @@
-// `deli run --restart` continues the run's outputs: the thermo CSV, the H5MD trajectory and
-// the LAMMPS dump of a run stopped at a checkpoint (and run on past it, frames the restart
+// `deli run --restart` continues the run's outputs: the thermo CSV, the H5MD trajectory
+// (still H5MD 1.1, its shared step and time extended once per frame) and the dump (XYZ or
+// LAMMPS) of a run stopped at a checkpoint (and run on past it, frames the restart
 // must drop) and then restarted are those of the uninterrupted run, bit for bit.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -37,7 +38,8 @@ std::string slit_input(const std::string& dir, const std::string& name, int step
                       << "thermo = { every = 20, file = \"" << dir << "/out.csv\" }\n"
                       << "trajectory = { file = \"" << dir << "/out.h5\", every = 20, "
                       << "forces = true }\n"
-                      << "dump = { file = \"" << dir << "/out.dump\", every = 40 }\n"
+                      << "dump = { file = \"" << dir
+                      << "/out.dump\", every = 40, format = \"xyz\" }\n"
                       << "checkpoint = { file = \"" << dir << "/out.chk\", every = 100 }\n";
   return path;
 }
@@ -66,6 +68,19 @@ TEST(Restart, OutputsContinueBitForBit) {
             0)
       << log;
   std::printf("%s", log.c_str());
+  // The appended file is still H5MD 1.1, its series still sharing one step and time.
+  EXPECT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/h5md_conformance.py --deli " +
+                      stopped + "/out.h5",
+                  log),
+            0)
+      << log;
+  std::printf("%s", log.c_str());
+  EXPECT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/extxyz_check.py " + stopped +
+                      "/out.dump",
+                  log),
+            0)
+      << log;
+  EXPECT_NE(log.find("6 frames"), std::string::npos) << log;
   // The GVI trajectory carries the rods and the constraint statistics; the plot tool draws
   // them.
   ASSERT_EQ(
@@ -142,6 +157,11 @@ TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
   EXPECT_EQ(slurp(root + "/straight/out.dump"), slurp(stopped + "/out.dump"));
   EXPECT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/compare_h5md.py " + root +
                       "/straight/out.h5 " + stopped + "/out.h5 7",
+                  log),
+            0)
+      << log;
+  EXPECT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/h5md_conformance.py --deli " +
+                      stopped + "/out.h5",
                   log),
             0)
       << log;
