@@ -1,6 +1,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,10 @@ int main(int argc, char** argv) {
   } catch (const deli::SimulationError& e) {
     std::fprintf(stderr, "deli: simulation stopped: %s\n", e.what());
     return deli::kExitSimulationStopped;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "deli: out of memory: the system (or an output buffer) does not fit in this "
+                 "machine's memory; check the number of atoms and the box\n");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "deli: error: %s\n", e.what());
   }

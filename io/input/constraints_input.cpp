@@ -68,7 +68,10 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
     const std::int32_t j = atom_index(r, "atoms", atoms[1], index_of);
     if (i == j) r.fail("a rod joins two different atoms", "atoms");
     std::optional<double> length;
-    if (r.has("length")) length = r.number("length");
+    if (r.has("length")) {
+      length = r.number("length");
+      if (!(*length > 0)) r.fail("a rod's length must be positive", "length");
+    }
     add_rod(i, j, length);
     r.finish();
   }

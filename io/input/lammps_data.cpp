@@ -491,6 +491,12 @@ CoefficientSection DataReader::coefficients(const Section& section, const std::s
 
 LammpsDataFile DataReader::read() {
   read_lines();
+  if (atoms_.value == 0) {
+    fail(atoms_.line, atoms_.line == 0
+                          ? "the file has no 'N atoms' header line: it is empty or not a LAMMPS "
+                            "data file (write one with LAMMPS write_data or deli write-data)"
+                          : "the file declares 0 atoms: a run needs atoms");
+  }
 
   LammpsDataFile result;
   result.path = path_;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -88,6 +89,7 @@ System read_system(TomlTable& t, const fs::path& input_dir, DataCoefficients& co
     for (int a = 0; a < 3; ++a) {
       if (cells[a] < 1 || cells[a] != std::floor(cells[a]))
         lattice->fail("cells must be positive integers", "cells");
+      if (cells[a] > 1e6) lattice->fail("at most 1000000 cells per axis", "cells");
       f.cells[a] = static_cast<int>(cells[a]);
     }
     if (lattice->has("masses")) {
@@ -103,13 +105,25 @@ System read_system(TomlTable& t, const fs::path& input_dir, DataCoefficients& co
       f.masses.assign(static_cast<std::size_t>(count), positive(*lattice, "mass", 1.0));
     }
     lattice->finish();
+    if (4.0 * f.cells[0] * f.cells[1] * f.cells[2] > std::numeric_limits<std::int32_t>::max()) {
+      lattice->fail("4 x " + std::to_string(f.cells[0]) + " x " + std::to_string(f.cells[1]) +
+                        " x " + std::to_string(f.cells[2]) +
+                        " atoms: more than deli's limit of 2147483647 atoms",
+                    "cells");
+    }
     system = build_fcc(f);
     set_box_periodicity(system, periodic);
   } else {
     RandomChains c;
-    c.count = static_cast<int>(chains->integer("count"));
-    c.length = static_cast<int>(chains->integer("length"));
-    if (c.count < 1 || c.length < 1) chains->fail("count and length must be at least 1");
+    const std::int64_t count = chains->integer("count"), length = chains->integer("length");
+    if (count < 1 || length < 1) chains->fail("count and length must be at least 1");
+    if (static_cast<double>(count) * static_cast<double>(length) >
+        std::numeric_limits<std::int32_t>::max()) {
+      chains->fail(std::to_string(count) + " chains of " + std::to_string(length) +
+                   " atoms: more than deli's limit of 2147483647 atoms");
+    }
+    c.count = static_cast<int>(count);
+    c.length = static_cast<int>(length);
     c.density = positive(*chains, "density");
     c.bond_length = positive(*chains, "bond_length", 0.97);
     c.min_distance = positive(*chains, "min_distance", 0.9);
@@ -486,6 +500,9 @@ void add_excluded_contacts(RunInput& input) {
 }  // namespace
 
 RunInput load_run_input(const std::string& path) {
+  if (fs::is_directory(path)) {
+    throw InputError(path + ": is a directory, not an input file; give the TOML input inside it");
+  }
   std::ifstream file(path);
   if (!file) throw InputError(path + ": cannot read the input file (does it exist?)");
   std::stringstream text;
@@ -613,6 +630,12 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
       input.gvi.energy = r->choice("energy", {"hamiltonian", "shadow"}, "hamiltonian") == "shadow"
                              ? ReflectionEnergy::shadow
                              : ReflectionEnergy::hamiltonian;
+      if (input.gvi.energy == ReflectionEnergy::shadow && input.force_field_spec.angle) {
+        r->fail(
+            "shadow-Hamiltonian reflections need the potential's pairwise Hessian, which "
+            "harmonic angles lack: use energy = \"hamiltonian\"",
+            "energy");
+      }
       if (input.gvi.energy == ReflectionEnergy::shadow &&
           input.gvi.lagrangian != Lagrangian::verlet) {
         r->fail(

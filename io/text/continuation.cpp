@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
 #include "core/error.hpp"
 
@@ -24,7 +25,14 @@ bool cut_back_after_step(const std::string& path, std::int64_t step,
   // A line without its newline was cut short (a killed run): never append after it.
   if (!lines.empty() && offset > keep) keep = offsets.back();
   for (std::size_t k = 0; k < lines.size(); ++k) {
-    const std::optional<std::int64_t> at = record_step(lines, k);
+    std::optional<std::int64_t> at;
+    try {
+      at = record_step(lines, k);
+    } catch (const std::logic_error&) {  // std::stoll on a damaged line
+      throw InputError(path + ":" + std::to_string(k + 1) +
+                       ": a record of the run being continued has no readable step; the "
+                       "file is damaged: restore it or remove it to start it afresh");
+    }
     if (offsets[k] < keep && at && *at > step) {
       keep = offsets[k];
       break;

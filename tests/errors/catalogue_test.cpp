@@ -24,7 +24,7 @@ struct Case {
   int status = 1;    // the expected exit status: 1 input error, 3 simulation stopped (README)
   std::vector<std::string> messages;          // each must appear in the output
   std::string command = "run @DIR@/in.toml";  // deli's arguments
-  std::string setup;                          // shell run in DIR first
+  std::string setup;                          // shell run in DIR first (@DELI@: the deli binary)
   std::string check;                          // shell run in DIR afterwards; must exit 0
   bool tmpfs = false;  // runs in a mount namespace with a small tmpfs at DIR/full
 };
@@ -652,8 +652,70 @@ void output_path_cases(std::vector<Case>& cases) {
                    DELI_BINARY " run in.toml > /dev/null"});
 }
 
+// Messages that used to mislead (issue 14, item 8): each now names what is wrong.
+void message_cases(std::vector<Case>& cases) {
+  cases.push_back({"input_is_a_directory",
+                   kLj,
+                   "",
+                   1,
+                   {"is a directory, not an input file"},
+                   "run @DIR@/sub",
+                   "mkdir -p sub"});
+  cases.push_back({"data_title_only",
+                   kLjData,
+                   "title only\n",
+                   1,
+                   {"in.data", "no 'N atoms' header line", "empty or not a LAMMPS data file"}});
+  cases.push_back({"data_empty_file", kLjData, "\n", 1, {"in.data", "no 'N atoms' header line"}});
+  cases.push_back({"lattice_cells_overflow_int",
+                   with(kLj, "cells = [3, 3, 3]", "cells = [1e10, 1, 1]"),
+                   "",
+                   1,
+                   {"in.toml:", "'system.lattice.cells'", "at most 1000000 cells per axis"}});
+  cases.push_back({"lattice_atoms_overflow_int",
+                   with(kLj, "cells = [3, 3, 3]", "cells = [1000000, 1000, 1]"),
+                   "",
+                   1,
+                   {"in.toml:", "more than deli's limit of 2147483647 atoms"}});
+  cases.push_back({"chain_count_overflow_int",
+                   with(kChains, "count = 20", "count = 4294967396"),
+                   "",
+                   1,
+                   {"in.toml:", "4294967396 chains of 5 atoms", "more than deli's limit"}});
+  cases.push_back({"shadow_reflections_with_angles",
+                   with(with(with(kChains, "[integrator]\n",
+                                  "[constraints]\nhard_spheres = { "
+                                  "diameter = 0.8 }\n[integrator]\n"
+                                  "type = \"gvi\"\n"),
+                             "timestep = 0.002\n\n[run]",
+                             "timestep = 0.002\nreflection = { energy = \"shadow\" }\n\n[run]"),
+                        "[minimize]\nmax_steps = 200\ntimestep = 0.002\n\n", ""),
+                   "",
+                   1,
+                   {"in.toml:", "'integrator.reflection.energy'", "harmonic angles lack",
+                    "energy = \"hamiltonian\""}});
+  for (const std::string length : {"0.0", "-1.0"}) {
+    cases.push_back({"rod_length_" + length,
+                     with(kGvi, "[neighbor]",
+                          "rods = [{ atoms = [1, 2], length = " + length + " }]\n\n[neighbor]"),
+                     kTwoAtoms,
+                     1,
+                     {"in.toml:", "'constraints.rods[1].length'", "must be positive"}});
+  }
+  cases.push_back(
+      {"restart_csv_damaged",
+       with(kLj, "[output]\n", "[output]\ncheckpoint = { file = \"@DIR@/c.h5\", every = 10 }\n"),
+       "",
+       1,
+       {"out.csv:3", "no readable step", "damaged"},
+       "run @DIR@/in.toml --restart @DIR@/c.h5",
+       "@DELI@ run @DIR@/in.toml > /dev/null && sed -i 's/steps = 20/steps = 40/' "
+       "in.toml && sed -i '3s/^[0-9]*/xx/' out.csv"});
+}
+
 std::vector<Case> all_cases() {
   std::vector<Case> cases;
+  message_cases(cases);
   non_finite_cases(cases);
   data_file_cases(cases);
   run_time_cases(cases);
@@ -688,7 +750,10 @@ TEST_P(Catalogue, ExitStatusAndMessage) {
   if (!c.data.empty()) std::ofstream(dir + "/in.data") << c.data;
   const std::string args = replaced_all(c.command, "@DIR@", dir);
   std::string command = "cd " + dir + " && ";
-  if (!c.setup.empty()) command += "(" + replaced_all(c.setup, "@DIR@", dir) + ") && ";
+  if (!c.setup.empty()) {
+    command +=
+        "(" + replaced_all(replaced_all(c.setup, "@DIR@", dir), "@DELI@", DELI_BINARY) + ") && ";
+  }
   command += std::string(DELI_BINARY) + " " + args;
   if (c.tmpfs) {
     // The tmpfs lives as long as the namespace: the run and its check happen inside.
