@@ -41,6 +41,10 @@ struct Check {
 
 double relative_difference(double a, double b);
 
+// The factor by which the position tolerance (set for 100 steps) grows after `steps`
+// steps of `timestep`: rounding differences grow exponentially in a chaotic system.
+double position_tolerance_growth(int steps, double timestep);
+
 // Term by term (matched by name), total, largest force component difference, virial.
 std::vector<Check> compare_evaluations(const EngineEvaluation& deli, const EngineEvaluation& other,
                                        const Tolerances& tolerances,
