@@ -27,6 +27,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   // Terms as deli has them: bonds held as rods are in the topology but not in the force field.
   has_bonds_ = bonds && spec.bond;
   has_angles_ = angles && spec.angle;
+  has_pair_ = spec.pair.has_value();
   const std::string style = angles ? "angle" : bonds ? "bond" : "atomic";
   data_path_ = (std::filesystem::temp_directory_path() /
                 ("deli-validate-" + std::to_string(getpid()) + ".data"))
@@ -208,8 +209,10 @@ EngineEvaluation LammpsBridge::evaluate() {
   command("run 0");
   EngineEvaluation e;
   e.engine = name();
-  e.term_names.push_back("pair");
-  e.term_energies.push_back(lammps_get_thermo(lammps_, "evdwl"));
+  if (has_pair_) {
+    e.term_names.push_back("pair");
+    e.term_energies.push_back(lammps_get_thermo(lammps_, "evdwl"));
+  }
   if (has_bonds_) {
     e.term_names.push_back("bond");
     e.term_energies.push_back(lammps_get_thermo(lammps_, "ebond"));

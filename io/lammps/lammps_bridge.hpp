@@ -43,9 +43,9 @@ class LammpsBridge {
 
   void* lammps_ = nullptr;
   std::string data_path_;
-  std::vector<std::int64_t> ids_;                // deli index -> atom id
-  bool has_bonds_ = false, has_angles_ = false;  // bond and angle terms in the force field
-  std::vector<std::string> external_fixes_;      // fix ids whose scalar is external energy
+  std::vector<std::int64_t> ids_;                                   // deli index -> atom id
+  bool has_pair_ = false, has_bonds_ = false, has_angles_ = false;  // terms of the force field
+  std::vector<std::string> external_fixes_;  // fix ids whose scalar is external energy
 };
 
 }  // namespace deli
