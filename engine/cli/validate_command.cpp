@@ -77,13 +77,23 @@ int command_validate(const std::vector<std::string>& args) {
               s.particles.size(), s.topology.bonds.size(), s.topology.angles.size(),
               s.box.periodic(0) ? 'p' : 'f', s.box.periodic(1) ? 'p' : 'f',
               s.box.periodic(2) ? 'p' : 'f');
+  ValidateOptions with_progress = options;
+  with_progress.progress = [](const std::string& line) {
+    std::fprintf(stderr, "deli validate: %s\n", line.c_str());
+    std::fflush(stderr);
+  };
   ValidationReport report;
   try {
-    report = validate(input, options);
+    report = validate(input, with_progress);
   } catch (const UnsupportedModel& e) {
     throw InputError(path + ": " + e.what());
   }
-  for (const std::string& why : report.skipped) std::printf("skipped: %s\n", why.c_str());
+  for (const std::string& note : report.notes) std::printf("note: %s\n", note.c_str());
+  for (const SkippedCheck& skip : report.skipped) {
+    std::printf("skipped: %s %s (%s): %s\n",
+                skip.engine == "all" ? "every engine's" : skip.engine.c_str(), skip.check.c_str(),
+                skip_reason_name(skip.reason), skip.why.c_str());
+  }
 
   // Energies side by side, then every check with its difference and tolerance.
   std::printf("\n%-14s %24s", "energy", "deli");

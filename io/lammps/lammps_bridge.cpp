@@ -23,21 +23,28 @@ std::string number(double v) {
 }  // namespace
 
 LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin) {
-  has_bonds_ = !system.topology.bonds.empty();
-  has_angles_ = !system.topology.angles.empty();
-  const std::string style = has_angles_ ? "angle" : has_bonds_ ? "bond" : "atomic";
+  const bool bonds = !system.topology.bonds.empty(), angles = !system.topology.angles.empty();
+  // Terms as deli has them: bonds held as rods are in the topology but not in the force field.
+  has_bonds_ = bonds && spec.bond;
+  has_angles_ = angles && spec.angle;
+  has_pair_ = spec.pair.has_value();
+  const std::string style = angles ? "angle" : bonds ? "bond" : "atomic";
   data_path_ = (std::filesystem::temp_directory_path() /
                 ("deli-validate-" + std::to_string(getpid()) + ".data"))
                    .string();
   // read_data drops atoms outside the box even along shrink-wrapped axes (a LAMMPS error,
-  // which ends the process): open axes get bounds around every atom.
+  // which ends the process): open axes get bounds around every atom, at least the
+  // neighbour cutoff away, and are shrink-wrapped no closer (boundary m): a box flat
+  // along an open axis (one atom, a planar pendulum) would else be thinner than a
+  // neighbour bin, another LAMMPS error.
   System copy = system;
   Vec3 lo = system.box.lo(), hi = system.box.hi();
+  const double pad = std::max(1.0, (spec.pair ? spec.pair->max_cutoff() : 1.0) + skin);
   for (const Vec3& x : system.particles.position) {
     for (int a = 0; a < 3; ++a) {
       if (system.box.periodic(a)) continue;
-      lo[a] = std::min(lo[a], x[a] - 1.0);
-      hi[a] = std::max(hi[a], x[a] + 1.0);
+      lo[a] = std::min(lo[a], x[a] - pad);
+      hi[a] = std::max(hi[a], x[a] + pad);
     }
   }
   copy.box = Box(lo, hi, system.box.periodic());
@@ -46,9 +53,21 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
 
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
   lammps_ = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
+  // A missing style would be a LAMMPS error, which ends the process: ask first.
+  const bool external = spec.gravity || !spec.radial.empty();
+  for (const char* fix : {"gravity", "addforce"}) {
+    if (external && !lammps_has_style(lammps_, "fix", fix)) {
+      lammps_close(lammps_);
+      lammps_ = nullptr;
+      std::error_code ignored;
+      std::filesystem::remove(data_path_, ignored);
+      throw UnsupportedModel(std::string("this LAMMPS has no fix ") + fix +
+                             " (needed for the input's external field)");
+    }
+  }
 
   std::string boundary;
-  for (int a = 0; a < 3; ++a) boundary += system.box.periodic(a) ? "p " : "s ";
+  for (int a = 0; a < 3; ++a) boundary += system.box.periodic(a) ? "p " : "m ";
   command("units lj");
   command("atom_style " + style);
   command("atom_modify map array");
@@ -88,6 +107,64 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
                 " " + number(p.epsilon) + " " + number(p.sigma));
       }
     }
+  }
+  if (bonds && !spec.bond) {  // rods: bonds for the exclusions, no force
+    command("bond_style zero");
+    command("bond_coeff *");
+  }
+  if (angles && !spec.angle) {
+    command("angle_style zero");
+    command("angle_coeff *");
+  }
+  // External fields: fix gravity (F = m g, energy -m g.x) and, for each radial field, fix
+  // addforce with atom-style variables for the force and the energy (deli's V(s) with
+  // s = |x - c|^2: F = -2 V'(s) (x - c)). Both count in pe (fix_modify energy yes) and,
+  // as deli's, not in the virial (fix_modify virial is off by default).
+  if (spec.gravity) {
+    const Vec3 g = *spec.gravity;
+    const double magnitude = norm(g);
+    if (magnitude > 0) {
+      command("fix deli_gravity all gravity " + number(magnitude) + " vector " + number(g.x) + " " +
+              number(g.y) + " " + number(g.z));
+      command("fix_modify deli_gravity energy yes");
+      external_fixes_.push_back("deli_gravity");
+    }
+  }
+  for (std::size_t r = 0; r < spec.radial.size(); ++r) {
+    const ForceFieldSpec::Radial& radial = spec.radial[r];
+    const std::string tag = "deli_r" + std::to_string(r) + "_";
+    auto par = [](double v) { return "(" + number(v) + ")"; };
+    const std::string dx = "(x-" + par(radial.center.x) + ")",
+                      dy = "(y-" + par(radial.center.y) + ")",
+                      dz = "(z-" + par(radial.center.z) + ")";
+    command("variable " + tag + "s atom " + dx + "^2+" + dy + "^2+" + dz + "^2");
+    const std::string s = "v_" + tag + "s";
+    std::string energy, slope;  // V(s) and V'(s)
+    if (radial.inverse_square) {
+      energy = par(radial.coefficients[0]) + "/" + s;
+      slope = "-" + par(radial.coefficients[0]) + "/(" + s + "^2)";
+    } else {
+      const std::vector<double>& a = radial.coefficients;
+      for (std::size_t k = a.size(); k-- > 0;) {
+        energy = energy.empty() ? par(a[k]) : par(a[k]) + "+" + s + "*(" + energy + ")";
+        if (k >= 1) {
+          const std::string term = par(static_cast<double>(k) * a[k]);
+          slope = slope.empty() ? term : term + "+" + s + "*(" + slope + ")";
+        }
+      }
+      if (energy.empty()) energy = "0";
+      if (slope.empty()) slope = "0";
+    }
+    command("variable " + tag + "e atom " + energy);
+    command("variable " + tag + "d atom " + slope);
+    for (const char* axis : {"x", "y", "z"}) {
+      const std::string d = axis[0] == 'x' ? dx : axis[0] == 'y' ? dy : dz;
+      command("variable " + tag + "f" + axis + " atom -2*v_" + tag + "d*" + d);
+    }
+    command("fix " + tag + "fix all addforce v_" + tag + "fx v_" + tag + "fy v_" + tag +
+            "fz energy v_" + tag + "e");
+    command("fix_modify " + tag + "fix energy yes");
+    external_fixes_.push_back(tag + "fix");
   }
   if (spec.angle) {
     command("angle_style harmonic");
@@ -132,8 +209,10 @@ EngineEvaluation LammpsBridge::evaluate() {
   command("run 0");
   EngineEvaluation e;
   e.engine = name();
-  e.term_names.push_back("pair");
-  e.term_energies.push_back(lammps_get_thermo(lammps_, "evdwl"));
+  if (has_pair_) {
+    e.term_names.push_back("pair");
+    e.term_energies.push_back(lammps_get_thermo(lammps_, "evdwl"));
+  }
   if (has_bonds_) {
     e.term_names.push_back("bond");
     e.term_energies.push_back(lammps_get_thermo(lammps_, "ebond"));
@@ -141,6 +220,17 @@ EngineEvaluation LammpsBridge::evaluate() {
   if (has_angles_) {
     e.term_names.push_back("angle");
     e.term_energies.push_back(lammps_get_thermo(lammps_, "eangle"));
+  }
+  if (!external_fixes_.empty()) {
+    double external = 0.0;
+    for (const std::string& fix : external_fixes_) {
+      auto* value = static_cast<double*>(
+          lammps_extract_fix(lammps_, fix.c_str(), LMP_STYLE_GLOBAL, LMP_TYPE_SCALAR, 0, 0));
+      external += *value;
+      lammps_free(value);
+    }
+    e.term_names.push_back("external");
+    e.term_energies.push_back(external);
   }
   e.potential = lammps_get_thermo(lammps_, "pe");
   // The virial pressure is W / (3 V) in LAMMPS' own (shrink-wrapped, if open) volume.

@@ -12,10 +12,12 @@ namespace deli {
 // The same model in LAMMPS (`units lj`), through its C library in this process: the
 // system goes through a LAMMPS data file written by deli, the force field as LAMMPS
 // commands (lj/cut with every type pair given explicitly, pair_modify shift,
-// special_bonds lj, bond_style harmonic or fene, angle_style harmonic). Open axes are
-// shrink-wrapped (boundary s). Debian's LAMMPS is built without exceptions: any LAMMPS
-// error ends the process, so only models deli has already evaluated without error may be
-// handed over (the validate command evaluates deli first).
+// special_bonds lj, bond_style harmonic or fene, angle_style harmonic; bonds held as rods
+// as bond_style zero; gravity as fix gravity, radial fields as fix addforce with atom-style
+// variables). Open axes are
+// shrink-wrapped, never inside the bounds deli gives them (boundary m). Debian's LAMMPS is built
+// without exceptions: any LAMMPS error ends the process, so only models deli has already evaluated
+// without error may be handed over (the validate command evaluates deli first).
 class LammpsBridge {
  public:
   LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin);
@@ -41,8 +43,9 @@ class LammpsBridge {
 
   void* lammps_ = nullptr;
   std::string data_path_;
-  std::vector<std::int64_t> ids_;  // deli index -> atom id
-  bool has_bonds_ = false, has_angles_ = false;
+  std::vector<std::int64_t> ids_;                                   // deli index -> atom id
+  bool has_pair_ = false, has_bonds_ = false, has_angles_ = false;  // terms of the force field
+  std::vector<std::string> external_fixes_;  // fix ids whose scalar is external energy
 };
 
 }  // namespace deli

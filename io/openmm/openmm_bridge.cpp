@@ -2,6 +2,7 @@
 
 #include <OpenMM.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -24,7 +25,8 @@ std::vector<Vec3> from_openmm(const std::vector<OpenMM::Vec3>& v) {
 }
 
 // Force groups, one per deli term, so that each term's energy can be read alone.
-constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup = 3;
+constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup = 3,
+              kExternalGroup = 4;
 
 // k_B N_A in kJ/mol/K, exactly as OpenMM's BOLTZ (SI 2019 constants).
 constexpr double kBoltzmannKJPerMolK = 1.380649e-23 * 6.02214076e23 / 1000.0;
@@ -42,6 +44,8 @@ struct OpenMMBridge::Impl {
   std::map<std::string, std::string> properties;
   bool periodic = false;
   Vec3 box_length;
+  std::array<bool, 3> padded{false, false, false};  // open axes made periodic and long
+  double cutoff = 0.0;
   std::vector<double> mass;
   std::vector<std::string> term_names;
   std::vector<int> term_groups;  // bitmask per term
@@ -52,12 +56,23 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   const auto& periodic = sys.box.periodic();
-  if (periodic[0] != periodic[1] || periodic[1] != periodic[2]) {
-    throw UnsupportedModel(
-        "OpenMM boxes are periodic along all axes or none; this system mixes both");
-  }
-  m.periodic = periodic[0];
+  m.periodic = periodic[0] || periodic[1] || periodic[2];
   m.box_length = sys.box.length();
+  m.cutoff = spec.pair ? spec.pair->max_cutoff() : 0.0;
+  // OpenMM boxes are periodic along all axes or none. An open axis of a partly periodic
+  // box becomes a periodic one long enough that no atom meets another's image: twice the
+  // atoms' extent plus twice the cutoff and 10 sigma (run_nve checks it stayed so).
+  for (int a = 0; a < 3; ++a) {
+    if (!m.periodic || periodic[a]) continue;
+    double lo = 0.0, hi = 0.0;
+    for (std::size_t i = 0; i < sys.particles.size(); ++i) {
+      const double x = sys.particles.position[i][a];
+      lo = i == 0 ? x : std::min(lo, x);
+      hi = i == 0 ? x : std::max(hi, x);
+    }
+    m.padded[a] = true;
+    m.box_length[a] = 2.0 * (hi - lo) + 2.0 * m.cutoff + 10.0;
+  }
   if (m.periodic) {
     m.system.setDefaultPeriodicBoxVectors(OpenMM::Vec3(m.box_length.x, 0, 0),
                                           OpenMM::Vec3(0, m.box_length.y, 0),
@@ -162,6 +177,54 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     m.term_groups.push_back(1 << kAngleGroup);
   }
 
+  // External fields, on positions as given (deli's act on positions as stored: the two
+  // agree along open axes, where the fields are meant to be used).
+  int external_terms = 0;
+  auto add_external = [&](OpenMM::CustomExternalForce* f) {
+    f->setForceGroup(kExternalGroup);
+    m.system.addForce(f);
+    ++external_terms;
+  };
+  if (spec.gravity) {
+    auto* f = new OpenMM::CustomExternalForce("-m*(gx*x + gy*y + gz*z)");
+    f->addGlobalParameter("gx", spec.gravity->x);
+    f->addGlobalParameter("gy", spec.gravity->y);
+    f->addGlobalParameter("gz", spec.gravity->z);
+    f->addPerParticleParameter("m");
+    for (std::size_t i = 0; i < sys.particles.size(); ++i) {
+      f->addParticle(static_cast<int>(i), {sys.particles.mass[i]});
+    }
+    add_external(f);
+  }
+  for (std::size_t r = 0; r < spec.radial.size(); ++r) {
+    const ForceFieldSpec::Radial& radial = spec.radial[r];
+    const std::string tag = "r" + std::to_string(r) + "_";
+    std::string v;
+    if (radial.inverse_square) {
+      v = tag + "a0/s";
+    } else {  // Horner: a0 + s*(a1 + s*(a2 + ...))
+      for (std::size_t k = radial.coefficients.size(); k-- > 0;) {
+        const std::string a = tag + "a" + std::to_string(k);
+        v = v.empty() ? a : a + " + s*(" + v + ")";
+      }
+      if (v.empty()) v = "0";
+    }
+    auto* f = new OpenMM::CustomExternalForce(v + "; s = (x - " + tag + "cx)^2 + (y - " + tag +
+                                              "cy)^2 + (z - " + tag + "cz)^2");
+    f->addGlobalParameter(tag + "cx", radial.center.x);
+    f->addGlobalParameter(tag + "cy", radial.center.y);
+    f->addGlobalParameter(tag + "cz", radial.center.z);
+    for (std::size_t k = 0; k < radial.coefficients.size(); ++k) {
+      f->addGlobalParameter(tag + "a" + std::to_string(k), radial.coefficients[k]);
+    }
+    for (std::size_t i = 0; i < sys.particles.size(); ++i) f->addParticle(static_cast<int>(i), {});
+    add_external(f);
+  }
+  if (external_terms > 0) {
+    m.term_names.push_back("external");
+    m.term_groups.push_back(1 << kExternalGroup);
+  }
+
   static const bool plugins_loaded = [] {
     OpenMM::Platform::loadPluginsFromDirectory(OpenMM::Platform::getDefaultPluginsDirectory());
     OpenMM::Platform::loadPluginsFromDirectory(DELI_OPENMM_PLUGIN_DIR);
@@ -204,14 +267,27 @@ EngineEvaluation OpenMMBridge::evaluate(const std::vector<Vec3>& position) {
                                        OpenMM::Vec3(0, 0, m.box_length.z * scale));
     }
     m.context->setPositions(to_openmm(scaled));
-    return m.context->getState(OpenMM::State::Energy).getPotentialEnergy();
+    // deli's external fields, as LAMMPS' fix gravity and fix addforce, add nothing to the
+    // virial: the energy under scaling is that of the other terms.
+    return m.context->getState(OpenMM::State::Energy, false, 0xffff & ~(1 << kExternalGroup))
+        .getPotentialEnergy();
   };
-  // OpenMM reports no virial: W = -dU/d(ln s) under uniform scaling of positions and box.
-  // The step balances truncation (h^2) against rounding (precision / h): single precision
-  // needs a much larger one.
-  const double h = m.platform_name == "Reference" ? 1e-6 : 1e-3;
-  const double up = energy_at(1 + h), down = energy_at(1 - h);
-  e.virial = -(up - down) / (std::log(1 + h) - std::log(1 - h));
+  // OpenMM reports no virial: W = -dU/d(ln s) under uniform scaling of positions and box,
+  // a central difference in ln s. The step balances truncation (h^2) against rounding
+  // (precision / h).
+  // In double precision (Reference) a step of 1e-6 gives W to about 1e-9. In single
+  // precision (CPU) the energy's rounding needs a step of 1e-3, where the h^2 error alone
+  // reached 1.2e-3 of W (FENE bonds, inputs/lj_chains/melt.toml): Richardson's
+  // extrapolation from steps h and 2h cancels it, leaving O(h^4).
+  auto slope = [&](double h) {
+    return -(energy_at(std::exp(h)) - energy_at(std::exp(-h))) / (2.0 * h);
+  };
+  if (m.platform_name == "Reference") {
+    e.virial = slope(1e-6);
+  } else {
+    const double h = 1e-3;
+    e.virial = (4.0 * slope(h) - slope(2.0 * h)) / 3.0;
+  }
 
   energy_at(1.0);
   const OpenMM::State state = m.context->getState(OpenMM::State::Energy | OpenMM::State::Forces);
@@ -238,7 +314,18 @@ std::vector<Vec3> OpenMMBridge::run_nve(const std::vector<Vec3>& position,
   m.context->setPositions(to_openmm(position));
   m.context->setVelocities(to_openmm(half_step_back));
   verlet->step(steps);
-  return from_openmm(m.context->getState(OpenMM::State::Positions).getPositions());
+  std::vector<Vec3> end = from_openmm(m.context->getState(OpenMM::State::Positions).getPositions());
+  for (int a = 0; a < 3; ++a) {
+    if (!m.padded[a]) continue;
+    double lo = end[0][a], hi = end[0][a];
+    for (const Vec3& x : end) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
+    if (hi - lo + m.cutoff >= m.box_length[a]) {
+      throw UnsupportedModel(
+          "atoms spread along an open axis beyond the periodic length OpenMM was given for it; "
+          "use fewer --steps");
+    }
+  }
+  return end;
 }
 
 EnergySeries OpenMMBridge::run_langevin(const std::vector<Vec3>& position,

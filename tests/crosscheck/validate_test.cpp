@@ -51,7 +51,7 @@ class AgreesWithOpenMMAndLammps : public ::testing::TestWithParam<Model> {};
 TEST_P(AgreesWithOpenMMAndLammps, EnergiesForcesVirialTrajectory) {
   const RunInput input = load(GetParam());
   const ValidationReport report = validate(input, ValidateOptions{});
-  EXPECT_TRUE(report.skipped.empty()) << report.skipped.front();
+  EXPECT_TRUE(report.skipped.empty()) << report.skipped.front().why;
   ASSERT_EQ(report.others.size(), 2u);
   // Every term deli has, each engine has too.
   for (const EngineEvaluation& other : report.others) {
@@ -98,6 +98,50 @@ TEST(Validate, DisagreementIsCaughtAndNamed) {
   EXPECT_THAT(report.worst()->quantity, ::testing::HasSubstr("energy"));
 }
 
+// External fields are compared too: a deli field that is not the one the bridges are given
+// (gravity 9.8 against 9.8 (1 + 1e-9); the nonlinear oscillator's a1 1 against 1 + 1e-9)
+// is caught in the external energy (1e-9 relative, against a tolerance of 1e-12).
+TEST(Validate, ExternalFieldDisagreementIsCaught) {
+  for (const char* file :
+       {"inputs/paper/particle_drop.toml", "inputs/paper/nonlinear_oscillator.toml",
+        "inputs/paper/spring_sphere_smooth.toml"}) {
+    RunInput input = load({file, file});
+    if (input.force_field_spec.gravity) {
+      input.force_field_spec.gravity->z *= 1 + 1e-9;
+    } else {
+      input.force_field_spec.radial[0]
+          .coefficients[input.force_field_spec.radial[0].inverse_square ? 0 : 1] *= 1 + 1e-9;
+    }
+    ValidateOptions options;
+    options.trajectory_steps = 0;
+    const ValidationReport report = validate(input, options);
+    EXPECT_FALSE(report.passed()) << file;
+    ASSERT_NE(report.worst(), nullptr);
+    EXPECT_EQ(report.worst()->quantity, "energy external") << file;
+    EXPECT_EQ(report.others.size(), 2u);
+  }
+}
+
+// With rods only the trajectory is GVI against OpenMM's constrained Verlet; a pair epsilon
+// OpenMM is given 1e-6 larger than deli's moves the positions by about 1e-8 sigma in 20
+// steps (dF ~ 1e-5, dx ~ dF t^2 / 2), far beyond their 1e-10 tolerance.
+TEST(Validate, RodTrajectoryDisagreementIsCaught) {
+  RunInput input = load({"rigid", "tests/crosscheck/inputs/rigid_chains.toml"});
+  ValidateOptions options;
+  options.lammps = false;
+  options.trajectory_steps = 20;
+  ValidationReport report = validate(input, options);
+  EXPECT_TRUE(report.passed());
+  ASSERT_FALSE(report.checks.empty());
+  EXPECT_EQ(report.checks.back().quantity, "max |dx| after 20 steps");
+  EXPECT_TRUE(report.checks.back().within());
+  const PairCoefficient& c = input.force_field_spec.pair->coefficients.at(0, 0);
+  input.force_field_spec.pair->coefficients.set(0, 0, c.epsilon * (1 + 1e-6), c.sigma, c.cutoff);
+  report = validate(input, options);
+  EXPECT_EQ(report.checks.back().quantity, "max |dx| after 20 steps");
+  EXPECT_FALSE(report.checks.back().within()) << report.checks.back().difference;
+}
+
 int run_status(const std::string& arguments, std::string& output) {
   const std::string command = std::string(DELI_BINARY) + " " + arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
@@ -126,6 +170,21 @@ TEST(Validate, CommandLineReportsAgreement) {
   EXPECT_THAT(output, ::testing::HasSubstr("OpenMM Reference"));
   EXPECT_THAT(output, ::testing::HasSubstr("LAMMPS"));
   EXPECT_THAT(output, ::testing::HasSubstr("agreement: every check within tolerance"));
+  // Progress, a line per phase on stderr.
+  EXPECT_THAT(output, ::testing::HasSubstr("deli validate: LAMMPS: 20 steps of fix nve"));
+}
+
+// The default input (rods, hard spheres, walls, a thermostat, a slit box) is validated: its
+// force field, with what is left out and why.
+TEST(Validate, CommandLineValidatesTheDefaultInput) {
+  std::string output;
+  const int status =
+      run_status("validate " + kSource + "/inputs/lj_chains/rigid_slit.toml", output);
+  EXPECT_EQ(status, 0) << output;
+  EXPECT_THAT(output, ::testing::HasSubstr("constraints are not part of the force field"));
+  EXPECT_THAT(output, ::testing::HasSubstr("the thermostat (langevin) is not part"));
+  EXPECT_THAT(output, ::testing::HasSubstr("skipped: every engine's trajectory"));
+  EXPECT_THAT(output, ::testing::HasSubstr("OpenMM Reference   max |dF| component"));
 }
 
 TEST(Validate, CommandLineRejectsUnknownEngine) {
