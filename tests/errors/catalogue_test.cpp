@@ -694,13 +694,14 @@ void message_cases(std::vector<Case>& cases) {
                    1,
                    {"in.toml:", "'integrator.reflection.energy'", "harmonic angles lack",
                     "energy = \"hamiltonian\""}});
-  for (const std::string length : {"0.0", "-1.0"}) {
-    cases.push_back({"rod_length_" + length,
-                     with(kGvi, "[neighbor]",
-                          "rods = [{ atoms = [1, 2], length = " + length + " }]\n\n[neighbor]"),
-                     kTwoAtoms,
-                     1,
-                     {"in.toml:", "'constraints.rods[1].length'", "must be positive"}});
+  for (const auto& [name, length] : {std::pair{"zero", "0.0"}, std::pair{"negative", "-1.0"}}) {
+    cases.push_back(
+        {std::string("rod_length_") + name,
+         with(kGvi, "[neighbor]",
+              std::string("rods = [{ atoms = [1, 2], length = ") + length + " }]\n\n[neighbor]"),
+         kTwoAtoms,
+         1,
+         {"in.toml:", "'constraints.rods[1].length'", "must be positive"}});
   }
   cases.push_back(
       {"restart_csv_damaged",
