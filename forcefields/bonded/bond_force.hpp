@@ -46,12 +46,17 @@ class BondForce final : public ForceTerm {
       const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
       double f_over_r, e;
       if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) {
-        throw SimulationError("step " + std::to_string(system.step) + ": " + name_ +
-                              " bond between atoms " + std::to_string(system.particles.id[b.i]) +
-                              " and " + std::to_string(system.particles.id[b.j]) +
-                              " is stretched to r = " + std::to_string(norm(d)) +
-                              ", beyond where the potential is defined; reduce the timestep or "
-                              "start from a relaxed configuration");
+        throw SimulationError(
+            "step " + std::to_string(system.step) + ": " + name_ + " bond between atoms " +
+            std::to_string(system.particles.id[b.i]) + " and " +
+            std::to_string(system.particles.id[b.j]) + " is stretched to r = " +
+            std::to_string(norm(d)) + ", beyond where the potential of bond type " +
+            std::to_string(b.type + 1) + " is defined" +
+            (system.step == 0 ? std::string(" already at the start: give that type a larger "
+                                            "r0 in [forcefield.bond] coeffs, or start from "
+                                            "shorter bonds")
+                              : std::string("; reduce the timestep or start from a relaxed "
+                                            "configuration")));
       }
       const Vec3 f = d * f_over_r;
       force[b.i] += f;

@@ -348,7 +348,7 @@ std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& syst
     spec.fene = by_type<FeneBond>(
         *t, types, "bond",
         [](TomlTable& c) {
-          return FeneBond::Params{c.number("k"), positive(c, "r0"), c.number("epsilon"),
+          return FeneBond::Params{positive(c, "k"), positive(c, "r0"), c.number("epsilon"),
                                   positive(c, "sigma")};
         },
         data, data.bond,

@@ -703,6 +703,49 @@ void message_cases(std::vector<Case>& cases) {
          1,
          {"in.toml:", "'constraints.rods[1].length'", "must be positive"}});
   }
+  cases.push_back({"fene_k_negative",
+                   with(kFene, "k = 30.0", "k = -30.0"),
+                   "",
+                   1,
+                   {"in.toml:", "'forcefield.bond.coeffs[1].k'", "must be a positive number"}});
+  cases.push_back({"fene_k_zero",
+                   with(kFene, "k = 30.0", "k = 0.0"),
+                   "",
+                   1,
+                   {"'forcefield.bond.coeffs[1].k'", "must be a positive number"}});
+  cases.push_back({"fene_r0_below_bond_length",
+                   with(kFene, "r0 = 1.5", "r0 = 0.9"),
+                   "",
+                   3,
+                   {"stretched to r = 0.97", "bond type 1", "already at the start", "larger r0"}});
+  cases.push_back({"fene_r0_zero",
+                   with(kFene, "r0 = 1.5", "r0 = 0.0"),
+                   "",
+                   1,
+                   {"'forcefield.bond.coeffs[1].r0'", "must be a positive number"}});
+  cases.push_back({"bond_sigma_negative",
+                   with(kFene, "sigma = 1.0 }]\n\n[integrator]", "sigma = -1.0 }]\n\n[integrator]"),
+                   "",
+                   1,
+                   {"'forcefield.bond.coeffs[1].sigma'", "must be a positive number"}});
+  cases.push_back({"thermostat_damping_zero",
+                   kLj + "\n[thermostat]\ntype = \"langevin\"\ntemperature = 1.0\ndamping = 0.0\n"
+                         "seed = 1\n",
+                   "",
+                   1,
+                   {"in.toml:", "'thermostat.damping'", "must be a positive time"}});
+  cases.push_back({"thermostat_unknown_type",
+                   kLj + "\n[thermostat]\ntype = \"berendsen\"\ntemperature = 1.0\ndamping = 1.0\n"
+                         "seed = 1\n",
+                   "",
+                   1,
+                   {"in.toml:", "'thermostat.type'", "berendsen"}});
+  cases.push_back({"thermostat_negative_seed",
+                   kLj + "\n[thermostat]\ntype = \"csvr\"\ntemperature = 1.0\ndamping = 1.0\n"
+                         "seed = -4\n",
+                   "",
+                   1,
+                   {"'thermostat.seed'", "must not be negative"}});
   cases.push_back(
       {"restart_csv_damaged",
        with(kLj, "[output]\n", "[output]\ncheckpoint = { file = \"@DIR@/c.h5\", every = 10 }\n"),
