@@ -1,7 +1,9 @@
 #include "integrators/constrained_integrator.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -71,6 +73,7 @@ std::string describe(const Constraint& c, const Particles& particles) {
 }
 
 // Writes a failed cluster solve to a file that a test can load: rows, positions, masses.
+// Returns what the message says of it: "is in FILE", or that FILE could not be written.
 std::string dump_failed_problem(const System& system, const LocalCluster& cluster,
                                 const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
                                 const std::vector<bool>& equality, double h) {
@@ -91,7 +94,9 @@ std::string dump_failed_problem(const System& system, const LocalCluster& cluste
         << " " << c.length << " " << c.point.x << " " << c.point.y << " " << c.point.z << " "
         << c.normal.x << " " << c.normal.y << " " << c.normal.z << "\n";
   }
-  return path;
+  out.flush();
+  if (!out) return path + " could not be written (" + std::strerror(errno) + ")";
+  return "is in " + path;
 }
 
 }  // namespace
@@ -157,8 +162,12 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
           std::to_string(cluster.rows.size()) +
           " constraints, first: " + describe(rows[cluster.rows.front()], particles) +
           "): residual " + std::to_string(solved.status.residual) + " after " +
-          std::to_string(solved.status.iterations) + " Newton iterations; the problem is in " +
-          file + "; reduce the timestep");
+          std::to_string(solved.status.iterations) + " Newton iterations; the problem " + file +
+          (setting_up_
+               ? "; the equality constraints cannot all hold from the starting configuration "
+                 "(infeasible lengths, or a start far from them): check the rod and string "
+                 "lengths against the starting distances"
+               : "; reduce the timestep"));
     }
     for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
       impulse[cluster.particles[k]] = solved.impulse[k];
@@ -215,9 +224,11 @@ void ConstrainedIntegrator::setup(System& system) {
   // rest), then momenta tangent to it.
   if (!constraints_.equalities.empty()) {
     std::vector<Vec3> impulse(P.size());
+    setting_up_ = true;
     solve_positions(system, constraints_.equalities,
                     std::vector<bool>(constraints_.equalities.size(), true), P.position,
                     std::vector<Vec3>(P.size()), impulse);
+    setting_up_ = false;
     for (std::size_t i = 0; i < P.size(); ++i) P.position[i] += impulse[i] * (dt_ / P.mass[i]);
   }
   const double gap =

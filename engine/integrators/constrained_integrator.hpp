@@ -109,6 +109,7 @@ class ConstrainedIntegrator : public Integrator {
   double step_virial_ = 0.0;              // sum of r . J over this step's constraint impulses
   std::array<double, 2> virial_sums_{};   // sum over steps of step_virial_ / h, per sampler
   std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
+  bool setting_up_ = false;               // solves of setup(): failures name the start
   // Performance only: the equality rows' clusters, prepared once; the last clustering.
   EqualityClusters equality_clusters_;
   std::vector<Cluster> found_clusters_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <unordered_map>
 
 #include "core/error.hpp"
@@ -29,6 +30,47 @@ void require_open(TomlTable& t, const Box& box, const Vec3& direction, const std
     if (box.periodic(a) && direction[a] != 0.0) {
       t.fail(what + " needs the box open along " + std::string(1, "xyz"[a]) +
              " (positions are wrapped along periodic axes); use boundary with 'f' there");
+    }
+  }
+}
+
+// Rods that cannot all hold, found before a solver fails on them: one pair joined by two
+// rods, or three atoms joined in a triangle whose lengths break the triangle inequality.
+void check_rods_can_hold(const std::vector<Constraint>& rods, const Particles& p,
+                         const TomlTable& t) {
+  const std::string key = t.has("rods") ? "rods" : "bonds";
+  std::map<std::pair<std::int32_t, std::int32_t>, double> length;
+  std::unordered_map<std::int32_t, std::vector<std::int32_t>> joined;
+  for (const Constraint& c : rods) {
+    if (c.kind != ConstraintKind::rod) continue;
+    if (!length.emplace(std::pair{c.i, c.j}, c.length).second) {
+      t.fail("infeasible constraints: atoms " + std::to_string(p.id[c.i]) + " and " +
+                 std::to_string(p.id[c.j]) +
+                 " are joined by two rods (a bond made rigid and a rod, or a rod given twice); "
+                 "give each pair one rod",
+             key);
+    }
+    joined[c.i].push_back(c.j);
+    joined[c.j].push_back(c.i);
+  }
+  auto rod = [&](std::int32_t a, std::int32_t b) {
+    const auto it = length.find({std::min(a, b), std::max(a, b)});
+    return it == length.end() ? -1.0 : it->second;
+  };
+  for (const auto& [pair, ij] : length) {
+    const auto [i, j] = pair;
+    for (const std::int32_t k : joined[i]) {
+      if (k <= j) continue;  // each triangle once: i < j < k
+      const double ik = rod(i, k), jk = rod(j, k);
+      if (jk < 0) continue;
+      const double longest = std::max({ij, ik, jk});
+      if (2.0 * longest > (ij + ik + jk) * (1.0 + 1e-12)) {
+        t.fail("infeasible constraints: the rods joining atoms " + std::to_string(p.id[i]) + ", " +
+                   std::to_string(p.id[j]) + " and " + std::to_string(p.id[k]) + " (lengths " +
+                   std::to_string(ij) + ", " + std::to_string(ik) + ", " + std::to_string(jk) +
+                   ") cannot form a triangle: the longest exceeds the sum of the other two",
+               key);
+      }
     }
   }
 }
@@ -75,6 +117,7 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
     add_rod(i, j, length);
     r.finish();
   }
+  check_rods_can_hold(set.equalities, p, t);
   for (TomlTable& a : t.tables("anchors")) {
     Constraint c;
     c.kind = ConstraintKind::anchor;

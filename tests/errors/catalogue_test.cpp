@@ -746,6 +746,27 @@ void message_cases(std::vector<Case>& cases) {
                    "",
                    1,
                    {"'thermostat.seed'", "must not be negative"}});
+  // kFene's chains are 1-2-3-4-5, 6-7-..., with bonds along each.
+  const std::string gvi_chains = with(kFene, "[integrator]\n", "[integrator]\ntype = \"gvi\"\n");
+  cases.push_back(
+      {"rods_break_triangle_inequality",
+       with(gvi_chains, "[integrator]",
+            "[constraints]\nrods = [{ atoms = [1, 2], length = 1.0 }, { atoms = [2, 3], "
+            "length = 1.0 }, { atoms = [1, 3], length = 3.0 }]\n\n[integrator]"),
+       "",
+       1,
+       {"in.toml:", "'constraints.rods'", "infeasible constraints", "atoms 1, 2 and 3",
+        "cannot form a triangle"}});
+  cases.push_back({"rod_given_twice",
+                   with(with(gvi_chains, "[integrator]",
+                             "[constraints]\nbonds = \"rigid\"\nrods = [{ atoms = [2, 1] }]\n\n"
+                             "[integrator]"),
+                        "[forcefield.bond]\nstyle = \"fene\"\ncoeffs = [{ type = 1, k = 30.0, r0 = "
+                        "1.5, epsilon = 1.0, sigma = 1.0 }]\n",
+                        ""),
+                   "",
+                   1,
+                   {"in.toml:", "infeasible constraints", "atoms 1 and 2 are joined by two rods"}});
   cases.push_back(
       {"restart_csv_damaged",
        with(kLj, "[output]\n", "[output]\ncheckpoint = { file = \"@DIR@/c.h5\", every = 10 }\n"),
