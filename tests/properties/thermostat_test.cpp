@@ -9,29 +9,15 @@
 #include <map>
 
 #include "simulation/run_loop.hpp"
+#include "support/block_average.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
 namespace {
 
-// Block averages of a correlated series: the mean of each of `blocks` blocks; the standard
-// error of their mean is their spread / sqrt(blocks).
-struct Estimate {
-  double value, error;
-};
-Estimate block_estimate(const std::vector<double>& series, int blocks = 20) {
-  const std::size_t per = series.size() / static_cast<std::size_t>(blocks);
-  std::vector<double> means(static_cast<std::size_t>(blocks), 0.0);
-  for (int b = 0; b < blocks; ++b) {
-    for (std::size_t k = 0; k < per; ++k) means[b] += series[b * per + k];
-    means[b] /= static_cast<double>(per);
-  }
-  double mean = 0, spread = 0;
-  for (double m : means) mean += m;
-  mean /= blocks;
-  for (double m : means) spread += (m - mean) * (m - mean);
-  return {mean, std::sqrt(spread / (blocks - 1) / blocks)};
-}
+using testing::block_estimate;
+using testing::Estimate;
+
 // The variance within each block, averaged (blocks much longer than the correlation time).
 Estimate block_variance(const std::vector<double>& series, int blocks = 20) {
   const std::size_t per = series.size() / static_cast<std::size_t>(blocks);
@@ -50,10 +36,7 @@ Estimate block_variance(const std::vector<double>& series, int blocks = 20) {
 }
 
 double standard_deviation(const std::vector<double>& series) {
-  double sum = 0, sum2 = 0;
-  for (double x : series) sum += x, sum2 += x * x;
-  const double mean = sum / static_cast<double>(series.size());
-  return std::sqrt(sum2 / static_cast<double>(series.size()) - mean * mean);
+  return std::sqrt(testing::variance(series));
 }
 
 // Kinetic energy of each molecule's centre of mass, summed, at every sample.
