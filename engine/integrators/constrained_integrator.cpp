@@ -500,7 +500,8 @@ std::vector<std::pair<std::string, double>> ConstrainedIntegrator::take_statisti
   const ConstraintStatistics s = sampled_[k];
   if (!keep) sampled_[k] = ConstraintStatistics{};
   const double steps = std::max<double>(1.0, static_cast<double>(s.steps));
-  return {{"min_gap", std::isfinite(s.min_gap) ? s.min_gap : 0.0},
+  // +inf when no inequality row was within reach over the span (no contact to measure).
+  return {{"min_gap", s.min_gap},
           {"max_rod_violation", s.max_rod_violation},
           {"active_per_step", static_cast<double>(s.active) / steps},
           {"reflected", static_cast<double>(s.reflected)},

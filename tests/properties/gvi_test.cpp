@@ -16,6 +16,17 @@
 namespace deli {
 namespace {
 
+// A named statistic of the integrator; a name it does not report fails the test (a loop
+// over the names would pass without checking anything).
+double statistic(const std::vector<std::pair<std::string, double>>& stats,
+                 const std::string& name) {
+  for (const auto& [n, value] : stats) {
+    if (n == name) return value;
+  }
+  ADD_FAILURE() << "the integrator reports no statistic '" << name << "'";
+  return std::nan("");
+}
+
 using testing::Atom;
 using testing::input_with_atoms;
 
@@ -182,10 +193,9 @@ TEST(Gvi, NarrowWedgeTerminatesAndKeepsEnergy) {
   for (int n = 0; n < 2000; ++n) run.step();
   const auto stats = run.gvi->take_statistics();
   EXPECT_NEAR(kinetic(run.particles()), k0, 1e-12 * k0);
-  for (const auto& [name, value] : stats) {
-    if (name == "stalled_reflections") EXPECT_EQ(value, 0);
-    if (name == "min_gap") EXPECT_GT(value, -1e-10);
-  }
+  EXPECT_EQ(statistic(stats, "stalled_reflections"), 0);
+  EXPECT_GT(statistic(stats, "min_gap"), -1e-10);
+  EXPECT_TRUE(std::isfinite(statistic(stats, "min_gap"))) << "the walls were never in reach";
   EXPECT_GT(run.particles().velocity[0].x, 0) << "it should leave the wedge";
 }
 
@@ -208,11 +218,8 @@ TEST(Gvi, PinnedSphereReflectionCycleIsDetected) {
   EXPECT_NEAR(p.position[0].x, 0.5, 1e-12);
   EXPECT_NEAR(p.velocity[0].x, 0.0, 1e-12);
   EXPECT_NEAR(p.velocity[0].y, 0.3, 1e-14);
-  double cycled = -1;
-  for (const auto& [name, value] : run.gvi->take_statistics()) {
-    if (name == "cycled_reflections") cycled = value;
-  }
-  EXPECT_EQ(cycled, 1) << "the first step cycles; later ones find nothing approaching";
+  EXPECT_EQ(statistic(run.gvi->take_statistics(), "cycled_reflections"), 1)
+      << "the first step cycles; later ones find nothing approaching";
 }
 
 // A sphere hitting two touching spheres in a line: one generalized reflection, momentum
@@ -264,10 +271,9 @@ TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
     worst_e = std::max(worst_e, std::abs(run.energy() - e0));
   }
   const auto stats = run.gvi->take_statistics();
-  for (const auto& [name, value] : stats) {
-    if (name == "max_rod_violation") EXPECT_LT(value, 1e-10);
-    if (name == "min_gap") EXPECT_GT(value, -1e-10) << "overlap";
-  }
+  EXPECT_LT(statistic(stats, "max_rod_violation"), 1e-10);
+  EXPECT_GT(statistic(stats, "min_gap"), -1e-10) << "overlap";
+  EXPECT_TRUE(std::isfinite(statistic(stats, "min_gap"))) << "no contact was ever in reach";
   const Vec3 l = angular_momentum(run.particles(), run.system().box);
   EXPECT_LT(norm(l - l0), 1e-12 * std::max(1.0, norm(l0)));
   std::printf("LJ chain: max |E - E0| = %.3e (E0 = %.4f), |dL| = %.3e\n", worst_e, e0,
@@ -290,11 +296,9 @@ TEST(Gvi, HardSphereGasKeepsLinearMomentum) {
   const double k0 = kinetic(run.particles());
   for (int n = 0; n < 4000; ++n) run.step();
   const auto stats = run.gvi->take_statistics();
-  double reflected = 0;
-  for (const auto& [name, value] : stats) {
-    if (name == "reflected") reflected = value;
-    if (name == "min_gap") EXPECT_GT(value, -1e-10);
-  }
+  const double reflected = statistic(stats, "reflected");
+  EXPECT_GT(statistic(stats, "min_gap"), -1e-10);
+  EXPECT_TRUE(std::isfinite(statistic(stats, "min_gap")));
   EXPECT_GT(reflected, 100) << "the gas should collide";
   EXPECT_LT(norm(total_momentum(run.particles()) - m0),
             1e-12 * static_cast<double>(run.particles().size()));
