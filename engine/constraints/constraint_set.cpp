@@ -32,7 +32,6 @@ Constraint ConstraintSet::wall_row(const Wall& wall, std::int32_t i, double radi
   return c;
 }
 
-namespace {
 Constraint sphere_pair(std::int32_t a, std::int32_t b, const Particles& particles) {
   Constraint c;
   c.kind = ConstraintKind::sphere_pair;
@@ -41,6 +40,8 @@ Constraint sphere_pair(std::int32_t a, std::int32_t b, const Particles& particle
   c.length = particles.radius[a] + particles.radius[b];
   return c;
 }
+
+namespace {
 
 // Visits every hard-sphere pair of the neighbour list that is not bonded, and every
 // (particle, wall) row.

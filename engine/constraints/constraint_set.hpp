@@ -67,4 +67,7 @@ struct ConstraintSet {
   Constraint wall_row(const Wall& wall, std::int32_t i, double radius) const;
 };
 
+// The hard-sphere row of particles a < b: |x_a - x_b| - (r_a + r_b) >= 0.
+Constraint sphere_pair(std::int32_t a, std::int32_t b, const Particles& particles);
+
 }  // namespace deli

@@ -5,17 +5,6 @@
 
 namespace deli {
 
-namespace {
-Constraint sphere_pair(std::int32_t a, std::int32_t b, const Particles& particles) {
-  Constraint c;
-  c.kind = ConstraintKind::sphere_pair;
-  c.i = a;
-  c.j = b;
-  c.length = particles.radius[a] + particles.radius[b];
-  return c;
-}
-}  // namespace
-
 void NearbyRows::make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                       const NeighborList& list, const Box& box) {
   pairs_.clear();
