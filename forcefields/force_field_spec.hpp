@@ -8,7 +8,7 @@
 
 #include "bonded/bond_styles.hpp"
 #include "bonded/harmonic_angle.hpp"
-#include "force_field.hpp"
+#include "forces/force_field.hpp"
 #include "pair/pair_coefficients.hpp"
 
 namespace deli {

@@ -3,7 +3,7 @@
 #include <optional>
 #include <vector>
 
-#include "force_field.hpp"
+#include "forces/force_field.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "system/system.hpp"
 

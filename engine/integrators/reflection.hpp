@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "constraints/clusters.hpp"
-#include "force_term.hpp"
+#include "forces/force_term.hpp"
 
 namespace deli {
 

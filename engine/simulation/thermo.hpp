@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "force_field.hpp"
+#include "forces/force_field.hpp"
 #include "simulation/degrees_of_freedom.hpp"
 #include "system/system.hpp"
 

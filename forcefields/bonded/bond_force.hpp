@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "force_term.hpp"
+#include "forces/force_term.hpp"
 #include "system/system.hpp"
 
 namespace deli {

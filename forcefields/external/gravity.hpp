@@ -1,6 +1,6 @@
 #pragma once
 
-#include "force_term.hpp"
+#include "forces/force_term.hpp"
 #include "system/system.hpp"
 
 namespace deli {

@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "force_term.hpp"
+#include "forces/force_term.hpp"
 #include "system/system.hpp"
 
 namespace deli {

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "force_term.hpp"
+#include "forces/force_term.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "system/system.hpp"
 

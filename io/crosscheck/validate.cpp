@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "crosscheck/lammps_bridge.hpp"
+#include "crosscheck/openmm_bridge.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
 #include "integrators/velocity_verlet.hpp"
-#include "lammps/lammps_bridge.hpp"
 #include "neighbor/neighbor_list.hpp"
-#include "openmm/openmm_bridge.hpp"
 
 namespace deli {
 

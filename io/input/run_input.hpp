@@ -5,8 +5,8 @@
 #include <string>
 
 #include "constraints/constraint_set.hpp"
-#include "force_field.hpp"
 #include "force_field_spec.hpp"
+#include "forces/force_field.hpp"
 #include "h5md/trajectory_spec.hpp"
 #include "integrators/collision_integrator.hpp"
 #include "integrators/direct_substitution.hpp"

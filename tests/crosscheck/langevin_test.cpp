@@ -31,12 +31,12 @@
 #include <chrono>
 #include <cstdio>
 
+#include "crosscheck/lammps_bridge.hpp"
+#include "crosscheck/openmm_bridge.hpp"
 #include "input/run_input.hpp"
 #include "integrators/quickmin.hpp"
 #include "integrators/thermostatted_integrator.hpp"
 #include "integrators/velocity_verlet.hpp"
-#include "lammps/lammps_bridge.hpp"
-#include "openmm/openmm_bridge.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/block_average.hpp"
 

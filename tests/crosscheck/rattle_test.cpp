@@ -3,9 +3,9 @@
 // OpenMM's leapfrog started from v - h/2 F/m, so that SHAKE's positions are RATTLE's).
 #include <gtest/gtest.h>
 
+#include "crosscheck/openmm_bridge.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
-#include "openmm/openmm_bridge.hpp"
 
 namespace deli {
 namespace {

@@ -1,4 +1,4 @@
-#include "openmm/openmm_bridge.hpp"
+#include "crosscheck/openmm_bridge.hpp"
 
 #include <OpenMM.h>
 

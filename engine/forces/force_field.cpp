@@ -1,4 +1,4 @@
-#include "force_field.hpp"
+#include "forces/force_field.hpp"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "lammps/lammps_bridge.hpp"
+#include "crosscheck/lammps_bridge.hpp"
 
 #include <library.h>
 #include <unistd.h>

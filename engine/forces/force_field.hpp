@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "force_term.hpp"
+#include "forces/force_term.hpp"
 
 namespace deli {
 
