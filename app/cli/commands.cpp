@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "cli/exit_status.hpp"
+#include "cli/integrator_factory.hpp"
 #include "core/error.hpp"
 #include "h5md/checkpoint.hpp"
 #include "h5md/fingerprint.hpp"

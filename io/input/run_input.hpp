@@ -70,8 +70,4 @@ RunInput load_run_input(const std::string& path);
 // The same from TOML text; `path` names it in messages and anchors relative file names.
 RunInput parse_run_input(const std::string& text, const std::string& path);
 
-// The integrator the input's [integrator] table names, for its system, inside the
-// [thermostat] when there is one.
-std::unique_ptr<Integrator> make_integrator(const RunInput& input);
-
 }  // namespace deli

@@ -183,4 +183,11 @@ void TomlTable::finish() const {
   }
 }
 
+double positive(TomlTable& t, const std::string& key, std::optional<double> fallback) {
+  const double v = t.number(key, fallback);
+  if (!(v > 0.0) || !std::isfinite(v))
+    t.fail("must be a positive number, found " + std::to_string(v), key);
+  return v;
+}
+
 }  // namespace deli

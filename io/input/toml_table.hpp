@@ -48,4 +48,7 @@ class TomlTable {
   mutable std::set<std::string> used_;
 };
 
+// A number that must be positive and finite (`fallback` when the key is absent, if given).
+double positive(TomlTable& t, const std::string& key, std::optional<double> fallback = {});
+
 }  // namespace deli

@@ -31,6 +31,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "cli/integrator_factory.hpp"
 #include "crosscheck/lammps_bridge.hpp"
 #include "crosscheck/openmm_bridge.hpp"
 #include "input/run_input.hpp"

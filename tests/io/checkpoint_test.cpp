@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli/integrator_factory.hpp"
 #include "core/error.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"

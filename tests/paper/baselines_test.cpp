@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "cli/integrator_factory.hpp"
 #include "core/error.hpp"
 #include "input/run_input.hpp"
 #include "simulation/run_loop.hpp"

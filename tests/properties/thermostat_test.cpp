@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 
+#include "cli/integrator_factory.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/block_average.hpp"
 #include "support/test_systems.hpp"

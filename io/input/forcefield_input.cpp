@@ -1,0 +1,310 @@
+#include "input/forcefield_input.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include "bonded/bond_styles.hpp"
+#include "bonded/harmonic_angle.hpp"
+#include "core/error.hpp"
+#include "pair/pair_coefficients.hpp"
+
+namespace deli {
+
+namespace {
+
+int type_index(TomlTable& t, const std::string& key, double value, int count,
+               const std::string& what) {
+  if (value != std::floor(value) || value < 1 || value > count) {
+    t.fail(what + " type " + std::to_string(value) + " does not exist: the system has " +
+               std::to_string(count) + " " + what + " type(s), numbered from 1",
+           key);
+  }
+  return static_cast<int>(value) - 1;
+}
+
+std::string where(const DataCoefficients& data, const CoefficientSection& section) {
+  return data.file + ":" + std::to_string(section.line);
+}
+
+// The data file's section for a style the input names: its "# style" comment must agree.
+void check_data_style(const DataCoefficients& data, const CoefficientSection& section,
+                      const char* name, const std::vector<std::string>& styles,
+                      const std::string& input_style) {
+  if (section.line == 0 || section.style.empty()) return;
+  if (std::find(styles.begin(), styles.end(), section.style) != styles.end()) return;
+  throw InputError(where(data, section) + ": the data file's " + name + " are for style '" +
+                   section.style + "', the input's is '" + input_style +
+                   "': give every coefficient in the input's coeffs, or use a data file "
+                   "written with write_data nocoeff");
+}
+
+std::string counted(std::size_t n, const std::string& what) {
+  return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+}
+
+std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const DataCoefficients& data,
+                                  std::vector<std::string>& notes) {
+  const std::string style = t.choice("style", {"lj/cut", "wca", "none"});
+  if (style == "none") {
+    t.finish();
+    return std::nullopt;
+  }
+  const int types = static_cast<int>(system.atom_types.size());
+  const bool wca = style == "wca";
+  const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
+  const bool shift = wca ? true : t.boolean("shift", false);
+  const Mixing mixing = t.choice("mixing", {"arithmetic", "geometric"}, "geometric") == "arithmetic"
+                            ? Mixing::arithmetic
+                            : Mixing::geometric;
+  PairCoefficients coeffs(types, global_cutoff);
+  // From the data file first (as read_data), then the input's coeffs, which win.
+  std::size_t from_data = 0;
+  const CoefficientSection* sections[] = {&data.pair, &data.pair_ij};
+  for (const CoefficientSection* section : sections) {
+    check_data_style(data, *section, section == &data.pair ? "Pair Coeffs" : "PairIJ Coeffs",
+                     {"lj/cut"}, style);
+    for (const CoefficientRow& row : section->rows) {
+      const int a = row.types.front(), b = row.types.back();
+      if (row.values.size() < 2 || row.values.size() > 3) {
+        throw InputError(located(data.file, row.line,
+                                 "lj/cut coefficients are epsilon sigma [cutoff], found " +
+                                     std::to_string(row.values.size()) + " numbers"));
+      }
+      std::optional<double> cutoff;
+      if (wca) {
+        cutoff = std::pow(2.0, 1.0 / 6.0) * row.values[1];
+      } else if (row.values.size() == 3) {
+        cutoff = row.values[2];
+      }
+      coeffs.set(a, b, row.values[0], row.values[1], cutoff);
+      ++from_data;
+    }
+  }
+  std::set<std::pair<int, int>> given;
+  for (TomlTable& c : t.tables("coeffs")) {
+    const auto pair = c.numbers("types", 2);
+    const int a = type_index(c, "types", pair[0], types, "atom");
+    const int b = type_index(c, "types", pair[1], types, "atom");
+    const double epsilon = c.number("epsilon");
+    if (epsilon < 0) c.fail("must not be negative", "epsilon");
+    const double sigma = positive(c, "sigma");
+    std::optional<double> cutoff;
+    if (wca) {
+      cutoff = std::pow(2.0, 1.0 / 6.0) * sigma;
+    } else if (c.has("cutoff")) {
+      cutoff = positive(c, "cutoff");
+    }
+    if (!given.insert({std::min(a, b), std::max(a, b)}).second)
+      c.fail("coefficients for this type pair were already given", "types");
+    coeffs.set(a, b, epsilon, sigma, cutoff);
+    c.finish();
+  }
+  if (from_data > 0) {
+    notes.push_back("pair coefficients: " + counted(from_data, "entry") + " from " +
+                    where(data, data.pair.line ? data.pair : data.pair_ij) +
+                    (given.empty() ? ""
+                                   : ", " + counted(given.size(), "entry") +
+                                         " from the input (the input's win)"));
+  }
+  const std::vector<int> missing = coeffs.resolve(mixing);
+  if (!missing.empty()) {
+    t.fail("no coefficients for atom type " + std::to_string(missing.front() + 1) +
+               " with itself; add {types = [" + std::to_string(missing.front() + 1) + ", " +
+               std::to_string(missing.front() + 1) + "], epsilon = ..., sigma = ...} to coeffs",
+           "coeffs");
+  }
+  t.finish();
+  PairSpec spec;
+  spec.style = wca ? PairSpec::Style::wca : PairSpec::Style::lj_cut;
+  spec.shift = shift;
+  spec.coefficients = std::move(coeffs);
+  return spec;
+}
+
+// Coefficients per type: from the data file's section first (`from_data` turns a row's
+// numbers into Params), then the input's coeffs, which win; every type must have some.
+template <class Style>
+std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::string& what,
+                                            const auto& read_one, const DataCoefficients& data,
+                                            const CoefficientSection& section,
+                                            const auto& from_data,
+                                            std::vector<std::string>& notes) {
+  std::vector<typename Style::Params> params(static_cast<std::size_t>(types));
+  std::vector<bool> given(static_cast<std::size_t>(types), false), in_data(given);
+  for (const CoefficientRow& row : section.rows) {
+    params[row.types.front()] = from_data(row);
+    in_data[row.types.front()] = true;
+  }
+  std::size_t from_input = 0;
+  for (TomlTable& c : t.tables("coeffs")) {
+    const int k = type_index(c, "type", c.number("type"), types, what);
+    if (given[k]) c.fail("coefficients for this " + what + " type were already given", "type");
+    params[k] = read_one(c);
+    given[k] = true;
+    ++from_input;
+    c.finish();
+  }
+  for (int k = 0; k < types; ++k) {
+    if (!given[k] && !in_data[k]) {
+      t.fail("no coefficients for " + what + " type " + std::to_string(k + 1) +
+                 " (neither in the input nor in the data file); add {type = " +
+                 std::to_string(k + 1) + ", ...} to coeffs",
+             "coeffs");
+    }
+  }
+  if (!section.rows.empty()) {
+    notes.push_back(what + " coefficients: " + counted(section.rows.size(), "type") + " from " +
+                    where(data, section) +
+                    (from_input == 0 ? ""
+                                     : ", " + counted(from_input, "type") +
+                                           " from the input (the input's win)"));
+  }
+  return params;
+}
+
+// A data file's row for a style, checked for its number of coefficients.
+void expect_values(const DataCoefficients& data, const CoefficientRow& row, std::size_t count,
+                   const std::string& form) {
+  if (row.values.size() != count) {
+    throw InputError(
+        located(data.file, row.line,
+                "expected " + form + ", found " + std::to_string(row.values.size()) + " numbers"));
+  }
+}
+
+std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& system,
+                                  bool rigid_bonds, const DataCoefficients& data,
+                                  std::vector<std::string>& notes) {
+  const int types = system.topology.bond_types;
+  if (rigid_bonds) {
+    if (t) t->fail("bonds are rigid rods ([constraints] bonds = \"rigid\"): remove this table");
+    return std::nullopt;
+  }
+  if (!t) {
+    if (!system.topology.bonds.empty()) {
+      throw InputError(
+          "the system has bonds but the input has no [forcefield.bond] table; "
+          "add one with style = \"harmonic\" or \"fene\" and its coeffs");
+    }
+    return std::nullopt;
+  }
+  BondSpec spec;
+  const std::string style = t->choice("style", {"harmonic", "fene"});
+  check_data_style(data, data.bond, "Bond Coeffs", {style}, style);
+  if (style == "harmonic") {
+    spec.style = BondSpec::Style::harmonic;
+    spec.harmonic = by_type<HarmonicBond>(
+        *t, types, "bond",
+        [](TomlTable& c) {
+          return HarmonicBond::Params{c.number("k"), positive(c, "r0")};
+        },
+        data, data.bond,
+        [&](const CoefficientRow& row) {
+          expect_values(data, row, 2, "harmonic bond coefficients K r0");
+          return HarmonicBond::Params{row.values[0], row.values[1]};
+        },
+        notes);
+  } else {
+    spec.style = BondSpec::Style::fene;
+    spec.fene = by_type<FeneBond>(
+        *t, types, "bond",
+        [](TomlTable& c) {
+          return FeneBond::Params{positive(c, "k"), positive(c, "r0"), c.number("epsilon"),
+                                  positive(c, "sigma")};
+        },
+        data, data.bond,
+        [&](const CoefficientRow& row) {
+          expect_values(data, row, 4, "fene bond coefficients K R0 epsilon sigma");
+          return FeneBond::Params{row.values[0], row.values[1], row.values[2], row.values[3]};
+        },
+        notes);
+  }
+  t->finish();
+  return spec;
+}
+
+std::optional<AngleSpec> read_angle(std::optional<TomlTable> t, const System& system,
+                                    const DataCoefficients& data, std::vector<std::string>& notes) {
+  if (!t) {
+    if (!system.topology.angles.empty()) {
+      throw InputError(
+          "the system has angles but the input has no [forcefield.angle] table; "
+          "add one with style = \"harmonic\" and its coeffs");
+    }
+    return std::nullopt;
+  }
+  const std::string style = t->choice("style", {"harmonic"});
+  check_data_style(data, data.angle, "Angle Coeffs", {style}, style);
+  AngleSpec spec;
+  spec.harmonic = by_type<HarmonicAngle>(
+      *t, system.topology.angle_types, "angle",
+      [](TomlTable& c) {
+        return HarmonicAngle::Params{c.number("k"), c.number("theta0") * std::numbers::pi / 180.0};
+      },
+      data, data.angle,
+      [&](const CoefficientRow& row) {
+        expect_values(data, row, 2, "harmonic angle coefficients K theta0");
+        return HarmonicAngle::Params{row.values[0], row.values[1] * std::numbers::pi / 180.0};
+      },
+      notes);
+  t->finish();
+  return spec;
+}
+
+}  // namespace
+
+ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigid_bonds,
+                                const DataCoefficients& data, std::vector<std::string>& notes) {
+  ForceFieldSpec spec;
+  auto t = root.table("forcefield");
+  if (!t) root.fail("missing the [forcefield] table");
+  if (auto special = t->table("special_bonds")) {
+    const auto lj = special->numbers("lj", 3);
+    for (int s = 0; s < 3; ++s) {
+      if (lj[s] < 0 || lj[s] > 1) special->fail("factors must lie in [0, 1]", "lj");
+      spec.special_lj[s] = lj[s];
+    }
+    special->finish();
+  }
+  auto pair = t->table("pair");
+  if (!pair) t->fail("missing [forcefield.pair] (style = \"none\" for no pair interactions)");
+  spec.pair = read_pair(*pair, system, data, notes);
+  spec.bond = read_bond(t->table("bond"), system, rigid_bonds, data, notes);
+  spec.angle = read_angle(t->table("angle"), system, data, notes);
+  if (auto external = t->table("external")) {
+    if (external->has("gravity")) {
+      const auto g = external->numbers("gravity", 3);
+      spec.gravity = Vec3{g[0], g[1], g[2]};
+    }
+    if (auto r = external->table("inverse_square")) {
+      ForceFieldSpec::Radial radial;
+      radial.inverse_square = true;
+      radial.coefficients = {r->number("strength")};
+      if (r->has("center")) {
+        const auto c = r->numbers("center", 3);
+        radial.center = {c[0], c[1], c[2]};
+      }
+      r->finish();
+      spec.radial.push_back(radial);
+    }
+    if (auto r = external->table("radial_polynomial")) {
+      ForceFieldSpec::Radial radial;
+      const auto count = r->integer("degree") + 1;
+      if (count < 1 || count > 16) r->fail("must be between 0 and 15", "degree");
+      radial.coefficients = r->numbers("coefficients", static_cast<std::size_t>(count));
+      if (r->has("center")) {
+        const auto c = r->numbers("center", 3);
+        radial.center = {c[0], c[1], c[2]};
+      }
+      r->finish();
+      spec.radial.push_back(radial);
+    }
+    external->finish();
+  }
+  t->finish();
+  return spec;
+}
+
+}  // namespace deli
