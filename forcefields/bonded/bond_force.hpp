@@ -4,6 +4,7 @@
 #include <utility>
 #include <vector>
 
+#include "bonded/bond_evaluator.hpp"
 #include "core/error.hpp"
 #include "forces/force_term.hpp"
 #include "system/system.hpp"
@@ -11,7 +12,7 @@
 namespace deli {
 
 // All bonds of one style; params indexed by bond type.
-template <class Evaluator>
+template <BondEvaluator Evaluator>
 class BondForce final : public ForceTerm {
  public:
   using Params = typename Evaluator::Params;

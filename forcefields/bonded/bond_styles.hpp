@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "bonded/bond_evaluator.hpp"
+
 namespace deli {
 
 // Bond evaluators: evaluate(params, r2, f_over_r, energy) returns false where the
@@ -56,5 +58,7 @@ struct FeneBond {
     return d2;
   }
 };
+
+static_assert(BondEvaluator<HarmonicBond> && BondEvaluator<FeneBond>);
 
 }  // namespace deli

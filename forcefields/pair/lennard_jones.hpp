@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "pair/pair_evaluator.hpp"
+
 namespace deli {
 
 // 12-6 Lennard-Jones, truncated at a cutoff, optionally shifted to zero energy there.
@@ -44,5 +46,6 @@ struct LennardJones {
     energy = r6inv * (p.lj3 * r6inv - p.lj4) - p.energy_shift;
   }
 };
+static_assert(PairEvaluator<LennardJones>);
 
 }  // namespace deli

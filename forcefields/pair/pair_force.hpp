@@ -8,6 +8,7 @@
 
 #include "forces/force_term.hpp"
 #include "neighbor/neighbor_list.hpp"
+#include "pair/pair_evaluator.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -19,9 +20,9 @@ struct ScaledPair {
   double factor;
 };
 
-// The one pair loop: any evaluator with Params and evaluate(params, r2, f_over_r, energy)
-// (HOOMD-style) becomes a force term. Parameters are a dense type x type table.
-template <class Evaluator>
+// The one pair loop: any PairEvaluator (HOOMD-style) becomes a force term. Parameters are a
+// dense type x type table.
+template <PairEvaluator Evaluator>
 class PairForce final : public ForceTerm {
  public:
   using Params = typename Evaluator::Params;
