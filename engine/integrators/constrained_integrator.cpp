@@ -163,7 +163,7 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
           (solved.line_search_failed ? " (its line search found no step that lowers the residual)"
                                      : " ([constraints.limits] newton = " +
                                            std::to_string(constraints_.limits.newton) + ")") +
-          "; the problem " + file + " (deli solve-problem FILE solves it again)" +
+          "; the problem " + file + "; deli solve-problem FILE solves it again" +
           (setting_up_
                ? "; the equality constraints cannot all hold from the starting configuration "
                  "(infeasible lengths, or a start far from them): check the rod and string "

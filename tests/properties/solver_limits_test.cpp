@@ -159,5 +159,68 @@ TEST(SolverLimits, ActiveSetLimitHitIsCountedAndTheStepStaysFeasible) {
   EXPECT_LE(z, 0.03 + 1e-10);
 }
 
+// [constraints.limits]: each limit an integer from 1 to 1e6; a misspelt key is refused
+// with the known ones suggested, as every table of the input.
+TEST(SolverLimits, InputRefusesBadLimits) {
+  auto read = [](const std::string& limits) {
+    return testing::input_with_atoms(
+        "LimitsInput" + std::to_string(::getpid()), {{{0, 0, 1}, {0, 0, 0}}}, "fff",
+        {-10, -10, -10}, {10, 10, 10},
+        "[forcefield.pair]\nstyle = \"none\"\n[constraints]\nwalls = [{ type = \"plane\", "
+        "point = [0, 0, 0], normal = [0, 0, 1] }]\n" +
+            limits + "[integrator]\ntype = \"gvi\"\ntimestep = 0.01\n[run]\nsteps = 0\n");
+  };
+  const RunInput good = read("limits = { newton = 7, feasibility_rounds = 3 }\n");
+  EXPECT_EQ(good.constraints.limits.newton, 7);
+  EXPECT_EQ(good.constraints.limits.feasibility_rounds, 3);
+  EXPECT_EQ(good.constraints.limits.active_set_rounds, SolverLimits{}.active_set_rounds);
+  for (const char* bad : {"limits = { newton = 0 }\n", "limits = { line_search = 2000000 }\n",
+                          "limits = { midpoint_passes = 1.5 }\n"}) {
+    try {
+      (void)read(bad);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("limits"), std::string::npos) << e.what();
+    }
+  }
+  try {
+    (void)read("limits = { newtn = 3 }\n");
+    ADD_FAILURE() << "accepted a misspelt limit";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("newtn"), std::string::npos) << e.what();
+  }
+}
+
+// A checkpoint written before the limit counters existed (15 numbers per statistics block)
+// restores, its counters kept and the new ones zero; the current layout round-trips.
+TEST(SolverLimits, CheckpointWithoutTheLimitCountersRestores) {
+  RunInput input = bipyramid("OldCheckpoint" + std::to_string(::getpid()), "");
+  Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+  gvi.setup(input.system);
+  for (int step = 0; step < 50; ++step) gvi.step(input.system, true);
+  const std::vector<double> state = gvi.saved_state();
+  const std::size_t n = input.system.particles.size();
+  const std::size_t now = ConstraintStatistics::saved_size;
+  const std::size_t before = ConstraintStatistics::saved_size_without_caps;
+  ASSERT_EQ(state.size(), 2 * now + 2 + 3 * n);
+  std::vector<double> old;
+  for (std::size_t block = 0; block < 2; ++block) {
+    old.insert(old.end(), state.begin() + block * now, state.begin() + block * now + before);
+  }
+  old.insert(old.end(), state.begin() + 2 * now, state.end());
+  Gvi restored(*input.force_field, input.constraints, input.gvi, input.system.particles);
+  restored.restore_state(old, input.system);
+  const auto expected = gvi.take_statistics(Sampler::thermo, true);
+  const auto got = restored.take_statistics(Sampler::thermo, true);
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].first, expected[k].first);
+    EXPECT_EQ(got[k].second, expected[k].second) << got[k].first;  // the caps are 0 here too
+  }
+  Gvi same(*input.force_field, input.constraints, input.gvi, input.system.particles);
+  same.restore_state(state, input.system);
+  EXPECT_EQ(same.saved_state(), state);
+}
+
 }  // namespace
 }  // namespace deli

@@ -15,6 +15,7 @@
 #include "constraints/constraint_set.hpp"
 #include "core/error.hpp"
 #include "solvers/position_problem.hpp"
+#include "support/shell.hpp"
 
 namespace deli {
 namespace {
@@ -181,6 +182,25 @@ TEST(SolverProblemFile, DamagedFileNamesTheLine) {
   }
   std::remove(path.c_str());
   EXPECT_THROW((void)read_position_problem(path), InputError);  // gone: cannot be read
+}
+
+// `deli solve-problem FILE [--newton N]`: exit status 0 when the problem converges, 3 when
+// it does not (the dumped limit reproduces the run's failure), 1 for a bad argument.
+TEST(SolveProblemCommand, ReportsConvergenceByExitStatus) {
+  const std::string deli = DELI_BINARY;
+  const std::string chain = kCollection + "/slit_chain_newton_limit.txt";
+  const testing::ShellResult limited = testing::run_shell(deli + " solve-problem " + chain);
+  EXPECT_EQ(limited.status, 3) << limited.output;
+  EXPECT_NE(limited.output.find("NOT converged after 1 Newton iterations"), std::string::npos)
+      << limited.output;
+  const testing::ShellResult solved =
+      testing::run_shell(deli + " solve-problem " + chain + " --newton 50");
+  EXPECT_EQ(solved.status, 0) << solved.output;
+  EXPECT_NE(solved.output.find("converged after"), std::string::npos) << solved.output;
+  const testing::ShellResult bad =
+      testing::run_shell(deli + " solve-problem " + chain + " --newton 0");
+  EXPECT_EQ(bad.status, 1) << bad.output;
+  EXPECT_NE(bad.output.find("--newton 0"), std::string::npos) << bad.output;
 }
 
 }  // namespace
