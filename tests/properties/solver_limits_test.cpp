@@ -13,6 +13,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
+#include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "simulation/thermo.hpp"
 #include "solvers/position_problem.hpp"
@@ -220,6 +221,36 @@ TEST(SolverLimits, CheckpointWithoutTheLimitCountersRestores) {
   Gvi same(*input.force_field, input.constraints, input.gvi, input.system.particles);
   same.restore_state(state, input.system);
   EXPECT_EQ(same.saved_state(), state);
+}
+
+// The implicit midpoint's fixed point (one loop for GVI and the baselines): two LJ atoms
+// 1.1 sigma apart moving towards each other need several passes to reach 1e-12; with
+// midpoint_passes = 2 the run stops naming the step, the last change and the limit.
+TEST(SolverLimits, MidpointPassesHitStopsTheRun) {
+  for (const char* integrator :
+       {"type = \"gvi\"\nlagrangian = \"midpoint\"", "type = \"direct\"\nscheme = \"midpoint\"",
+        "type = \"collision\"\nlagrangian = \"midpoint\""}) {
+    RunInput input = testing::input_with_atoms(
+        "MidpointPasses" + std::to_string(::getpid()),
+        {{{0, 0, 0}, {1, 0, 0}}, {{1.1, 0, 0}, {-1, 0, 0}}}, "fff", {-10, -10, -10}, {10, 10, 10},
+        "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\ncoeffs = [{ types = [1, 1], "
+        "epsilon = 1.0, sigma = 1.0 }]\n[constraints]\nwalls = [{ type = \"plane\", point = "
+        "[0, 0, -5], normal = [0, 0, 1] }]\nlimits = { midpoint_passes = 2 }\n[integrator]\n" +
+            std::string(integrator) + "\ntimestep = 0.005\n[run]\nsteps = 0\n");
+    std::unique_ptr<Integrator> run = make_integrator(input);
+    run->setup(input.system);
+    try {
+      run->step(input.system, true);
+      ADD_FAILURE() << integrator << ": expected the midpoint limit to stop the run";
+    } catch (const SimulationError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("step 1:"), std::string::npos) << what;
+      EXPECT_NE(what.find("implicit-midpoint fixed point"), std::string::npos) << what;
+      EXPECT_NE(what.find("after 2 passes ([constraints.limits] midpoint_passes)"),
+                std::string::npos)
+          << what;
+    }
+  }
 }
 
 }  // namespace
