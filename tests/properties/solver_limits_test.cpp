@@ -253,5 +253,71 @@ TEST(SolverLimits, MidpointPassesHitStopsTheRun) {
   }
 }
 
+// The feasibility guard's limit: a V of two rods (ends 0.002 and 0.05 above a floor, apex
+// 0.6, at rest, gravity, h = 0.1: the free step drops everything by g h^2 / 2 = 0.049).
+// Round 0 finds only the low end overlapping; landing it pivots the V about it and sends the
+// other end through the floor, landed in round 1. With feasibility_rounds = 1 the second
+// landing is not made: the hit is counted in feasibility_caps and the step ends overlapped
+// (penetrating_steps); with the default both ends land and nothing overlaps.
+TEST(SolverLimits, FeasibilityLimitHitIsCountedAndTheOverlapShown) {
+  auto first_step = [](const std::string& limits) {
+    const Vec3 low{0, 0, 0.002}, apex{0.8, 0, 0.6}, high{1.6, 0, 0.05};
+    char rods[200];
+    std::snprintf(rods, sizeof rods,
+                  "rods = [{ atoms = [1, 2], length = %.17g }, { atoms = [2, 3], length = "
+                  "%.17g }]\n",
+                  norm(low - apex), norm(apex - high));
+    RunInput input = testing::input_with_atoms(
+        "FeasibilityLimit" + std::to_string(::getpid()), {{low, {}}, {apex, {}}, {high, {}}}, "fff",
+        {-10, -10, -10}, {10, 10, 10},
+        "[forcefield.pair]\nstyle = \"none\"\n[forcefield.external]\ngravity = [0, 0, "
+        "-9.8]\n[constraints]\n" +
+            std::string(rods) +
+            "walls = [{ type = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }]\n" + limits +
+            "[integrator]\ntype = \"gvi\"\ntimestep = 0.1\n[run]\nsteps = 0\n");
+    Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+    gvi.setup(input.system);
+    gvi.step(input.system, true);
+    return gvi.take_statistics();
+  };
+  const auto capped = first_step("limits = { feasibility_rounds = 1 }\n");
+  EXPECT_EQ(statistic(capped, "feasibility_caps"), 1);
+  EXPECT_EQ(statistic(capped, "landings"), 1);
+  EXPECT_EQ(statistic(capped, "penetrating_steps"), 1);
+  EXPECT_LT(statistic(capped, "min_gap"), -1e-10);
+  const auto full = first_step("");
+  EXPECT_EQ(statistic(full, "feasibility_caps"), 0);
+  EXPECT_EQ(statistic(full, "landings"), 2);
+  EXPECT_EQ(statistic(full, "penetrating_steps"), 0);
+  EXPECT_GT(statistic(full, "min_gap"), -1e-10);
+}
+
+// The collision baseline's contact-time limit: a ball dropped from rest at z = 1 onto a floor
+// (h = 0.01) meets it in step 46 (t = sqrt(2 / 9.8) = 0.452); with one root-finding
+// iteration the bracket stays wider than root_tolerance * h: the hit is counted and the
+// ball is put at the bracket's feasible end, above the floor. With the default limit the
+// bracket closes: nothing counted.
+TEST(SolverLimits, ContactTimeLimitHitIsCountedAtTheFeasibleEnd) {
+  auto drop = [](const std::string& limits) {
+    RunInput input = testing::input_with_atoms(
+        "ContactTimeLimit" + std::to_string(::getpid()), {{{0, 0, 1}, {}}}, "fff", {-10, -10, -10},
+        {10, 10, 10},
+        "[forcefield.pair]\nstyle = \"none\"\n[forcefield.external]\ngravity = [0, 0, "
+        "-9.8]\n[constraints]\nwalls = [{ type = \"plane\", point = [0, 0, 0], normal = [0, 0, "
+        "1] }]\n" +
+            limits + "[integrator]\ntype = \"collision\"\ntimestep = 0.01\n[run]\nsteps = 0\n");
+    std::unique_ptr<Integrator> run = make_integrator(input);
+    run->setup(input.system);
+    for (int step = 0; step < 60; ++step) run->step(input.system, true);
+    return run->take_statistics();
+  };
+  const auto capped = drop("limits = { contact_time = 1 }\n");
+  EXPECT_GE(statistic(capped, "contact_time_caps"), 1);
+  EXPECT_GT(statistic(capped, "min_gap"), -1e-10);
+  const auto full = drop("");
+  EXPECT_EQ(statistic(full, "contact_time_caps"), 0);
+  EXPECT_GT(statistic(full, "min_gap"), -1e-10);
+}
+
 }  // namespace
 }  // namespace deli
