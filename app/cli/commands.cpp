@@ -23,6 +23,7 @@
 #include "simulation/interrupt.hpp"
 #include "simulation/run_loop.hpp"
 #include "simulation/timing_table.hpp"
+#include "solvers/position_problem.hpp"
 #include "text/dump_writer.hpp"
 #include "text/run_log.hpp"
 #include "text/thermo_output.hpp"
@@ -256,6 +257,25 @@ int command_write_data(const std::vector<std::string>& args) {
                     "deli " DELI_VERSION " from " + args[0]);
   std::printf("wrote %zu atoms to %s\n", input.system.particles.size(), args[1].c_str());
   return 0;
+}
+
+int command_solve_problem(const std::vector<std::string>& args) {
+  const char* usage = "usage: deli solve-problem FILE [--newton N]";
+  if (args.size() != 1 && args.size() != 3) throw InputError(usage);
+  int newton = 0;
+  if (args.size() == 3) {
+    if (args[1] != "--newton") throw InputError(std::string(usage) + ": unknown " + args[1]);
+    char* end = nullptr;
+    const long value = std::strtol(args[2].c_str(), &end, 10);
+    if (args[2].empty() || *end != '\0' || value < 1 || value > 1000000) {
+      throw InputError("--newton " + args[2] + ": expected an integer from 1 to 1000000");
+    }
+    newton = static_cast<int>(value);
+  }
+  const PositionProblem problem = read_position_problem(args[0]);
+  const PositionUpdate solved = solve_position_problem(problem, newton);
+  std::fputs(describe_position_solve(problem, solved).c_str(), stdout);
+  return solved.status.converged ? kExitSuccess : kExitSimulationStopped;
 }
 
 }  // namespace deli

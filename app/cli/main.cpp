@@ -24,6 +24,9 @@ constexpr const char* kUsage =
     "                            NVE trajectory with OpenMM and LAMMPS in-process\n"
     "  info FILE                 summarise an H5MD trajectory\n"
     "  write-data INPUT FILE     write the system INPUT builds as a LAMMPS data file\n"
+    "  solve-problem FILE [--newton N]\n"
+    "                            solve again a failed constraint solve a run dumped\n"
+    "                            (deli-failed-solve-stepN.txt)\n"
     "\n"
     "options:\n"
     "  -h, --help                this help\n"
@@ -52,6 +55,13 @@ constexpr const char* kInfoUsage =
     "\n"
     "Summarises an H5MD trajectory (particles, frames, observables, temperature and its\n"
     "degrees of freedom) or a deli checkpoint.\n";
+constexpr const char* kSolveProblemUsage =
+    "usage: deli solve-problem FILE [--newton N]\n"
+    "\n"
+    "Reads a position-update problem a failed run wrote (deli-failed-solve-stepN.txt) and\n"
+    "solves it again as the run did (with N Newton iterations at most, if given): prints\n"
+    "whether it converges, the residual, and each row's gap and impulse. Exit status 0 when\n"
+    "it converges, 3 when it does not.\n";
 constexpr const char* kWriteDataUsage =
     "usage: deli write-data INPUT FILE\n"
     "\n"
@@ -79,11 +89,12 @@ int main(int argc, char** argv) {
     }
     const std::vector<std::string> rest(args.begin() + 1, args.end());
     if (asks_for_help(rest)) {
-      const char* usage = args[0] == "run"          ? kRunUsage
-                          : args[0] == "validate"   ? kValidateUsage
-                          : args[0] == "info"       ? kInfoUsage
-                          : args[0] == "write-data" ? kWriteDataUsage
-                                                    : nullptr;
+      const char* usage = args[0] == "run"             ? kRunUsage
+                          : args[0] == "validate"      ? kValidateUsage
+                          : args[0] == "info"          ? kInfoUsage
+                          : args[0] == "write-data"    ? kWriteDataUsage
+                          : args[0] == "solve-problem" ? kSolveProblemUsage
+                                                       : nullptr;
       if (usage) {
         std::fputs(usage, stdout);
         return 0;
@@ -93,6 +104,7 @@ int main(int argc, char** argv) {
     if (args[0] == "write-data") return deli::command_write_data(rest);
     if (args[0] == "validate") return deli::command_validate(rest);
     if (args[0] == "info") return deli::command_info(rest);
+    if (args[0] == "solve-problem") return deli::command_solve_problem(rest);
     std::fprintf(stderr, "deli: unknown command '%s'; run 'deli --help' for the commands\n",
                  args[0].c_str());
     return deli::kExitUsage;

@@ -28,6 +28,37 @@ struct ConstraintTolerances {
   double solver = 1e-12;  // position update residual, sigma
 };
 
+// Every iteration limit of the constraint solvers, beside the tolerances they iterate to.
+// Each hit is either a counted fallback (the step goes on; a thermo/H5MD counter says how
+// often) or a stop naming the step, the cluster and the residual (README, "Solver
+// limits"). Input: [constraints.limits].
+struct SolverLimits {
+  // Position update, Newton iterations per cluster. Stop (problem dumped).
+  int newton = 50;
+  // Backtracking halvings of one Newton step's line search; when none decreases the merit
+  // the solve stops there: a stop as above unless the residual is already within tolerance.
+  int line_search = 34;
+  // Extended active set, rounds of reflect-and-predict. Fallback: the rows found so far go
+  // on; the feasibility guard lands any the last prediction missed (`active_set_caps`).
+  int active_set_rounds = 16;
+  // Feasibility guard, rounds of landing overlapped rows. Fallback: the step ends
+  // overlapped (`feasibility_caps`, and `penetrating_steps` when beyond the gap tolerance).
+  int feasibility_rounds = 8;
+  // Reflection (Algorithm 2), solves per cluster. Fallback: inelastic projection
+  // (`stalled_reflections`).
+  int reflection_solves = 100;
+  // The implicit midpoint's fixed point (midpoint Lagrangian, direct and collision
+  // baselines), passes per step. Stop.
+  int midpoint_passes = 200;
+  // The collision baseline's contact-time root finder, iterations per row. Fallback: the
+  // bracket's feasible end (`contact_time_caps`).
+  int contact_time = 200;
+  // The direct baselines: passes moving the constraint gradients to the landed point, and
+  // rounds adding newly overlapped rows. Stop.
+  int direct_settle_passes = 100;
+  int direct_landing_rounds = 16;
+};
+
 // Every constraint of a system: the equalities (rods, anchor strings), fixed for the run,
 // and the inequalities found each step: hard-sphere pairs (all pairs not joined by a rod
 // or bond, candidates from the neighbour list) and walls.
@@ -40,6 +71,7 @@ struct ConstraintSet {
   // special_bonds) that must still not overlap: checked every step.
   std::vector<std::array<std::int32_t, 2>> always_checked_pairs;
   ConstraintTolerances tolerances;
+  SolverLimits limits;
   // Replace every inequality by its linearisation about the previous step's configuration
   // (gaps linearised at the last converged state, as contact codes do): the paper's
   // counterexample, whose impulses no longer point along the current normals.

@@ -37,7 +37,7 @@ std::vector<Vec3> CollisionIntegrator::free_positions(System& system, const std:
   for (std::size_t i = 0; i < n; ++i) x[i] = q[i] + (p[i] + f[i] * (0.5 * tau)) * (tau / P.mass[i]);
   if (options_.base == Lagrangian::verlet) return x;
   std::vector<Vec3> mid(n), force;
-  for (int k = 0;; ++k) {
+  iterate_midpoint(system, 1, [&] {
     for (std::size_t i = 0; i < n; ++i) mid[i] = (q[i] + x[i]) * 0.5;
     engine_.forces_at(system, mid, force);
     double change = 0.0;
@@ -46,9 +46,8 @@ std::vector<Vec3> CollisionIntegrator::free_positions(System& system, const std:
       change = std::max(change, norm(next - x[i]));
       x[i] = next;
     }
-    if (change <= constraints_.tolerances.solver && k > 0) break;
-    if (k == 200) midpoint_failure(system, change);
-  }
+    return change;
+  });
   if (f_mid) *f_mid = force;
   return x;
 }
@@ -56,8 +55,7 @@ std::vector<Vec3> CollisionIntegrator::free_positions(System& system, const std:
 std::optional<double> CollisionIntegrator::contact_time(System& system, const Constraint& c,
                                                         const std::vector<Vec3>& q,
                                                         const std::vector<Vec3>& p,
-                                                        const std::vector<Vec3>& f,
-                                                        double tau) const {
+                                                        const std::vector<Vec3>& f, double tau) {
   auto gap = [&](double t) {
     return evaluate(c, free_positions(system, q, p, f, t).data(), system.box).gap;
   };
@@ -80,7 +78,8 @@ std::optional<double> CollisionIntegrator::contact_time(System& system, const Co
   }
   // Illinois false position on [lo, hi], gap(lo) > 0 >= gap(hi).
   int side = 0;
-  for (int k = 0; k < 200 && hi - lo > options_.root_tolerance * dt_; ++k) {
+  int k = 0;
+  for (; k < constraints_.limits.contact_time && hi - lo > options_.root_tolerance * dt_; ++k) {
     double t = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
     if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
     const double g = gap(t);
@@ -94,6 +93,7 @@ std::optional<double> CollisionIntegrator::contact_time(System& system, const Co
       side = -1;
     }
   }
+  if (hi - lo > options_.root_tolerance * dt_) ++stats_.contact_time_caps;
   return lo;
 }
 

@@ -37,10 +37,11 @@ class CollisionIntegrator final : public ConstrainedIntegrator {
   std::vector<Vec3> free_positions(System& system, const std::vector<Vec3>& q,
                                    const std::vector<Vec3>& p, const std::vector<Vec3>& f,
                                    double tau, std::vector<Vec3>* f_mid = nullptr) const;
-  // The first time in (0, tau] at which row c closes along the free step, or nothing.
+  // The first time in (0, tau] at which row c closes along the free step, or nothing; the
+  // bracket's feasible end (counted) when limits.contact_time iterations do not narrow it.
   std::optional<double> contact_time(System& system, const Constraint& c,
                                      const std::vector<Vec3>& q, const std::vector<Vec3>& p,
-                                     const std::vector<Vec3>& f, double tau) const;
+                                     const std::vector<Vec3>& f, double tau);
 
   CollisionOptions options_;
 };

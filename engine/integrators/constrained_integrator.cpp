@@ -1,17 +1,15 @@
 #include "integrators/constrained_integrator.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
+#include <cstdio>
 #include <optional>
-#include <sstream>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "solvers/cluster_matrices.hpp"
 #include "solvers/momentum_update.hpp"
+#include "solvers/position_problem.hpp"
 #include "solvers/position_update.hpp"
 
 namespace deli {
@@ -56,12 +54,22 @@ void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& wh
   for (std::size_t k = 0; k < which.size(); ++k) all[which[k]] = local[k];
 }
 
+namespace {
+// A residual for a message: std::to_string prints 1e-9 as 0.000000.
+std::string scientific(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3e", value);
+  return text;
+}
+}  // namespace
+
 void ConstrainedIntegrator::midpoint_failure(const System& system, double change) const {
   throw SimulationError("step " + std::to_string(system.step + 1) +
-                        ": the implicit-midpoint iteration did not converge (last change " +
-                        std::to_string(change) +
-                        " sigma after 200 iterations); reduce the "
-                        "timestep");
+                        ": the implicit-midpoint fixed point (all atoms) did not converge: last "
+                        "change " +
+                        scientific(change) + " sigma after " +
+                        std::to_string(constraints_.limits.midpoint_passes) +
+                        " passes ([constraints.limits] midpoint_passes); reduce the timestep");
 }
 
 namespace {
@@ -70,33 +78,6 @@ std::string describe(const Constraint& c, const Particles& particles) {
   std::string s = std::string(kind_name(c.kind)) + " on atom " + std::to_string(particles.id[c.i]);
   if (c.j >= 0) s += " and atom " + std::to_string(particles.id[c.j]);
   return s;
-}
-
-// Writes a failed cluster solve to a file that a test can load: rows, positions, masses.
-// Returns what the message says of it: "is in FILE", or that FILE could not be written.
-std::string dump_failed_problem(const System& system, const LocalCluster& cluster,
-                                const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
-                                const std::vector<bool>& equality, double h) {
-  const std::string path = "deli-failed-solve-step" + std::to_string(system.step) + ".txt";
-  std::ofstream out(path);
-  out.precision(17);
-  out << "# deli failed position update: step " << system.step << ", h " << h << "\n";
-  out << "particles " << cluster.size() << "\n";
-  for (std::size_t k = 0; k < cluster.size(); ++k) {
-    out << system.particles.id[cluster.particles[k]] << " " << 1.0 / cluster.inverse_mass[k] << " "
-        << q[k].x << " " << q[k].y << " " << q[k].z << " " << x0[k].x << " " << x0[k].y << " "
-        << x0[k].z << "\n";
-  }
-  out << "rows " << cluster.rows.size() << "\n";
-  for (std::size_t r = 0; r < cluster.rows.size(); ++r) {
-    const Constraint& c = cluster.rows[r];
-    out << kind_name(c.kind) << (equality[r] ? " equality " : " inequality ") << c.i << " " << c.j
-        << " " << c.length << " " << c.point.x << " " << c.point.y << " " << c.point.z << " "
-        << c.normal.x << " " << c.normal.y << " " << c.normal.z << "\n";
-  }
-  out.flush();
-  if (!out) return path + " could not be written (" + std::strerror(errno) + ")";
-  return "is in " + path;
 }
 
 }  // namespace
@@ -126,9 +107,10 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
       bool held = true;
       for (std::int32_t r : cluster.rows) held = held && equality[r];
       SolverStatus status;
-      if (held && prepared->chain->solve_positions(q.data(), delta.data(), dt_, system.box,
-                                                   constraints_.tolerances.solver, 50, chain_work_,
-                                                   impulse.data(), virial, status)) {
+      if (held && prepared->chain->solve_positions(
+                      q.data(), delta.data(), dt_, system.box, constraints_.tolerances.solver,
+                      constraints_.limits.newton, constraints_.limits.line_search, chain_work_,
+                      impulse.data(), virial, status)) {
         ++stats_.solves;
         stats_.solver_iterations += status.iterations;
         stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, status.iterations);
@@ -147,13 +129,28 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
     for (std::size_t k = 0; k < x0_local.size(); ++k) x0_local[k] += q_local[k];
     const PositionUpdate solved =
         solve_position_update(structure, local_equality, q_local, x0_local, dt_, system.box,
-                              constraints_.tolerances.solver);
+                              constraints_.tolerances.solver, constraints_.limits.newton,
+                              constraints_.limits.line_search);
     ++stats_.solves;
     stats_.solver_iterations += solved.status.iterations;
     stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
     if (!solved.status.converged) {
-      const std::string file =
-          dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);
+      PositionProblem problem;
+      problem.step = system.step + 1;
+      problem.h = dt_;
+      problem.tolerance = constraints_.tolerances.solver;
+      problem.newton_limit = constraints_.limits.newton;
+      problem.line_search_limit = constraints_.limits.line_search;
+      problem.box = system.box;
+      for (std::int32_t i : cluster.particles) problem.ids.push_back(particles.id[i]);
+      problem.cluster = local;
+      problem.equality = local_equality;
+      problem.q = q_local;
+      problem.x0 = x0_local;
+      problem.failed_residual = solved.status.residual;
+      problem.failed_iterations = solved.status.iterations;
+      const std::string file = save_position_problem(
+          "deli-failed-solve-step" + std::to_string(problem.step) + ".txt", problem);
       throw SimulationError(
           "step " + std::to_string(system.step + 1) +
           ": the position update did not converge for the cluster of " +
@@ -161,8 +158,12 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
           std::to_string(particles.id[cluster.particles.front()]) + " (" +
           std::to_string(cluster.rows.size()) +
           " constraints, first: " + describe(rows[cluster.rows.front()], particles) +
-          "): residual " + std::to_string(solved.status.residual) + " after " +
-          std::to_string(solved.status.iterations) + " Newton iterations; the problem " + file +
+          "): residual " + scientific(solved.status.residual) + " sigma after " +
+          std::to_string(solved.status.iterations) + " Newton iterations" +
+          (solved.line_search_failed ? " (its line search found no step that lowers the residual)"
+                                     : " ([constraints.limits] newton = " +
+                                           std::to_string(constraints_.limits.newton) + ")") +
+          "; the problem " + file + "; deli solve-problem FILE solves it again" +
           (setting_up_
                ? "; the equality constraints cannot all hold from the starting configuration "
                  "(infeasible lengths, or a start far from them): check the rod and string "
@@ -201,16 +202,24 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
     std::vector<Vec3> p_local = gather(p, cluster.particles);
     const std::vector<Vec3> x_local = gather(x, cluster.particles);
     Eigen::VectorXd mu;
-    const SolverStatus status = project_momentum(structure, x_local, p_local, system.box, mu);
+    const SolverStatus status = project_momentum(structure, x_local, p_local, system.box,
+                                                 constraints_.tolerances.velocity, mu);
     for (std::size_t r = 0; r < local.rows.size(); ++r) {
       virial +=
           pair_virial(local.rows[r], mu(static_cast<Eigen::Index>(r)), x_local.data(), system.box);
     }
     if (!status.converged) {
-      throw SimulationError("step " + std::to_string(system.step) +
-                            ": the momentum update failed for the cluster from atom " +
-                            std::to_string(system.particles.id[cluster.particles.front()]) +
-                            " (singular constraint matrix)");
+      throw SimulationError(
+          "step " + std::to_string(system.step) +
+          ": the momentum update failed for the cluster of " +
+          std::to_string(cluster.particles.size()) + " atoms from atom " +
+          std::to_string(system.particles.id[cluster.particles.front()]) + " (" +
+          std::to_string(cluster.rows.size()) +
+          " constraints, first: " + describe(rows[cluster.rows.front()], system.particles) +
+          "): normal velocities up to " + scientific(status.residual) +
+          " sigma/tau remain after the projection (tolerance velocity = " +
+          scientific(constraints_.tolerances.velocity) +
+          "); the constraint matrix is singular beyond repair or the velocities are not finite");
     }
     scatter(p_local, cluster.particles, p);
   }
@@ -354,9 +363,10 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
     ShadowOperator shadow;
     if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, c, p);
     const std::vector<Vec3> x_local = gather(x, cluster.particles);
-    const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
-                                      constraints_.tolerances.velocity,
-                                      energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
+    const ReflectionStats r =
+        reflect(local, equality, x_local, p_local, system.box, reflection_,
+                constraints_.tolerances.velocity, constraints_.limits.reflection_solves,
+                energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
     for (std::size_t k = 0; k < local.rows.size(); ++k) {
       step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
     }
@@ -364,6 +374,7 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
     stats_.shadow_fallbacks += r.shadow_fallbacks;
     stats_.stalled += r.capped ? 1 : 0;
     stats_.cycled += r.cycled ? 1 : 0;
+    stats_.qp_caps += r.qp_caps;
     scatter(p_local, cluster.particles, p);
   }
 }
@@ -433,6 +444,10 @@ void ConstraintStatistics::add(const ConstraintStatistics& later) {
   max_solver_iterations = std::max(max_solver_iterations, later.max_solver_iterations);
   min_gap = std::min(min_gap, later.min_gap);
   max_rod_violation = std::max(max_rod_violation, later.max_rod_violation);
+  active_set_caps += later.active_set_caps;
+  feasibility_caps += later.feasibility_caps;
+  qp_caps += later.qp_caps;
+  contact_time_caps += later.contact_time_caps;
 }
 
 void ConstraintStatistics::save(std::vector<double>& out) const {
@@ -443,9 +458,12 @@ void ConstraintStatistics::save(std::vector<double>& out) const {
   out.push_back(max_solver_iterations);
   out.push_back(min_gap);
   out.push_back(max_rod_violation);
+  for (std::int64_t count : {active_set_caps, feasibility_caps, qp_caps, contact_time_caps}) {
+    out.push_back(static_cast<double>(count));
+  }
 }
 
-ConstraintStatistics ConstraintStatistics::load(const double* in) {
+ConstraintStatistics ConstraintStatistics::load(const double* in, std::size_t size) {
   ConstraintStatistics s;
   for (std::int64_t* count :
        {&s.steps, &s.active, &s.reflected, &s.smooth, &s.stalled, &s.cycled, &s.penetrations,
@@ -455,6 +473,11 @@ ConstraintStatistics ConstraintStatistics::load(const double* in) {
   s.max_solver_iterations = static_cast<int>(*in++);
   s.min_gap = *in++;
   s.max_rod_violation = *in++;
+  if (size == saved_size_without_caps) return s;
+  for (std::int64_t* count :
+       {&s.active_set_caps, &s.feasibility_caps, &s.qp_caps, &s.contact_time_caps}) {
+    *count = static_cast<std::int64_t>(*in++);
+  }
   return s;
 }
 
@@ -469,16 +492,26 @@ std::vector<double> ConstrainedIntegrator::saved_state() const {
 }
 
 void ConstrainedIntegrator::restore_state(const std::vector<double>& state, const System& system) {
-  const std::size_t head = 2 * ConstraintStatistics::saved_size + 2;
   const std::size_t n = system.particles.size();
-  if (state.size() != head && state.size() != head + 3 * n) {
-    throw InputError("the checkpoint's integrator state (" + std::to_string(state.size()) +
-                     " numbers) is not that of '" + name() + "' for " + std::to_string(n) +
-                     " atoms; restart with the input that wrote it");
+  // The current layout, or that of a checkpoint written before the limit counters.
+  std::size_t stats_size = ConstraintStatistics::saved_size;
+  for (std::size_t size :
+       {ConstraintStatistics::saved_size, ConstraintStatistics::saved_size_without_caps}) {
+    const std::size_t head = 2 * size + 2;
+    if (state.size() == head || state.size() == head + 3 * n) {
+      stats_size = size;
+      break;
+    }
+    if (size == ConstraintStatistics::saved_size_without_caps) {
+      throw InputError("the checkpoint's integrator state (" + std::to_string(state.size()) +
+                       " numbers) is not that of '" + name() + "' for " + std::to_string(n) +
+                       " atoms; restart with the input that wrote it");
+    }
   }
+  const std::size_t head = 2 * stats_size + 2;
   for (std::size_t k = 0; k < sampled_.size(); ++k) {
-    sampled_[k] = ConstraintStatistics::load(&state[k * ConstraintStatistics::saved_size]);
-    virial_sums_[k] = state[2 * ConstraintStatistics::saved_size + k];
+    sampled_[k] = ConstraintStatistics::load(&state[k * stats_size], stats_size);
+    virial_sums_[k] = state[2 * stats_size + k];
   }
   previous_positions_.clear();
   for (std::size_t i = head; i < state.size(); i += 3) {
@@ -515,7 +548,11 @@ std::vector<std::pair<std::string, double>> ConstrainedIntegrator::take_statisti
           {"solver_iterations_mean",
            s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)
                         : 0.0},
-          {"solver_iterations_max", static_cast<double>(s.max_solver_iterations)}};
+          {"solver_iterations_max", static_cast<double>(s.max_solver_iterations)},
+          {"active_set_caps", static_cast<double>(s.active_set_caps)},
+          {"feasibility_caps", static_cast<double>(s.feasibility_caps)},
+          {"qp_caps", static_cast<double>(s.qp_caps)},
+          {"contact_time_caps", static_cast<double>(s.contact_time_caps)}};
 }
 
 }  // namespace deli

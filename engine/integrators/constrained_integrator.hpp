@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <limits>
 
@@ -27,12 +28,19 @@ struct ConstraintStatistics {
   int max_solver_iterations = 0;
   double min_gap = std::numeric_limits<double>::infinity();
   double max_rod_violation = 0;  // |f| / length, equality rows
+  // Iteration limits hit where the step goes on (SolverLimits says what each does).
+  std::int64_t active_set_caps = 0;    // steps whose active set was still growing
+  std::int64_t feasibility_caps = 0;   // steps whose guard still had overlapped rows
+  std::int64_t qp_caps = 0;            // reflection QP solves ended unconverged
+  std::int64_t contact_time_caps = 0;  // contact times left unbracketed (collision)
 
   void add(const ConstraintStatistics& later);
   // As numbers for a checkpoint (counts are exact in a double up to 2^53).
   void save(std::vector<double>& out) const;
-  static constexpr std::size_t saved_size = 15;
-  static ConstraintStatistics load(const double* in);
+  static constexpr std::size_t saved_size = 19;
+  // The layout before the limit counters (a checkpoint of an earlier deli): they load as 0.
+  static constexpr std::size_t saved_size_without_caps = 15;
+  static ConstraintStatistics load(const double* in, std::size_t size = saved_size);
 };
 
 // What every integrator of constrained systems shares (GVI, the direct-substitution and
@@ -89,6 +97,20 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<Constraint> candidates_for_step(System& system, std::vector<Vec3>& q,
                                               std::vector<Vec3>& x);
   void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
+  // The implicit midpoint's fixed point, the one loop of every integrator that has one:
+  // repeats `pass` (one pass, returning the largest change it made, sigma) until a pass
+  // from the `first_checked`-th on changes less than the solver tolerance; at
+  // limits.midpoint_passes passes the run stops with the step and the last change.
+  template <class Pass>
+  void iterate_midpoint(const System& system, int first_checked, Pass&& pass) const {
+    for (int k = 0;; ++k) {
+      const double change = pass();
+      if (change <= constraints_.tolerances.solver && k >= first_checked) return;
+      if (k + 1 >= std::max(constraints_.limits.midpoint_passes, first_checked + 1)) {
+        midpoint_failure(system, change);
+      }
+    }
+  }
   [[noreturn]] void midpoint_failure(const System& system, double change) const;
   // Clusters the rows (the equality rows themselves: their prepared clusters; else
   // find_clusters into found_clusters_) and returns how many; prepared_cluster(rows, k) is

@@ -55,11 +55,13 @@ std::vector<Vec3> DirectSubstitution::land(System& system, const std::vector<Vec
           y[i] = next;
         }
         if (k > 0 && change <= tol.solver) break;
-        if (k == 100) {
+        if (k == constraints_.limits.direct_settle_passes) {
           throw SimulationError("step " + std::to_string(system.step + 1) +
                                 ": the direct method's constraint point did not settle (last "
                                 "change " +
-                                std::to_string(change) + " sigma); reduce the timestep");
+                                std::to_string(change) + " sigma after " + std::to_string(k) +
+                                " passes, [constraints.limits] direct_settle_passes); reduce "
+                                "the timestep");
         }
         at = y;
       }
@@ -71,10 +73,15 @@ std::vector<Vec3> DirectSubstitution::land(System& system, const std::vector<Vec
       }
     }
     if (violated.empty()) return y;
-    if (round == 16) {
+    if (round == constraints_.limits.direct_landing_rounds) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": the direct method found new overlaps after 16 rounds; reduce "
-                            "the timestep");
+                            ": the direct method found new overlaps after " +
+                            std::to_string(round) + " rounds (" + std::to_string(violated.size()) +
+                            " rows, first: atom " + std::to_string(P.id[violated.front().i]) +
+                            ", gap " +
+                            std::to_string(evaluate(violated.front(), y.data(), system.box).gap) +
+                            " sigma; [constraints.limits] direct_landing_rounds); reduce the "
+                            "timestep");
     }
     held.insert(held.end(), violated.begin(), violated.end());
   }
@@ -85,7 +92,6 @@ void DirectSubstitution::step(System& system, bool tally) {
   const std::size_t n = P.size();
   const double h = dt_;
   const double alpha = options_.alpha;
-  const ConstraintTolerances& tol = constraints_.tolerances;
   const bool newmark = options_.scheme != DirectScheme::midpoint;
   const double beta = options_.beta, gamma = options_.gamma;
   step_virial_ = 0.0;
@@ -117,7 +123,7 @@ void DirectSubstitution::step(System& system, bool tally) {
   std::vector<Constraint> held;
   std::vector<Vec3> impulse(n), x(n), y0(n);
   double virial = 0.0;
-  for (int k = 0;; ++k) {
+  iterate_midpoint(system, 1, [&] {
     x_free = free_end();
     for (std::size_t i = 0; i < n; ++i) y0[i] = q[i] + (x_free[i] - q[i]) * alpha;
     const std::vector<Vec3> y = land(system, q, y0, candidates, held, impulse, virial);
@@ -132,9 +138,8 @@ void DirectSubstitution::step(System& system, bool tally) {
     std::vector<Vec3> at(n);
     for (std::size_t i = 0; i < n; ++i) at[i] = newmark ? x[i] : (q[i] + x[i]) * 0.5;
     engine_.forces_at(system, at, f_implicit);
-    if (k > 0 && change <= tol.solver) break;
-    if (k == 200) midpoint_failure(system, change);
-  }
+    return change;
+  });
   stats_.active += static_cast<std::int64_t>(held.size());
 
   // Momenta. The solver's impulse J moved the constraint point by h M^-1 J.

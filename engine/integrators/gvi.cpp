@@ -53,7 +53,7 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
   if (lagrangian_ != Lagrangian::midpoint) return;
   std::vector<Vec3>& mid = ws_.prediction_mid;
   mid.resize(n);
-  for (int k = 0;; ++k) {
+  iterate_midpoint(system, 0, [&] {
     for (std::size_t i = 0; i < n; ++i) mid[i] = P.position[i] + d[i] * 0.5;
     engine_.forces_at(system, mid, ws_.prediction_force);
     const std::vector<Vec3>& f_mid = ws_.prediction_force;
@@ -63,9 +63,8 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
       change = std::max(change, norm(next - d[i]));
       d[i] = next;
     }
-    if (change <= constraints_.tolerances.solver) break;
-    if (k == 200) midpoint_failure(system, change);
-  }
+    return change;
+  });
 }
 
 // The predictor: the unconstrained step, or (predictor = "constrained") that step with the
@@ -154,7 +153,8 @@ void Gvi::find_active_set(System& system) {
   std::vector<Constraint>& active = ws_.active;
   active.clear();
   ws_.prediction_changed.assign(n, 1);
-  for (int round = 0; round < 16; ++round) {
+  bool settled = false;
+  for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
     const std::vector<Constraint>& candidates = candidates_for(system, ws_.predicted);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     bool grew = false;
@@ -169,8 +169,10 @@ void Gvi::find_active_set(System& system) {
         if (!contains(active, c)) active.push_back(c), grew = true;
       }
     }
-    if (!grew) break;
-    if (!reflections_) break;
+    if (!grew || !reflections_) {
+      settled = true;
+      break;
+    }
     ws_.rows = constraints_.equalities;
     ws_.rows.insert(ws_.rows.end(), active.begin(), active.end());
     {
@@ -187,6 +189,7 @@ void Gvi::find_active_set(System& system) {
     }
   }
   stats_.active += static_cast<std::int64_t>(active.size());
+  if (!settled) ++stats_.active_set_caps;
 }
 
 // Smooth set: active at q and tangent to the momenta after reflection.
@@ -230,7 +233,7 @@ void Gvi::solve_held_positions(System& system) {
   const std::vector<Vec3>& f_start = engine_.force();
   ws_.half.resize(n);
   for (std::size_t i = 0; i < n; ++i) ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h);
-  for (int k = 0;; ++k) {
+  auto solve = [&] {
     ws_.free.resize(n);
     for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
     ws_.impulse.assign(n, Vec3{});
@@ -238,7 +241,13 @@ void Gvi::solve_held_positions(System& system) {
       ws_.position_virial =
           solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse);
     }
-    if (lagrangian_ == Lagrangian::verlet) return;
+  };
+  if (lagrangian_ == Lagrangian::verlet) {
+    solve();
+    return;
+  }
+  iterate_midpoint(system, 1, [&] {
+    solve();
     displaced(P);
     ws_.mid.resize(n);
     for (std::size_t i = 0; i < n; ++i) ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5;
@@ -249,9 +258,8 @@ void Gvi::solve_held_positions(System& system) {
       change = std::max(change, norm(next - ws_.half[i]) * h / P.mass[i]);
       ws_.half[i] = next;
     }
-    if (change <= constraints_.tolerances.solver && k > 0) return;
-    if (k == 200) midpoint_failure(system, change);
-  }
+    return change;
+  });
 }
 
 // Position update, then the feasibility guard: inequality rows that would still end the step
@@ -274,7 +282,11 @@ void Gvi::update_positions(System& system) {
         }
       }
     }
-    if (ws_.violated.empty() || round == 8) break;
+    if (ws_.violated.empty()) break;
+    if (round == constraints_.limits.feasibility_rounds) {
+      ++stats_.feasibility_caps;
+      break;
+    }
     ws_.held.insert(ws_.held.end(), ws_.violated.begin(), ws_.violated.end());
     ws_.landed.insert(ws_.landed.end(), ws_.violated.begin(), ws_.violated.end());
   }

@@ -42,8 +42,8 @@ Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool wit
 
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
-                        ReflectionOperator op, double tolerance, const ShadowOperator* shadow,
-                        int max_iterations) {
+                        ReflectionOperator op, double tolerance, int max_iterations,
+                        const ShadowOperator* shadow) {
   std::vector<int> eq_rows, in_rows;
   for (std::size_t k = 0; k < cluster.rows.size(); ++k) {
     (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
@@ -114,17 +114,23 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
           check.info() == Eigen::Success && check.isPositive() &&
           check.vectorD().minCoeff() > 1e-14 * Qs.diagonal().cwiseAbs().maxCoeff();
       if (positive) {
-        solve_nonnegative_qp(Qs, cs, lambda, 1e-14 * std::max(1.0, cs.lpNorm<Eigen::Infinity>()));
-        solved = lambda.lpNorm<Eigen::Infinity>() > 0.0;
+        const SolverStatus qp = solve_nonnegative_qp(
+            Qs, cs, lambda, 1e-14 * std::max(1.0, cs.lpNorm<Eigen::Infinity>()));
+        if (!qp.converged) ++stats.qp_caps;
+        solved = qp.converged && lambda.lpNorm<Eigen::Infinity>() > 0.0;
       }
       if (!solved) ++stats.shadow_fallbacks;
     }
+    bool optimal = true;
     if (!solved) {
-      solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+      const SolverStatus qp =
+          solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+      if (!qp.converged) ++stats.qp_caps;
+      optimal = qp.converged;
     }
     ++stats.iterations;
-    if (lambda.lpNorm<Eigen::Infinity>() == 0.0) {
-      stats.capped = true;  // approaching, yet no energy-preserving impulse: stalled
+    if (!optimal || lambda.lpNorm<Eigen::Infinity>() == 0.0) {
+      stats.capped = true;  // approaching, yet no energy-preserving impulse (found): stalled
       stopped = true;
       break;
     }
@@ -161,7 +167,9 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     const Eigen::MatrixXd Q = NV.transpose() * KN;
     const Eigen::VectorXd c = KN.transpose() * flat;
     Eigen::VectorXd lambda;
-    solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    const SolverStatus qp =
+        solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    if (!qp.converged) ++stats.qp_caps;
     flat += NV * lambda;
     for (std::size_t k = 0; k < rows.size(); ++k) {
       total_lambda(rows[k]) += lambda(static_cast<Eigen::Index>(k));

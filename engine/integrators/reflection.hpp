@@ -31,6 +31,7 @@ struct ReflectionStats {
   bool capped = false;       // Algorithm 2 hit its iteration cap or stalled
   bool cycled = false;       // Algorithm 2 returned to momenta it had already produced
   int shadow_fallbacks = 0;  // solves where the shadow energy had no reflection: H used
+  int qp_caps = 0;           // QP solves that hit their iteration cap (see reflect())
   // The impulse each local row applied, along its own gradient (equality rows carry the
   // share of the projected normals that runs along them): for the constraint virial.
   std::vector<double> row_impulse;
@@ -54,9 +55,15 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
 // With `shadow`, E is Verlet's shadow Hamiltonian; a solve where it admits no reflection
 // (an approaching row with grad g^T K p >= 0, or K not positive on the normals) falls back
 // to E = H for that solve and is counted.
-ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
-                        const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
-                        ReflectionOperator op, double tolerance,
-                        const ShadowOperator* shadow = nullptr, int max_iterations = 100);
+// A QP solve that ends at its iteration cap (not optimal, so not energy-preserving) is
+// counted in qp_caps and handled as the nearest safe case: a shadow solve falls back to H,
+// an H solve stops Algorithm 2 as a stall (inelastic projection), and a capped inelastic
+// projection applies its feasible, non-optimal impulses (the feasibility guard of the
+// position update keeps the step from ending overlapped).
+[[nodiscard]] ReflectionStats reflect(const LocalCluster& cluster,
+                                      const std::vector<bool>& equality, const std::vector<Vec3>& q,
+                                      std::vector<Vec3>& p, const Box& box, ReflectionOperator op,
+                                      double tolerance, int max_iterations,
+                                      const ShadowOperator* shadow = nullptr);
 
 }  // namespace deli

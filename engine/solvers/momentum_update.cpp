@@ -6,7 +6,7 @@ namespace deli {
 
 SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int>& rows,
                               const std::vector<Vec3>& x, std::vector<Vec3>& p, const Box& box,
-                              Eigen::VectorXd& mu) {
+                              double tolerance, Eigen::VectorXd& mu) {
   if (rows.empty()) {
     SolverStatus status;
     status.iterations = 1;
@@ -18,11 +18,12 @@ SolverStatus project_momentum(const LocalCluster& cluster, const std::vector<int
   LocalCluster selected = cluster;
   selected.rows.clear();
   for (int r : rows) selected.rows.push_back(cluster.rows[r]);
-  return project_momentum(ClusterRows(selected), x, p, box, mu);
+  return project_momentum(ClusterRows(selected), x, p, box, tolerance, mu);
 }
 
 SolverStatus project_momentum(const ClusterRows& structure, const std::vector<Vec3>& x,
-                              std::vector<Vec3>& p, const Box& box, Eigen::VectorXd& mu) {
+                              std::vector<Vec3>& p, const Box& box, double tolerance,
+                              Eigen::VectorXd& mu) {
   SolverStatus status;
   status.iterations = 1;
   const LocalCluster& cluster = structure.cluster();
@@ -41,8 +42,11 @@ SolverStatus project_momentum(const ClusterRows& structure, const std::vector<Ve
     const Eigen::MatrixXd A = structure.coupling(u, u);
     Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
     mu = ldlt.solve(b);
-    if (ldlt.info() != Eigen::Success || !mu.allFinite()) {
-      mu = A.completeOrthogonalDecomposition().solve(b);  // dependent rows (a rigid loop)
+    // Dependent rows (a rigid loop, a contact repeating a rod) make A singular: LDLT then
+    // fails, or gives multipliers that do not solve the system; least norm instead.
+    if (ldlt.info() != Eigen::Success || !mu.allFinite() ||
+        !(residual_norm(A * mu - b) <= tolerance)) {
+      mu = A.completeOrthogonalDecomposition().solve(b);
     }
   }
   const std::vector<Vec3> j = structure.impulse(u, mu);
@@ -50,8 +54,8 @@ SolverStatus project_momentum(const ClusterRows& structure, const std::vector<Ve
     p[k] += j[k];
     v[k] = p[k] * cluster.inverse_mass[k];
   }
-  status.residual = structure.project(u, v).lpNorm<Eigen::Infinity>();
-  status.converged = mu.allFinite();
+  status.residual = residual_norm(structure.project(u, v));
+  status.converged = status.residual <= tolerance;
   return status;
 }
 

@@ -11,7 +11,8 @@ namespace deli {
 // at the solution (x_i > 0 => (Qx + c)_i = 0 to rounding), and least-norm sub-solves so a
 // singular Q (dependent normals, as at a corner) is handled. `tolerance` bounds the
 // negative gradient accepted as zero.
-SolverStatus solve_nonnegative_qp(const Eigen::MatrixXd& Q, const Eigen::VectorXd& c,
-                                  Eigen::VectorXd& x, double tolerance, int max_iterations = 0);
+[[nodiscard]] SolverStatus solve_nonnegative_qp(const Eigen::MatrixXd& Q, const Eigen::VectorXd& c,
+                                                Eigen::VectorXd& x, double tolerance,
+                                                int max_iterations = 0);
 
 }  // namespace deli

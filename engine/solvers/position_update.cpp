@@ -11,26 +11,39 @@ double fischer_burmeister(double a, double b) {
   return a + b - std::sqrt(a * a + b * b);
 }
 
+// Dependent rows (a rigid loop, a contact repeating a rod) make J singular, and nearly
+// dependent ones (the loop slightly bent, the contact nearly along the rod) nearly so: LU
+// then gives a huge finite step along the near-null direction. Below this reciprocal
+// condition number the directions whose pivots fall under it (relative to the largest) are
+// dropped and the step is the least-norm solution of the rest (the threshold of the
+// tridiagonal solver's vanishing pivots).
+constexpr double kDependentRows = 1e-12;
+
 Eigen::VectorXd solve_linear(const Eigen::MatrixXd& J, const Eigen::VectorXd& rhs) {
-  Eigen::VectorXd step = J.partialPivLu().solve(rhs);
-  // Dependent rows (a rigid loop, a contact repeating a rod) make J singular: least norm.
-  if (!step.allFinite()) step = J.completeOrthogonalDecomposition().solve(rhs);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(J);
+  Eigen::VectorXd step = lu.solve(rhs);
+  if (!step.allFinite() || !(lu.rcond() > kDependentRows)) {
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> least_norm;
+    least_norm.setThreshold(kDependentRows);
+    least_norm.compute(J);
+    step = least_norm.solve(rhs);
+  }
   return step;
 }
 }  // namespace
 
 PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vector<bool>& equality,
                                      const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
-                                     double h, const Box& box, double tolerance,
-                                     int max_iterations) {
+                                     double h, const Box& box, double tolerance, int newton_limit,
+                                     int line_search_limit) {
   return solve_position_update(ClusterRows(cluster), equality, q, x0, h, box, tolerance,
-                               max_iterations);
+                               newton_limit, line_search_limit);
 }
 
 PositionUpdate solve_position_update(const ClusterRows& structure,
                                      const std::vector<bool>& equality, const std::vector<Vec3>& q,
                                      const std::vector<Vec3>& x0, double h, const Box& box,
-                                     double tolerance, int max_iterations) {
+                                     double tolerance, int newton_limit, int line_search_limit) {
   const LocalCluster& cluster = structure.cluster();
   const auto m = static_cast<Eigen::Index>(cluster.rows.size());
   const std::size_t n = cluster.size();
@@ -39,6 +52,17 @@ PositionUpdate solve_position_update(const ClusterRows& structure,
   // Rods only, numbered along a chain: the Newton matrix is tridiagonal.
   bool banded = structure.tridiagonal();
   for (Eigen::Index k = 0; banded && k < m; ++k) banded = equality[k];
+
+  // Complementarity pairs an impulse z_k with a gap g_k (sigma): Fischer-Burmeister is
+  // taken of (s_k z_k, g_k), s_k = h (w_i + w_j) being how far the row's own impulse moves
+  // its gap per unit (the diagonal of d gap / d z), so both arguments are lengths and the
+  // residual tolerance means the same for a heavy pair and a light one, at any timestep.
+  Eigen::VectorXd impulse_length(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const Constraint& row = cluster.rows[k];
+    impulse_length(k) =
+        h * (cluster.inverse_mass[row.i] + (row.j >= 0 ? cluster.inverse_mass[row.j] : 0.0));
+  }
 
   PositionUpdate out;
   out.z = Eigen::VectorXd::Zero(m);
@@ -54,7 +78,7 @@ PositionUpdate solve_position_update(const ClusterRows& structure,
     gaps.resize(m);
     for (Eigen::Index k = 0; k < m; ++k) {
       gaps(k) = evaluate(cluster.rows[k], x.data(), box).gap;
-      phi(k) = equality[k] ? gaps(k) : fischer_burmeister(z(k), gaps(k));
+      phi(k) = equality[k] ? gaps(k) : fischer_burmeister(impulse_length(k) * z(k), gaps(k));
     }
   };
 
@@ -64,12 +88,12 @@ PositionUpdate solve_position_update(const ClusterRows& structure,
   residual(out.z, x, gaps, phi);
   Tridiagonal bands;
   for (;;) {
-    out.status.residual = phi.lpNorm<Eigen::Infinity>();
+    out.status.residual = residual_norm(phi);
     if (out.status.residual <= tolerance) {
       out.status.converged = true;
       break;
     }
-    if (out.status.iterations >= max_iterations) break;
+    if (out.status.iterations >= newton_limit) break;
     ++out.status.iterations;
     // d gap_k / d z_l = h grad g_k(x)^T M^-1 C_l(q).
     bool solved = false;
@@ -85,30 +109,37 @@ PositionUpdate solve_position_update(const ClusterRows& structure,
       Eigen::MatrixXd J = dgap;
       for (Eigen::Index k = 0; k < m; ++k) {
         if (equality[k]) continue;
-        const double a = out.z(k), b = gaps(k), r = std::sqrt(a * a + b * b);
+        const double a = impulse_length(k) * out.z(k), b = gaps(k), r = std::sqrt(a * a + b * b);
         // At (0, 0) any element of the generalized Jacobian will do; take the direction (1, 1).
         const double da = r > 0 ? 1 - a / r : 1 - M_SQRT1_2;
         const double db = r > 0 ? 1 - b / r : 1 - M_SQRT1_2;
         J.row(k) = db * dgap.row(k);
-        J(k, k) += da;
+        J(k, k) += da * impulse_length(k);
       }
       step = solve_linear(J, -phi);
     }
     const double merit = phi.squaredNorm();
     double t = 1.0;
-    for (;;) {
+    bool decreased = false;
+    for (int halvings = 0;; ++halvings) {
       trial = out.z + t * step;
       positions(trial, xt);
       residual(trial, xt, gt, pt);
-      if (pt.squaredNorm() <= (1 - 1e-4 * t) * merit || t < 1e-10) {
-        std::swap(out.z, trial);
-        std::swap(x, xt);
-        std::swap(gaps, gt);
-        std::swap(phi, pt);
+      if (pt.squaredNorm() <= (1 - 1e-4 * t) * merit) {
+        decreased = true;
         break;
       }
+      if (halvings == line_search_limit) break;
       t *= 0.5;
     }
+    if (!decreased) {
+      out.line_search_failed = true;
+      break;
+    }
+    std::swap(out.z, trial);
+    std::swap(x, xt);
+    std::swap(gaps, gt);
+    std::swap(phi, pt);
   }
   out.x = std::move(x);
   out.impulse = structure.impulse(uq, out.z);

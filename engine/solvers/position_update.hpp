@@ -14,7 +14,9 @@ namespace deli {
 // x0 being the unconstrained step. With only equality rows this is SHAKE's position step.
 // Semismooth Newton on the Fischer-Burmeister reformulation, with a backtracking line
 // search on the squared residual; converged when every equality residual and every
-// complementarity residual is below `tolerance` (sigma).
+// complementarity residual is below `tolerance` (sigma). At most `newton_limit` Newton
+// steps; a step whose line search finds no decrease of the residual in `line_search_limit`
+// halvings ends the solve (not converged: an uphill step is never taken).
 struct PositionUpdate {
   std::vector<Vec3> x;
   // C(q) z per particle: the constraint impulse. x - x0 = h M^-1 impulse; the momentum
@@ -23,18 +25,23 @@ struct PositionUpdate {
   std::vector<Vec3> impulse;
   Eigen::VectorXd z;
   SolverStatus status;
+  bool line_search_failed = false;  // why it ended unconverged, when it did
 };
-PositionUpdate solve_position_update(const LocalCluster& cluster, const std::vector<bool>& equality,
-                                     const std::vector<Vec3>& q, const std::vector<Vec3>& x0,
-                                     double h, const Box& box, double tolerance,
-                                     int max_iterations = 50);
+[[nodiscard]] PositionUpdate solve_position_update(const LocalCluster& cluster,
+                                                   const std::vector<bool>& equality,
+                                                   const std::vector<Vec3>& q,
+                                                   const std::vector<Vec3>& x0, double h,
+                                                   const Box& box, double tolerance,
+                                                   int newton_limit, int line_search_limit);
 // The same with the cluster's row structure prepared by the caller (reused across steps).
 // Rods only, numbered along a linear chain (structure.tridiagonal()): each Newton step is an
 // O(rows) tridiagonal solve instead of a dense LU (results differ from the dense solve only
 // by rounding; the residual tolerance is the same).
-PositionUpdate solve_position_update(const ClusterRows& structure,
-                                     const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                                     const std::vector<Vec3>& x0, double h, const Box& box,
-                                     double tolerance, int max_iterations = 50);
+[[nodiscard]] PositionUpdate solve_position_update(const ClusterRows& structure,
+                                                   const std::vector<bool>& equality,
+                                                   const std::vector<Vec3>& q,
+                                                   const std::vector<Vec3>& x0, double h,
+                                                   const Box& box, double tolerance,
+                                                   int newton_limit, int line_search_limit);
 
 }  // namespace deli

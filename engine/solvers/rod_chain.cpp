@@ -28,7 +28,7 @@ std::unique_ptr<RodChain> RodChain::make(const LocalCluster& cluster) {
     c.high_.push_back(i_first ? row.j : row.i);
     c.low_sign_.push_back(i_first ? 1.0 : -1.0);
     c.high_sign_.push_back(i_first ? -1.0 : 1.0);
-    for (const auto [p, sign] : {std::pair{row.i, 1.0}, std::pair{row.j, -1.0}}) {
+    for (const auto& [p, sign] : {std::pair{row.i, 1.0}, std::pair{row.j, -1.0}}) {
       if (c.first_row_[p] < 0) {
         c.first_row_[p] = static_cast<std::int32_t>(k);
         c.first_sign_[p] = sign;
@@ -98,8 +98,9 @@ void RodChain::coupling_bands(const std::vector<Vec3>& a, const std::vector<Vec3
 }
 
 bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const Box& box,
-                               double tolerance, int max_iterations, RodChainWorkspace& ws,
-                               Vec3* impulse, double& virial, SolverStatus& status) const {
+                               double tolerance, int max_iterations, int line_search_limit,
+                               RodChainWorkspace& ws, Vec3* impulse, double& virial,
+                               SolverStatus& status) const {
   const std::size_t n = particles_.size();
   const std::size_t m = rows();
   const auto rows_count = static_cast<Eigen::Index>(m);
@@ -133,7 +134,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
   ws.x = ws.x0;
   residual(ws.x, ws.phi, ws.ux, ws.rx);
   for (;;) {
-    status.residual = ws.phi.lpNorm<Eigen::Infinity>();
+    status.residual = residual_norm(ws.phi);
     if (status.residual <= tolerance) {
       status.converged = true;
       break;
@@ -149,11 +150,11 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     if (!solve_tridiagonal(ws.bands, ws.rhs, ws.step, ws.pivots)) return false;
     const double merit = ws.phi.squaredNorm();
     double t = 1.0;
-    for (;;) {
+    for (int halvings = 0;; ++halvings) {
       ws.trial = ws.z + t * ws.step;
       positions(ws.trial, ws.xt);
       residual(ws.xt, ws.pt, ws.uxt, ws.rxt);
-      if (ws.pt.squaredNorm() <= (1 - 1e-4 * t) * merit || t < 1e-10) {
+      if (ws.pt.squaredNorm() <= (1 - 1e-4 * t) * merit) {
         std::swap(ws.z, ws.trial);
         std::swap(ws.x, ws.xt);
         std::swap(ws.phi, ws.pt);
@@ -161,6 +162,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
         std::swap(ws.rx, ws.rxt);
         break;
       }
+      if (halvings == line_search_limit) return false;  // no decrease: the generic path reports
       t *= 0.5;
     }
   }

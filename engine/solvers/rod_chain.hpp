@@ -29,8 +29,9 @@ struct RodChainWorkspace {
 // into per-cluster containers. Every number is computed by the same operations in the same
 // order as the generic solvers (solve_position_update, project_momentum over ClusterRows):
 // the results agree bit for bit. When a pivot vanishes (where the generic solvers switch to
-// a dense solve) or the Newton iteration does not converge, the kernels return false and
-// the caller takes the generic path, which redoes the solve and reports a failure.
+// a dense solve) or the Newton iteration does not converge (or its line search finds no descent),
+// the kernels return false and the caller takes the generic path, which redoes the solve and
+// reports a failure.
 class RodChain {
  public:
   // The chain form of a cluster, or null when its rows are not such a chain.
@@ -43,15 +44,16 @@ class RodChain {
   // into `impulse` (global, entries of the chain's particles overwritten) and
   // sum z_k |q_i - q_j| to `virial`. Returns false (nothing written) when the generic path
   // must take over.
-  bool solve_positions(const Vec3* q, const Vec3* delta, double h, const Box& box, double tolerance,
-                       int max_iterations, RodChainWorkspace& ws, Vec3* impulse, double& virial,
-                       SolverStatus& status) const;
+  [[nodiscard]] bool solve_positions(const Vec3* q, const Vec3* delta, double h, const Box& box,
+                                     double tolerance, int max_iterations, int line_search_limit,
+                                     RodChainWorkspace& ws, Vec3* impulse, double& virial,
+                                     SolverStatus& status) const;
 
   // Momentum projection at positions x: p <- p + C(x) mu with C(x)^T M^-1 p = 0; adds
   // sum mu_k |x_i - x_j| to `virial`. Returns false (p untouched) when the generic path must
   // take over.
-  bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
-                       double& virial) const;
+  [[nodiscard]] bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
+                                     double& virial) const;
 
  private:
   RodChain() = default;

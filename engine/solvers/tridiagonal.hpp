@@ -21,9 +21,10 @@ struct Tridiagonal {
 // Solves A x = rhs by Gaussian elimination without pivoting (the Thomas algorithm), stable
 // for the (near) symmetric positive definite matrices of rod chains. Returns false when a
 // pivot vanishes or the solution is not finite: the caller falls back to a dense solve.
-bool solve_tridiagonal(const Tridiagonal& a, const Eigen::VectorXd& rhs, Eigen::VectorXd& x);
+[[nodiscard]] bool solve_tridiagonal(const Tridiagonal& a, const Eigen::VectorXd& rhs,
+                                     Eigen::VectorXd& x);
 // The same with the sweep's scratch vector `c` kept by the caller (no allocation).
-bool solve_tridiagonal(const Tridiagonal& a, const Eigen::VectorXd& rhs, Eigen::VectorXd& x,
-                       Eigen::VectorXd& c);
+[[nodiscard]] bool solve_tridiagonal(const Tridiagonal& a, const Eigen::VectorXd& rhs,
+                                     Eigen::VectorXd& x, Eigen::VectorXd& c);
 
 }  // namespace deli

@@ -199,6 +199,23 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
     }
     tol->finish();
   }
+  if (auto lim = t.table("limits")) {
+    SolverLimits& limits = set.limits;
+    for (const auto& [key, value] :
+         {std::pair{"newton", &limits.newton}, std::pair{"line_search", &limits.line_search},
+          std::pair{"active_set_rounds", &limits.active_set_rounds},
+          std::pair{"feasibility_rounds", &limits.feasibility_rounds},
+          std::pair{"reflection_solves", &limits.reflection_solves},
+          std::pair{"midpoint_passes", &limits.midpoint_passes},
+          std::pair{"contact_time", &limits.contact_time},
+          std::pair{"direct_settle_passes", &limits.direct_settle_passes},
+          std::pair{"direct_landing_rounds", &limits.direct_landing_rounds}}) {
+      const std::int64_t read = lim->integer(key, *value);
+      if (read < 1 || read > 1000000) lim->fail("must be an integer from 1 to 1000000", key);
+      *value = static_cast<int>(read);
+    }
+    lim->finish();
+  }
   t.finish();
   return set;
 }
