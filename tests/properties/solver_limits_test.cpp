@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "cli/integrator_factory.hpp"
 #include "core/error.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
