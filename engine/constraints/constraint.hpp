@@ -43,7 +43,8 @@ struct ConstraintValue {
   Vec3 u;
 };
 
-ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box);
+// Inline: the candidate scans call it for thousands of rows per step.
+inline ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box);
 
 // The same constraint: kind, particles and every parameter equal.
 bool same_row(const Constraint& a, const Constraint& b);
@@ -52,5 +53,35 @@ bool same_row(const Constraint& a, const Constraint& b);
 // plane for a one-particle row, a linear pair for a two-particle one. Its gap agrees at q
 // and its gradient is the one at q, everywhere.
 Constraint linearized(const Constraint& c, const Vec3* q, const Box& box);
+
+namespace detail {
+// Distance and unit direction of d; a zero vector has no direction: u = 0 then, which the
+// solvers see as a singular row and report rather than divide by zero.
+inline ConstraintValue distance(const Vec3& d, double length) {
+  const double r = norm(d);
+  return {r - length, r > 0 ? d * (1.0 / r) : Vec3{}};
+}
+}  // namespace detail
+
+inline ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box) {
+  switch (c.kind) {
+    case ConstraintKind::rod:
+    case ConstraintKind::sphere_pair:
+      return detail::distance(box.minimum_image(x[c.i] - x[c.j]), c.length);
+    case ConstraintKind::anchor:
+      return detail::distance(x[c.i] - c.point, c.length);
+    case ConstraintKind::plane:
+      return {dot(c.normal, x[c.i] - c.point) - c.length, c.normal};
+    case ConstraintKind::inside_sphere: {
+      const ConstraintValue v = detail::distance(x[c.i] - c.point, 0.0);
+      return {c.length - v.gap, -v.u};
+    }
+    case ConstraintKind::outside_sphere:
+      return detail::distance(x[c.i] - c.point, c.length);
+    case ConstraintKind::linear_pair:
+      return {dot(c.normal, box.minimum_image(x[c.i] - x[c.j])) - c.length, c.normal};
+  }
+  return {0, {}};
+}
 
 }  // namespace deli

@@ -121,8 +121,11 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system,
                                                    const std::vector<Vec3>& x) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
-  double largest = 0.0;
-  for (std::size_t i = 0; i < q.size(); ++i) largest = std::max(largest, norm(x[i] - q[i]));
+  // The largest |x - q| as the square root of the largest square: the same number (the
+  // square root is monotone and correctly rounded), one root instead of one per particle.
+  double largest2 = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) largest2 = std::max(largest2, norm2(x[i] - q[i]));
+  const double largest = std::sqrt(largest2);
   ws_.nearby_refreshed = false;
   if (2.0 * largest + gap_tolerance > ws_.reach) {
     ws_.reach = 4.0 * largest + 2.0 * gap_tolerance;
@@ -130,13 +133,13 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system,
       ws_.nearby =
           constraints_.nearby_inequalities(system.particles, q.data(), engine_.neighbors(),
                                            system.box, ws_.reach, previous_positions_.data());
+      ws_.nearby_gap_at_q.resize(ws_.nearby.size());
+      for (std::size_t k = 0; k < ws_.nearby.size(); ++k) {
+        ws_.nearby_gap_at_q[k] = evaluate(ws_.nearby[k], q.data(), system.box).gap;
+      }
     } else {
       nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(),
-                           system.box, ws_.reach, ws_.nearby);
-    }
-    ws_.nearby_gap_at_q.resize(ws_.nearby.size());
-    for (std::size_t k = 0; k < ws_.nearby.size(); ++k) {
-      ws_.nearby_gap_at_q[k] = evaluate(ws_.nearby[k], q.data(), system.box).gap;
+                           system.box, ws_.reach, ws_.nearby, ws_.nearby_gap_at_q);
     }
     ws_.nearby_refreshed = true;
   }
