@@ -10,6 +10,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "integrators/lone_row_reflection.hpp"
 #include "solvers/cluster_matrices.hpp"
 #include "solvers/momentum_update.hpp"
 #include "solvers/position_update.hpp"
@@ -343,9 +344,23 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   if (energy_ == ReflectionEnergy::shadow && any) {
     gather_hessian_blocks(system, clusters, holds_inequality);
   }
+  // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
+  // the same single-row problem with H as its energy.
+  const bool lone_rows_closed =
+      energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!holds_inequality[c]) continue;
     const Cluster& cluster = clusters[c];
+    if (lone_rows_closed && cluster.rows.size() == 1) {
+      const Constraint& row = rows[cluster.rows.front()];
+      const double lambda = reflect_lone_row(row, x.data(), system.box, P.mass,
+                                             constraints_.tolerances.velocity, p.data());
+      if (lambda >= 0.0) {
+        step_virial_ += pair_virial(row, lambda, x.data(), system.box);
+        stats_.reflected += lambda > 0.0 ? 1 : 0;
+        continue;
+      }
+    }
     const LocalCluster local = localize(cluster, rows, P.mass);
     std::vector<bool> equality;
     for (std::int32_t r : cluster.rows)
