@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "core/vec3.hpp"
 #include "system/box.hpp"
@@ -45,6 +47,27 @@ struct ConstraintValue {
 
 // Inline: the candidate scans call it for thousands of rows per step.
 inline ConstraintValue evaluate(const Constraint& c, const Vec3* x, const Box& box);
+
+// evaluate(c, x, box).gap without the gradient (no division).
+inline double gap_of(const Constraint& c, const Vec3* x, const Box& box) {
+  if (c.kind == ConstraintKind::sphere_pair || c.kind == ConstraintKind::rod) {
+    return norm(box.minimum_image(x[c.i] - x[c.j])) - c.length;
+  }
+  return evaluate(c, x, box).gap;
+}
+
+// The row's gap at x (gap_of's number) when it may be at most `limit`; +infinity when the
+// squared distance of a sphere pair already puts it beyond by far more than rounding (no
+// square root then). For the scans that only compare gaps with a limit or keep the smallest.
+inline double gap_unless_beyond(const Constraint& c, const Vec3* x, const Box& box, double limit) {
+  if (c.kind == ConstraintKind::sphere_pair && limit >= -0.5 * c.length) {
+    const double d2 = norm2(box.minimum_image(x[c.i] - x[c.j]));
+    const double within = c.length + limit;
+    if (d2 > within * within * (1.0 + 1e-6)) return std::numeric_limits<double>::infinity();
+    return std::sqrt(d2) - c.length;
+  }
+  return gap_of(c, x, box);
+}
 
 // The same constraint: kind, particles and every parameter equal.
 bool same_row(const Constraint& a, const Constraint& b);

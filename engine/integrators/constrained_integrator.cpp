@@ -422,12 +422,12 @@ void ConstrainedIntegrator::record_geometry(const System& system,
                    ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
                    : std::numeric_limits<double>::infinity();
   for (const Constraint& c : candidates) {
-    gap = std::min(gap, evaluate(c, P.position.data(), system.box).gap);
+    gap = std::min(gap, gap_unless_beyond(c, P.position.data(), system.box, gap));
   }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
   for (const Constraint& c : constraints_.equalities) {
-    const double violation = std::abs(evaluate(c, P.position.data(), system.box).gap) / c.length;
+    const double violation = std::abs(gap_of(c, P.position.data(), system.box)) / c.length;
     stats_.max_rod_violation = std::max(stats_.max_rod_violation, violation);
   }
 }

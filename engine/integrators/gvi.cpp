@@ -168,7 +168,7 @@ void Gvi::find_active_set(System& system) {
       }
       // Active at q, or overlapping at the prediction.
       if (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
-          evaluate(c, ws_.predicted.data(), system.box).gap <= 0.0) {
+          gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0) {
         if (!contains(active, c)) active.push_back(c), grew = true;
       }
     }
@@ -272,7 +272,8 @@ void Gvi::update_positions(System& system) {
     if (feasibility_ != Feasibility::none) {
       // Overlapping beyond tolerance at x (such a row is also active there).
       for (const Constraint& c : candidates_for(system, ws_.x)) {
-        if (evaluate(c, ws_.x.data(), system.box).gap < -gap_tolerance && !contains(ws_.held, c)) {
+        if (gap_unless_beyond(c, ws_.x.data(), system.box, -gap_tolerance) < -gap_tolerance &&
+            !contains(ws_.held, c)) {
           ws_.violated.push_back(c);
         }
       }
