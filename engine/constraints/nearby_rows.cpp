@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace deli {
 
@@ -41,7 +42,7 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
 }
 
 void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-                         const NeighborList& list, const Box& box, double reach,
+                         const NeighborList& list, const Box& box, double reach, double exact_below,
                          std::vector<Constraint>& out, std::vector<double>& gap_at_q) {
   out.clear();
   gap_at_q.clear();
@@ -63,29 +64,32 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       fresh = largest2 <= room * room;
     }
     if (!fresh) make(set, particles, q, list, box);
-    // The screen of nearby_inequalities, then its exact test: evaluate()'s sphere-pair gap,
-    // the row built only when kept. The screen may take the separation through the list's
+    // The screen of nearby_inequalities, then its exact test (evaluate()'s sphere-pair gap,
+    // the row built only when kept). The screen may take the separation through the list's
     // shift (no rounding to the nearest image): it differs from the minimum image by
-    // rounding at most, far inside the screen's margin.
-    auto exact = [&](const Pair& pair) {
-      const double gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
-      if (gap <= reach)
-        out.push_back(sphere_pair(pair.a, pair.b, particles)), gap_at_q.push_back(gap);
-    };
-    const double screen = 1.0 + 1e-6;
-    if (shifted_) {
-      for (const Pair& pair : pairs_) {
-        const double within = pair.contact + reach;
-        if (norm2(q[pair.a] - q[pair.b] - pair.shift) <= within * within * screen + 1e-300) {
-          exact(pair);
-        }
+    // rounding at most, far inside the screen's margin. A pair inside contact + reach by
+    // far more than rounding is kept without its square root, and its gap is needed only
+    // if it may be at most `exact_below`.
+    const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
+    const double infinity = std::numeric_limits<double>::infinity();
+    auto keep_pair = [&](const Pair& pair, double d2) {
+      const double within = pair.contact + reach;
+      if (d2 > within * within * screen + 1e-300) return;
+      const double near = pair.contact + exact_below;
+      double gap = infinity;
+      if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
+          d2 <= near * near * screen + 1e-300) {
+        gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
+        if (!(gap <= reach)) return;
       }
+      out.push_back(sphere_pair(pair.a, pair.b, particles));
+      gap_at_q.push_back(gap);
+    };
+    if (shifted_) {
+      for (const Pair& pair : pairs_) keep_pair(pair, norm2(q[pair.a] - q[pair.b] - pair.shift));
     } else {
       for (const Pair& pair : pairs_) {
-        const double within = pair.contact + reach;
-        if (norm2(box.minimum_image(q[pair.a] - q[pair.b])) <= within * within * screen + 1e-300) {
-          exact(pair);
-        }
+        keep_pair(pair, norm2(box.minimum_image(q[pair.a] - q[pair.b])));
       }
     }
   }

@@ -19,10 +19,12 @@ namespace deli {
 class NearbyRows {
  public:
   explicit NearbyRows(double margin = 0.5) : margin_(margin) {}
-  // The rows into `out` and their gaps at q into `gap_at_q` (evaluate()'s, bit for bit).
+  // The rows into `out` and their gaps at q into `gap_at_q`: evaluate()'s, bit for bit,
+  // where the gap may be at most `exact_below`; elsewhere it can be +infinity (a pair whose
+  // squared distance alone shows it beyond, by far more than rounding).
   void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-               const NeighborList& list, const Box& box, double reach, std::vector<Constraint>& out,
-               std::vector<double>& gap_at_q);
+               const NeighborList& list, const Box& box, double reach, double exact_below,
+               std::vector<Constraint>& out, std::vector<double>& gap_at_q);
 
  private:
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,

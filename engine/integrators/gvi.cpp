@@ -139,7 +139,7 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system,
       }
     } else {
       nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(),
-                           system.box, ws_.reach, ws_.nearby, ws_.nearby_gap_at_q);
+                           system.box, ws_.reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
     }
     ws_.nearby_refreshed = true;
   }

@@ -21,7 +21,7 @@ struct GviWorkspace {
   std::vector<bool> all_equality;                      // one `true` per equality row
 
   // Candidate inequality rows near q, with their gaps at q (refreshed when a displacement
-  // outgrows `reach`).
+  // outgrows `reach`); a gap well beyond the gap tolerance may be held as +infinity.
   std::vector<Constraint> nearby;
   std::vector<double> nearby_gap_at_q;
   double reach = -1.0;
