@@ -115,13 +115,29 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
                                               const std::vector<bool>& equality,
                                               const std::vector<Vec3>& q,
                                               const std::vector<Vec3>& delta,
-                                              std::vector<Vec3>& impulse) {
+                                              std::vector<Vec3>& impulse,
+                                              const std::vector<char>* delta_changed) {
   const Particles& particles = system.particles;
   double virial = 0.0;
   const std::size_t cluster_count = cluster_rows(rows, particles);
+  const bool equality_rows = &rows == &constraints_.equalities;
+  if (equality_rows) equality_iterations_.resize(cluster_count, 0);
+  auto count_solve = [&](int iterations) {
+    ++stats_.solves;
+    stats_.solver_iterations += iterations;
+    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, iterations);
+  };
   for (std::size_t index = 0; index < cluster_count; ++index) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    if (delta_changed && equality_rows) {
+      bool changed = false;
+      for (std::int32_t i : cluster.particles) changed = changed || (*delta_changed)[i];
+      if (!changed) {
+        count_solve(equality_iterations_[index]);
+        continue;
+      }
+    }
     if (prepared && prepared->chain) {
       // A chain of rods held as equalities: the chain kernel (same numbers, no gathering).
       bool held = true;
@@ -130,9 +146,8 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
       if (held && prepared->chain->solve_positions(q.data(), delta.data(), dt_, system.box,
                                                    constraints_.tolerances.solver, 50, chain_work_,
                                                    impulse.data(), virial, status)) {
-        ++stats_.solves;
-        stats_.solver_iterations += status.iterations;
-        stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, status.iterations);
+        count_solve(status.iterations);
+        if (equality_rows) equality_iterations_[index] = status.iterations;
         continue;
       }
     }
@@ -149,9 +164,8 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
     const PositionUpdate solved =
         solve_position_update(structure, local_equality, q_local, x0_local, dt_, system.box,
                               constraints_.tolerances.solver);
-    ++stats_.solves;
-    stats_.solver_iterations += solved.status.iterations;
-    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
+    count_solve(solved.status.iterations);
+    if (equality_rows) equality_iterations_[index] = solved.status.iterations;
     if (!solved.status.converged) {
       const std::string file =
           dump_failed_problem(system, local, q_local, x0_local, local_equality, dt_);

@@ -72,7 +72,7 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
 // equality rows (rods, strings) solved, which lands where the step will really go when rods
 // pull, so fewer contacts are missed.
 void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& x,
-                  bool constrained) {
+                  bool constrained, bool again) {
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   std::vector<Vec3>& d = ws_.displacement;
@@ -81,9 +81,23 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   for (std::size_t i = 0; i < n; ++i) x[i] = P.position[i] + d[i];
   if (!constrained || constraints_.equalities.empty()) return;
   std::vector<Vec3>& j = ws_.prediction_kick;
-  j.assign(n, Vec3{});
+  // Again in the same step: only the chains whose free displacement changed (those the
+  // reflections touched) are solved again; the others' kicks would come out the same.
+  const bool reuse = again && ws_.kicked_displacement.size() == n && j.size() == n;
+  if (reuse) {
+    ws_.displacement_changed.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3& a = d[i];
+      const Vec3& b = ws_.kicked_displacement[i];
+      ws_.displacement_changed[i] = !(a.x == b.x && a.y == b.y && a.z == b.z);
+    }
+  } else {
+    j.assign(n, Vec3{});
+  }
   ws_.all_equality.assign(constraints_.equalities.size(), true);
-  solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j);
+  solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j,
+                  reuse ? &ws_.displacement_changed : nullptr);
+  ws_.kicked_displacement = d;
   for (std::size_t i = 0; i < n; ++i) x[i] += j[i] * (dt_ / P.mass[i]);
 }
 
@@ -182,7 +196,7 @@ void Gvi::find_active_set(System& system) {
     }
     const TimedPhase predicting(Phase::prediction);
     std::swap(ws_.previous_prediction, ws_.predicted);
-    predict(system, ws_.p, ws_.predicted, constrained_predictor_);
+    predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3& a = ws_.predicted[i];
       const Vec3& b = ws_.previous_prediction[i];
