@@ -289,12 +289,15 @@ void ConstrainedIntegrator::gather_hessian_blocks(const System& system,
                                                   const std::vector<bool>& reflected) {
   const std::size_t n = system.particles.size();
   cluster_of_particle_.assign(n, -1);
+  local_index_of_particle_.resize(n);
   std::vector<char> mask(n, 0);
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!reflected[c]) continue;
-    for (std::int32_t i : clusters[c].particles) {
-      cluster_of_particle_[i] = static_cast<std::int32_t>(c);
-      mask[i] = 1;
+    const std::vector<std::int32_t>& members = clusters[c].particles;
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      cluster_of_particle_[members[k]] = static_cast<std::int32_t>(c);
+      local_index_of_particle_[members[k]] = static_cast<std::int32_t>(k);
+      mask[members[k]] = 1;
     }
   }
   hessian_blocks_.clear();
@@ -320,12 +323,14 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, cons
   const Particles& P = system.particles;
   ShadowOperator shadow;
   shadow.h = dt_;
+  // Local index of a particle in this cluster (its rank among the sorted particles), -1
+  // outside it: recorded by gather_hessian_blocks for every cluster it gathered.
+  const auto self = static_cast<std::int32_t>(c);
   auto local = [&](std::int32_t g) {
-    const auto it = std::lower_bound(cluster.particles.begin(), cluster.particles.end(), g);
-    return it != cluster.particles.end() && *it == g
-               ? static_cast<std::int32_t>(it - cluster.particles.begin())
-               : std::int32_t{-1};
+    return cluster_of_particle_[g] == self ? local_index_of_particle_[g] : std::int32_t{-1};
   };
+  shadow.blocks.reserve(blocks_of_cluster_[c].size());
+  shadow.outside_velocity.reserve(blocks_of_cluster_[c].size());
   for (std::size_t k : blocks_of_cluster_[c]) {
     const PairHessian& b = hessian_blocks_[k];
     std::int32_t a = local(b.a), other = local(b.b);

@@ -123,6 +123,7 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<PairHessian> hessian_blocks_;
   std::vector<std::vector<std::size_t>> blocks_of_cluster_;
   std::vector<std::int32_t> cluster_of_particle_;
+  std::vector<std::int32_t> local_index_of_particle_;  // within its cluster, where gathered
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);
