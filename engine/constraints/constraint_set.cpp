@@ -138,7 +138,7 @@ double ConstraintSet::minimum_gap(const Particles& particles, const Vec3* x,
                                   const NeighborList& list, const Box& box) const {
   double smallest = std::numeric_limits<double>::infinity();
   for_each_inequality(*this, particles, list, [&](const Constraint& c) {
-    smallest = std::min(smallest, evaluate(c, x, box).gap);
+    smallest = std::min(smallest, gap_unless_beyond(c, x, box, smallest));
   });
   return smallest;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace deli {
 
@@ -11,6 +12,8 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   const auto& offsets = list.offsets();
   const auto& neighbors = list.neighbors();
   const std::vector<double>& radius = particles.radius;
+  const std::vector<std::uint8_t>& codes = list.image_codes();
+  shifted_ = !codes.empty();
   for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
     for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
       const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
@@ -24,7 +27,13 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
                              std::array<std::int32_t, 2>{a, b})) {
         continue;
       }
-      pairs_.push_back({a, b});
+      Vec3 shift;
+      if (shifted_) {
+        // The list's shift is for q_i - q_j: negated when i is the pair's second particle.
+        shift = list.image_shifts()[codes[k]];
+        if (a != static_cast<std::int32_t>(i)) shift = -shift;
+      }
+      pairs_.push_back({a, b, radius[a] + radius[b], shift});
     }
   }
   anchor_.assign(q, q + particles.size());
@@ -33,14 +42,16 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
 }
 
 void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-                         const NeighborList& list, const Box& box, double reach,
-                         std::vector<Constraint>& out) {
+                         const NeighborList& list, const Box& box, double reach, double exact_below,
+                         std::vector<Constraint>& out, std::vector<double>& gap_at_q) {
   out.clear();
+  gap_at_q.clear();
+  auto keep = [&](const Constraint& c) {
+    const double gap = evaluate(c, q, box).gap;
+    if (gap <= reach) out.push_back(c), gap_at_q.push_back(gap);
+  };
   if (set.hard_spheres) {
-    for (const auto& [a, b] : set.always_checked_pairs) {
-      const Constraint c = sphere_pair(a, b, particles);
-      if (evaluate(c, q, box).gap <= reach) out.push_back(c);
-    }
+    for (const auto& [a, b] : set.always_checked_pairs) keep(sphere_pair(a, b, particles));
     bool fresh = list_ == &list && list_builds_ == list.builds() &&
                  anchor_.size() == particles.size() && reach < margin_;
     if (fresh) {
@@ -53,15 +64,33 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       fresh = largest2 <= room * room;
     }
     if (!fresh) make(set, particles, q, list, box);
-    const std::vector<double>& radius = particles.radius;
-    for (const auto& [a, b] : pairs_) {
-      // The screen of nearby_inequalities, then its exact test.
-      const double within = radius[a] + radius[b] + reach;
-      if (norm2(box.minimum_image(q[a] - q[b])) > within * within * (1.0 + 1e-6) + 1e-300) {
-        continue;
+    // The screen of nearby_inequalities, then its exact test (evaluate()'s sphere-pair gap,
+    // the row built only when kept). The screen may take the separation through the list's
+    // shift (no rounding to the nearest image): it differs from the minimum image by
+    // rounding at most, far inside the screen's margin. A pair inside contact + reach by
+    // far more than rounding is kept without its square root, and its gap is needed only
+    // if it may be at most `exact_below`.
+    const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
+    const double infinity = std::numeric_limits<double>::infinity();
+    auto keep_pair = [&](const Pair& pair, double d2) {
+      const double within = pair.contact + reach;
+      if (d2 > within * within * screen + 1e-300) return;
+      const double near = pair.contact + exact_below;
+      double gap = infinity;
+      if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
+          d2 <= near * near * screen + 1e-300) {
+        gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
+        if (!(gap <= reach)) return;
       }
-      const Constraint c = sphere_pair(a, b, particles);
-      if (evaluate(c, q, box).gap <= reach) out.push_back(c);
+      out.push_back(sphere_pair(pair.a, pair.b, particles));
+      gap_at_q.push_back(gap);
+    };
+    if (shifted_) {
+      for (const Pair& pair : pairs_) keep_pair(pair, norm2(q[pair.a] - q[pair.b] - pair.shift));
+    } else {
+      for (const Pair& pair : pairs_) {
+        keep_pair(pair, norm2(box.minimum_image(q[pair.a] - q[pair.b])));
+      }
     }
   }
   for (const Wall& wall : set.walls) {
@@ -71,8 +100,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
         // evaluate()'s plane gap, without building the row first.
         if (dot(wall.normal, q[i] - wall.point) - particles.radius[i] > reach) continue;
       }
-      const Constraint c = set.wall_row(wall, index, particles.radius[i]);
-      if (evaluate(c, q, box).gap <= reach) out.push_back(c);
+      keep(set.wall_row(wall, index, particles.radius[i]));
     }
   }
 }

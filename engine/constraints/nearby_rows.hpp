@@ -19,16 +19,27 @@ namespace deli {
 class NearbyRows {
  public:
   explicit NearbyRows(double margin = 0.5) : margin_(margin) {}
+  // The rows into `out` and their gaps at q into `gap_at_q`: evaluate()'s, bit for bit,
+  // where the gap may be at most `exact_below`; elsewhere it can be +infinity (a pair whose
+  // squared distance alone shows it beyond, by far more than rounding).
   void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-               const NeighborList& list, const Box& box, double reach,
-               std::vector<Constraint>& out);
+               const NeighborList& list, const Box& box, double reach, double exact_below,
+               std::vector<Constraint>& out, std::vector<double>& gap_at_q);
 
  private:
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
             const NeighborList& list, const Box& box);
 
   double margin_;
-  std::vector<std::array<std::int32_t, 2>> pairs_;  // a < b, in the neighbour list's order
+  // a < b, in the neighbour list's order, with their contact distance and, when the list
+  // has image codes, the periodic shift that makes q_a - q_b - shift their separation.
+  struct Pair {
+    std::int32_t a, b;
+    double contact;
+    Vec3 shift;
+  };
+  std::vector<Pair> pairs_;
+  bool shifted_ = false;
   std::vector<Vec3> anchor_;
   const NeighborList* list_ = nullptr;
   std::int64_t list_builds_ = -1;

@@ -7,6 +7,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "integrators/lone_row_reflection.hpp"
 #include "solvers/cluster_matrices.hpp"
 #include "solvers/momentum_update.hpp"
 #include "solvers/position_problem.hpp"
@@ -95,13 +96,29 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
                                               const std::vector<bool>& equality,
                                               const std::vector<Vec3>& q,
                                               const std::vector<Vec3>& delta,
-                                              std::vector<Vec3>& impulse) {
+                                              std::vector<Vec3>& impulse,
+                                              const std::vector<char>* delta_changed) {
   const Particles& particles = system.particles;
   double virial = 0.0;
   const std::size_t cluster_count = cluster_rows(rows, particles);
+  const bool equality_rows = &rows == &constraints_.equalities;
+  if (equality_rows) equality_iterations_.resize(cluster_count, 0);
+  auto count_solve = [&](int iterations) {
+    ++stats_.solves;
+    stats_.solver_iterations += iterations;
+    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, iterations);
+  };
   for (std::size_t index = 0; index < cluster_count; ++index) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    if (delta_changed && equality_rows) {
+      bool changed = false;
+      for (std::int32_t i : cluster.particles) changed = changed || (*delta_changed)[i];
+      if (!changed) {
+        count_solve(equality_iterations_[index]);
+        continue;
+      }
+    }
     if (prepared && prepared->chain) {
       // A chain of rods held as equalities: the chain kernel (same numbers, no gathering).
       bool held = true;
@@ -111,9 +128,8 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
                       q.data(), delta.data(), dt_, system.box, constraints_.tolerances.solver,
                       constraints_.limits.newton, constraints_.limits.line_search, chain_work_,
                       impulse.data(), virial, status)) {
-        ++stats_.solves;
-        stats_.solver_iterations += status.iterations;
-        stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, status.iterations);
+        count_solve(status.iterations);
+        if (equality_rows) equality_iterations_[index] = status.iterations;
         continue;
       }
     }
@@ -131,9 +147,8 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
         solve_position_update(structure, local_equality, q_local, x0_local, dt_, system.box,
                               constraints_.tolerances.solver, constraints_.limits.newton,
                               constraints_.limits.line_search);
-    ++stats_.solves;
-    stats_.solver_iterations += solved.status.iterations;
-    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, solved.status.iterations);
+    count_solve(solved.status.iterations);
+    if (equality_rows) equality_iterations_[index] = solved.status.iterations;
     if (!solved.status.converged) {
       PositionProblem problem;
       problem.step = system.step + 1;
@@ -283,12 +298,15 @@ void ConstrainedIntegrator::gather_hessian_blocks(const System& system,
                                                   const std::vector<bool>& reflected) {
   const std::size_t n = system.particles.size();
   cluster_of_particle_.assign(n, -1);
+  local_index_of_particle_.resize(n);
   std::vector<char> mask(n, 0);
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!reflected[c]) continue;
-    for (std::int32_t i : clusters[c].particles) {
-      cluster_of_particle_[i] = static_cast<std::int32_t>(c);
-      mask[i] = 1;
+    const std::vector<std::int32_t>& members = clusters[c].particles;
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      cluster_of_particle_[members[k]] = static_cast<std::int32_t>(c);
+      local_index_of_particle_[members[k]] = static_cast<std::int32_t>(k);
+      mask[members[k]] = 1;
     }
   }
   hessian_blocks_.clear();
@@ -314,12 +332,14 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, cons
   const Particles& P = system.particles;
   ShadowOperator shadow;
   shadow.h = dt_;
+  // Local index of a particle in this cluster (its rank among the sorted particles), -1
+  // outside it: recorded by gather_hessian_blocks for every cluster it gathered.
+  const auto self = static_cast<std::int32_t>(c);
   auto local = [&](std::int32_t g) {
-    const auto it = std::lower_bound(cluster.particles.begin(), cluster.particles.end(), g);
-    return it != cluster.particles.end() && *it == g
-               ? static_cast<std::int32_t>(it - cluster.particles.begin())
-               : std::int32_t{-1};
+    return cluster_of_particle_[g] == self ? local_index_of_particle_[g] : std::int32_t{-1};
   };
+  shadow.blocks.reserve(blocks_of_cluster_[c].size());
+  shadow.outside_velocity.reserve(blocks_of_cluster_[c].size());
   for (std::size_t k : blocks_of_cluster_[c]) {
     const PairHessian& b = hessian_blocks_[k];
     std::int32_t a = local(b.a), other = local(b.b);
@@ -352,9 +372,23 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   if (energy_ == ReflectionEnergy::shadow && any) {
     gather_hessian_blocks(system, clusters, holds_inequality);
   }
+  // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
+  // the same single-row problem with H as its energy.
+  const bool lone_rows_closed =
+      energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!holds_inequality[c]) continue;
     const Cluster& cluster = clusters[c];
+    if (lone_rows_closed && cluster.rows.size() == 1) {
+      const Constraint& row = rows[cluster.rows.front()];
+      const double lambda = reflect_lone_row(row, x.data(), system.box, P.mass,
+                                             constraints_.tolerances.velocity, p.data());
+      if (lambda >= 0.0) {
+        step_virial_ += pair_virial(row, lambda, x.data(), system.box);
+        stats_.reflected += lambda > 0.0 ? 1 : 0;
+        continue;
+      }
+    }
     const LocalCluster local = localize(cluster, rows, P.mass);
     std::vector<bool> equality;
     for (std::int32_t r : cluster.rows)
@@ -418,12 +452,12 @@ void ConstrainedIntegrator::record_geometry(const System& system,
                    ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
                    : std::numeric_limits<double>::infinity();
   for (const Constraint& c : candidates) {
-    gap = std::min(gap, evaluate(c, P.position.data(), system.box).gap);
+    gap = std::min(gap, gap_unless_beyond(c, P.position.data(), system.box, gap));
   }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
   for (const Constraint& c : constraints_.equalities) {
-    const double violation = std::abs(evaluate(c, P.position.data(), system.box).gap) / c.length;
+    const double violation = std::abs(gap_of(c, P.position.data(), system.box)) / c.length;
     stats_.max_rod_violation = std::max(stats_.max_rod_violation, violation);
   }
 }

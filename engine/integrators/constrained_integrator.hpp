@@ -73,9 +73,14 @@ class ConstrainedIntegrator : public Integrator {
   // Solves x = q + delta + h M^-1 C(q) z with f(x) = 0 for the equality rows and
   // 0 <= z _|_ g(x) >= 0 for the rest, per cluster; returns the impulses C z per particle in
   // `impulse` and their virial. Gradients are taken at `q`.
+  // With `delta_changed` (only for the equality rows themselves, all held): the clusters
+  // none of whose particles has a changed delta since the last such call at the same q are
+  // not solved again; their impulses are left as that call wrote them, and its solver
+  // iterations count again (the statistics are those of solving them again).
   double solve_positions(System& system, const std::vector<Constraint>& rows,
                          const std::vector<bool>& equality, const std::vector<Vec3>& q,
-                         const std::vector<Vec3>& delta, std::vector<Vec3>& impulse);
+                         const std::vector<Vec3>& delta, std::vector<Vec3>& impulse,
+                         const std::vector<char>* delta_changed = nullptr);
   // The pair Hessian blocks touching the clusters marked `reflected`, in one scan; then
   // shadow_operator(..., c, p) is cluster c's shadow-energy operator.
   void gather_hessian_blocks(const System& system, const std::vector<Cluster>& clusters,
@@ -136,9 +141,11 @@ class ConstrainedIntegrator : public Integrator {
   EqualityClusters equality_clusters_;
   std::vector<Cluster> found_clusters_;
   RodChainWorkspace chain_work_;
+  std::vector<int> equality_iterations_;  // per equality cluster, its last solve's iterations
   std::vector<PairHessian> hessian_blocks_;
   std::vector<std::vector<std::size_t>> blocks_of_cluster_;
   std::vector<std::int32_t> cluster_of_particle_;
+  std::vector<std::int32_t> local_index_of_particle_;  // within its cluster, where gathered
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);

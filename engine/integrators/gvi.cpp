@@ -71,7 +71,7 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
 // equality rows (rods, strings) solved, which lands where the step will really go when rods
 // pull, so fewer contacts are missed.
 void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& x,
-                  bool constrained) {
+                  bool constrained, bool again) {
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   std::vector<Vec3>& d = ws_.displacement;
@@ -80,9 +80,23 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   for (std::size_t i = 0; i < n; ++i) x[i] = P.position[i] + d[i];
   if (!constrained || constraints_.equalities.empty()) return;
   std::vector<Vec3>& j = ws_.prediction_kick;
-  j.assign(n, Vec3{});
+  // Again in the same step: only the chains whose free displacement changed (those the
+  // reflections touched) are solved again; the others' kicks would come out the same.
+  const bool reuse = again && ws_.kicked_displacement.size() == n && j.size() == n;
+  if (reuse) {
+    ws_.displacement_changed.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3& a = d[i];
+      const Vec3& b = ws_.kicked_displacement[i];
+      ws_.displacement_changed[i] = !(a.x == b.x && a.y == b.y && a.z == b.z);
+    }
+  } else {
+    j.assign(n, Vec3{});
+  }
   ws_.all_equality.assign(constraints_.equalities.size(), true);
-  solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j);
+  solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j,
+                  reuse ? &ws_.displacement_changed : nullptr);
+  ws_.kicked_displacement = d;
   for (std::size_t i = 0; i < n; ++i) x[i] += j[i] * (dt_ / P.mass[i]);
 }
 
@@ -120,8 +134,11 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system,
                                                    const std::vector<Vec3>& x) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
-  double largest = 0.0;
-  for (std::size_t i = 0; i < q.size(); ++i) largest = std::max(largest, norm(x[i] - q[i]));
+  // The largest |x - q| as the square root of the largest square: the same number (the
+  // square root is monotone and correctly rounded), one root instead of one per particle.
+  double largest2 = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) largest2 = std::max(largest2, norm2(x[i] - q[i]));
+  const double largest = std::sqrt(largest2);
   ws_.nearby_refreshed = false;
   if (2.0 * largest + gap_tolerance > ws_.reach) {
     ws_.reach = 4.0 * largest + 2.0 * gap_tolerance;
@@ -129,13 +146,13 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system,
       ws_.nearby =
           constraints_.nearby_inequalities(system.particles, q.data(), engine_.neighbors(),
                                            system.box, ws_.reach, previous_positions_.data());
+      ws_.nearby_gap_at_q.resize(ws_.nearby.size());
+      for (std::size_t k = 0; k < ws_.nearby.size(); ++k) {
+        ws_.nearby_gap_at_q[k] = evaluate(ws_.nearby[k], q.data(), system.box).gap;
+      }
     } else {
       nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(),
-                           system.box, ws_.reach, ws_.nearby);
-    }
-    ws_.nearby_gap_at_q.resize(ws_.nearby.size());
-    for (std::size_t k = 0; k < ws_.nearby.size(); ++k) {
-      ws_.nearby_gap_at_q[k] = evaluate(ws_.nearby[k], q.data(), system.box).gap;
+                           system.box, ws_.reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
     }
     ws_.nearby_refreshed = true;
   }
@@ -165,7 +182,7 @@ void Gvi::find_active_set(System& system) {
       }
       // Active at q, or overlapping at the prediction.
       if (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
-          evaluate(c, ws_.predicted.data(), system.box).gap <= 0.0) {
+          gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0) {
         if (!contains(active, c)) active.push_back(c), grew = true;
       }
     }
@@ -181,7 +198,7 @@ void Gvi::find_active_set(System& system) {
     }
     const TimedPhase predicting(Phase::prediction);
     std::swap(ws_.previous_prediction, ws_.predicted);
-    predict(system, ws_.p, ws_.predicted, constrained_predictor_);
+    predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3& a = ws_.predicted[i];
       const Vec3& b = ws_.previous_prediction[i];
@@ -277,7 +294,8 @@ void Gvi::update_positions(System& system) {
     if (feasibility_ != Feasibility::none) {
       // Overlapping beyond tolerance at x (such a row is also active there).
       for (const Constraint& c : candidates_for(system, ws_.x)) {
-        if (evaluate(c, ws_.x.data(), system.box).gap < -gap_tolerance && !contains(ws_.held, c)) {
+        if (gap_unless_beyond(c, ws_.x.data(), system.box, -gap_tolerance) < -gap_tolerance &&
+            !contains(ws_.held, c)) {
           ws_.violated.push_back(c);
         }
       }

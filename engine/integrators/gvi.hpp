@@ -72,9 +72,10 @@ class Gvi final : public ConstrainedIntegrator {
   // The unconstrained step's displacement from the current positions for momenta `momenta`.
   void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d);
   // The predictor's end positions into `x`: the free step, or (`constrained`) that step with
-  // the equality rows solved.
+  // the equality rows solved. `again`: a later prediction of the same step (same positions
+  // and forces, momenta changed by reflections), which re-solves only the chains it must.
   void predict(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& x,
-               bool constrained);
+               bool constrained, bool again = false);
   // The candidate rows for a step from q to x (refreshed when x outgrows their reach).
   const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x);
   // One solve of the position update for the rows held, with its midpoint fixed point.

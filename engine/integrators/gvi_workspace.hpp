@@ -17,11 +17,13 @@ struct GviWorkspace {
   std::vector<Vec3> predicted;                         // where the step would end unconstrained
   std::vector<Vec3> displacement;                      // the unconstrained step's displacement
   std::vector<Vec3> prediction_kick;                   // the constrained predictor's impulses
+  std::vector<Vec3> kicked_displacement;               // the free step they were solved for
+  std::vector<char> displacement_changed;              // per particle, since that solve
   std::vector<Vec3> prediction_force, prediction_mid;  // midpoint predictor's fixed point
   std::vector<bool> all_equality;                      // one `true` per equality row
 
   // Candidate inequality rows near q, with their gaps at q (refreshed when a displacement
-  // outgrows `reach`).
+  // outgrows `reach`); a gap well beyond the gap tolerance may be held as +infinity.
   std::vector<Constraint> nearby;
   std::vector<double> nearby_gap_at_q;
   double reach = -1.0;

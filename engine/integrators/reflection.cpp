@@ -51,15 +51,17 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
   ReflectionStats stats;
   if (in_rows.empty()) return stats;
   const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
-  const Eigen::MatrixXd N = projected_normals(cluster, equality, q, box);
-  // N = G - F Y: the equality rows' share of an impulse N lambda is -Y lambda.
+  // N = G - F Y, Y = (F^T W F)^+ F^T W G: projected_normals' N, with Y (the equality rows'
+  // share of an impulse N lambda is -Y lambda) from the same decomposition instead of a
+  // second one.
+  Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, q, box);
   Eigen::MatrixXd Y;
   if (!eq_rows.empty()) {
     const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
     const Eigen::MatrixXd WF = w.asDiagonal() * F;
-    Y = (F.transpose() * WF)
-            .completeOrthogonalDecomposition()
-            .solve(WF.transpose() * gradient_matrix(cluster, in_rows, q, box));
+    const Eigen::MatrixXd FWF = F.transpose() * WF;
+    Y = FWF.completeOrthogonalDecomposition().solve(WF.transpose() * N);
+    N -= F * Y;
   }
   stats.row_impulse.assign(cluster.rows.size(), 0.0);
   Eigen::VectorXd total_lambda = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(in_rows.size()));

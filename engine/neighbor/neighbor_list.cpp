@@ -43,6 +43,7 @@ NeighborList::Grid NeighborList::make_grid(const std::vector<Vec3>& inside, cons
       lo[a] = lo_p, extent[a] = hi_p - lo_p;
     }
   }
+  bool coarsened = false;
   auto grid_with = [&](double width, int span) {
     Grid g;
     g.span = span;
@@ -52,8 +53,10 @@ NeighborList::Grid NeighborList::make_grid(const std::vector<Vec3>& inside, cons
     // A sparse or spread-out system would get more cells than particles: coarser cells
     // (never narrower than `width`) keep memory proportional to the particle count.
     const double limit = std::max(125.0, 2.0 * static_cast<double>(inside.size()));
+    coarsened = false;
     while (static_cast<double>(g.count[0]) * g.count[1] * g.count[2] > limit) {
       for (int& c : g.count) c = (c + 1) / 2;
+      coarsened = true;
     }
     for (int a = 0; a < 3; ++a) {
       g.origin[a] = lo[a];
@@ -63,8 +66,13 @@ NeighborList::Grid NeighborList::make_grid(const std::vector<Vec3>& inside, cons
     return g;
   };
   Grid fine = grid_with(reach / 2, 2);
-  if (fine.shifted) return fine;
-  return grid_with(reach, 1);
+  if (fine.shifted && !coarsened) return fine;
+  // Coarsened half-reach cells are about a reach wide, yet scanned over the 5^3 stencil:
+  // cells a reach wide over a 3^3 stencil scan a fifth of the volume (a dilute hard-sphere
+  // fluid, whose reach is about one diameter).
+  const Grid full = grid_with(reach, 1);
+  if (fine.shifted && !full.shifted) return fine;
+  return full;
 }
 
 void NeighborList::make_stencils(const Grid& grid, const Box& box) {

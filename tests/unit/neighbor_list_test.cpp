@@ -82,7 +82,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BoxCase{"two_cells_per_axis", {6.0, 6.5, 7.0}, {true, true, true}, 200},
                       BoxCase{"open", {9, 9, 9}, {false, false, false}, 400},
                       BoxCase{"slab_ppf", {8, 8, 20}, {true, true, false}, 500},
-                      BoxCase{"thin_periodic", {5.0, 30, 6}, {true, false, true}, 300}),
+                      BoxCase{"thin_periodic", {5.0, 30, 6}, {true, false, true}, 300},
+                      // More half-reach cells than twice the particles: coarsened, so cells
+                      // a reach wide over the 3^3 stencil.
+                      BoxCase{"dilute_coarsened_cells", {30, 31, 32}, {true, true, true}, 300}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(NeighborList, ExcludedPairsNeverAppear) {
