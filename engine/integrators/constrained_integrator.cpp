@@ -326,8 +326,7 @@ void ConstrainedIntegrator::gather_hessian_blocks(const System& system,
 
 // Cluster c's Hessian blocks in the cluster's numbering, with the velocities of the
 // particles outside it that its blocks reach.
-ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, const Cluster& cluster,
-                                                      std::size_t c,
+ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std::size_t c,
                                                       const std::vector<Vec3>& p) const {
   const Particles& P = system.particles;
   ShadowOperator shadow;
@@ -395,7 +394,7 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
       equality.push_back(r < static_cast<std::int32_t>(first_inequality));
     std::vector<Vec3> p_local = gather(p, cluster.particles);
     ShadowOperator shadow;
-    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, cluster, c, p);
+    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, c, p);
     const std::vector<Vec3> x_local = gather(x, cluster.particles);
     const ReflectionStats r =
         reflect(local, equality, x_local, p_local, system.box, reflection_,

@@ -85,7 +85,7 @@ class ConstrainedIntegrator : public Integrator {
   // shadow_operator(..., c, p) is cluster c's shadow-energy operator.
   void gather_hessian_blocks(const System& system, const std::vector<Cluster>& clusters,
                              const std::vector<bool>& reflected);
-  ShadowOperator shadow_operator(const System& system, const Cluster& cluster, std::size_t c,
+  ShadowOperator shadow_operator(const System& system, std::size_t c,
                                  const std::vector<Vec3>& p) const;
   // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
   // index `first_inequality`) that holds an inequality, at positions x.

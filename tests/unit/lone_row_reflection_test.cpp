@@ -10,6 +10,7 @@
 #include <cmath>
 #include <random>
 
+#include "constraints/constraint_set.hpp"
 #include "integrators/reflection.hpp"
 
 namespace deli {
@@ -50,7 +51,8 @@ Outcome generic(const Constraint& row, const std::vector<Vec3>& x, std::vector<V
   std::vector<Vec3> x_local, p_local;
   for (std::int32_t g : local.particles) x_local.push_back(x[g]), p_local.push_back(p[g]);
   const ReflectionStats stats =
-      reflect(local, {false}, x_local, p_local, box, ReflectionOperator::generalized, tolerance);
+      reflect(local, {false}, x_local, p_local, box, ReflectionOperator::generalized, tolerance,
+              SolverLimits{}.reflection_solves);
   for (std::size_t k = 0; k < local.particles.size(); ++k) p[local.particles[k]] = p_local[k];
   return {p, stats.row_impulse[0], stats.reflected};
 }
