@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "constraints/equality_rank.hpp"
+
 namespace deli {
 
 std::optional<ThermostatSettings> read_thermostat(std::optional<TomlTable> t) {
@@ -53,7 +55,11 @@ DegreesOfFreedom run_degrees_of_freedom(const System& system, const ConstraintSe
   // starts with the conserved momenta removed.
   actions.bath_on_each_particle =
       thermostat && thermostat->kind == ThermostatKind::langevin && thermostat->until_step < 0;
-  return count_degrees_of_freedom(system.particles, constraints.equalities.size(), actions);
+  // Rods count by their rank: a redundant rod (a braced rigid loop) removes no freedom.
+  const std::size_t independent =
+      independent_equalities(constraints.equalities, system.particles.position.data(),
+                             system.particles.size(), system.box);
+  return count_degrees_of_freedom(system.particles, independent, actions);
 }
 
 }  // namespace deli

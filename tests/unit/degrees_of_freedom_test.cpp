@@ -1,10 +1,11 @@
-// The count of degrees of freedom (README "Temperature"): 3N, less one per rod or string,
-// less the conserved momentum components. Each expectation is the rule applied by hand to
+// The count of degrees of freedom (README "Temperature"): 3N, less the rank of the rods and
+// strings, less the conserved momentum components. Each expectation is the rule applied by hand to
 // the geometry of the case.
 #include "simulation/degrees_of_freedom.hpp"
 
 #include <gtest/gtest.h>
 
+#include "constraints/equality_rank.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
@@ -120,6 +121,55 @@ TEST(DegreesOfFreedom, InputWithRodsAndSlitWalls) {
       "walls = [{ type = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }]\n"
       "[integrator]\ntype = \"gvi\"\ntimestep = 0.001\n[run]\nsteps = 0\n");
   EXPECT_EQ(input.degrees_of_freedom.count(), 3 * 20 - 15 - 2);
+}
+
+// Rods remove their rank, not their number (expected ranks from rigidity counting: a rigid
+// body in 3D has 3n - 6 independent distance constraints, a rigid planar framework 2n - 3,
+// since rods in a plane have no out-of-plane gradient).
+Constraint rod(std::int32_t i, std::int32_t j, const std::vector<Vec3>& x) {
+  return {ConstraintKind::rod, i, j, norm(x[i] - x[j]), {}, {}};
+}
+
+const Box kOpenBox({-10, -10, -10}, {10, 10, 10}, {false, false, false});
+
+TEST(EqualityRank, ChainOfRodsIsIndependent) {
+  const std::vector<Vec3> x = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {1, 1, 1}};
+  const std::vector<Constraint> rows = {rod(0, 1, x), rod(1, 2, x), rod(2, 3, x)};
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 3u);
+}
+
+TEST(EqualityRank, FlatSquareWithBothDiagonalsHasRankFive) {
+  const std::vector<Vec3> x = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  std::vector<Constraint> rows;
+  for (std::int32_t i = 0; i < 4; ++i)
+    for (std::int32_t j = i + 1; j < 4; ++j) rows.push_back(rod(i, j, x));
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 5u);  // 2n - 3
+}
+
+TEST(EqualityRank, BipyramidWithItsAxisHasOneRedundantRod) {
+  // Triangle 0-1-2 in z = 0, apexes 3 and 4 above and below, each joined to the triangle;
+  // the axis 3-4 is the tenth rod of a body that 3n - 6 = 9 already hold rigid.
+  const std::vector<Vec3> x = {{1, 0, 0},
+                               {-0.5, 0.8660254037844386, 0},
+                               {-0.5, -0.8660254037844386, 0},
+                               {0, 0, 1},
+                               {0, 0, -1}};
+  std::vector<Constraint> rows = {rod(0, 1, x), rod(1, 2, x), rod(2, 0, x)};
+  for (std::int32_t apex : {3, 4})
+    for (std::int32_t i = 0; i < 3; ++i) rows.push_back(rod(apex, i, x));
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 9u);
+  rows.push_back(rod(3, 4, x));
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 9u);
+}
+
+TEST(EqualityRank, AnchorsOnSeparateAtomsAreIndependent) {
+  const std::vector<Vec3> x = {{0, 0, -1}, {2, 0, -1}, {3, 0, -1}};
+  std::vector<Constraint> rows;
+  for (std::int32_t i = 0; i < 3; ++i) {
+    rows.push_back({ConstraintKind::anchor, i, -1, 1.0, x[i] + Vec3{0, 0, 1}, {}});
+  }
+  rows.push_back(rod(1, 2, x));
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 4u);
 }
 
 }  // namespace
