@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "bonded/bond_force.hpp"
 #include "external/gravity.hpp"
 #include "external/radial_potentials.hpp"
 #include "pair/lennard_jones.hpp"
@@ -49,14 +48,8 @@ std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const 
         "pair", c.type_count(), std::move(table), spec.pair->max_cutoff(),
         scaled_special_pairs(system, spec.special_lj)));
   }
-  if (spec.bond) {
-    if (spec.bond->style == BondSpec::Style::harmonic) {
-      ff->add(std::make_unique<BondForce<HarmonicBond>>("bond", spec.bond->harmonic));
-    } else {
-      ff->add(std::make_unique<BondForce<FeneBond>>("bond", spec.bond->fene));
-    }
-  }
-  if (spec.angle) ff->add(std::make_unique<HarmonicAngle>(spec.angle->harmonic));
+  if (spec.bond) ff->add(spec.bond->style->make_term(spec.bond->by_type));
+  if (spec.angle) ff->add(spec.angle->style->make_term(spec.angle->by_type));
   if (spec.gravity) ff->add(std::make_unique<Gravity>(*spec.gravity));
   for (const ForceFieldSpec::Radial& r : spec.radial) {
     ff->add(std::make_unique<RadialPotential>(r.inverse_square

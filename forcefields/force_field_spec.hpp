@@ -6,8 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "bonded/bond_styles.hpp"
-#include "bonded/harmonic_angle.hpp"
+#include "bonded/bonded_style.hpp"
 #include "forces/force_field.hpp"
 #include "pair/pair_coefficients.hpp"
 
@@ -26,22 +25,18 @@ struct PairSpec {
   double max_cutoff() const;
 };
 
-struct BondSpec {
-  enum class Style { harmonic, fene };
-  Style style = Style::harmonic;
-  std::vector<HarmonicBond::Params> harmonic;  // by bond type
-  std::vector<FeneBond::Params> fene;
-};
-
-struct AngleSpec {
-  std::vector<HarmonicAngle::Params> harmonic;  // by angle type; theta0 in radians
+// The bonds' or the angles' style and its coefficients by type, each in the style's
+// coefficient order (angles in radians).
+struct BondedSpec {
+  const BondedStyle* style = nullptr;
+  std::vector<std::vector<double>> by_type;
 };
 
 struct ForceFieldSpec {
   std::array<double, 3> special_lj{0.0, 0.0, 0.0};  // LAMMPS special_bonds lj 1-2 1-3 1-4
   std::optional<PairSpec> pair;
-  std::optional<BondSpec> bond;
-  std::optional<AngleSpec> angle;
+  std::optional<BondedSpec> bond;
+  std::optional<BondedSpec> angle;
   std::optional<Vec3> gravity;  // uniform field, force per unit mass
   struct Radial {
     bool inverse_square = false;  // else polynomial in |x - c|^2

@@ -23,6 +23,13 @@ std::string number(double v) {
 }  // namespace
 
 LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin) {
+  for (const std::optional<BondedSpec>* bonded : {&spec.bond, &spec.angle}) {
+    if (*bonded && (*bonded)->style->lammps_style.empty()) {
+      throw UnsupportedModel("LAMMPS has no " +
+                             std::string(bonded == &spec.bond ? "bond" : "angle") + " style '" +
+                             (*bonded)->style->name + "'");
+    }
+  }
   const bool bonds = !system.topology.bonds.empty(), angles = !system.topology.angles.empty();
   // Terms as deli has them: bonds held as rods are in the topology but not in the force field.
   has_bonds_ = bonds && spec.bond;
@@ -55,14 +62,21 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   lammps_ = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   // A missing style would be a LAMMPS error, which ends the process: ask first.
   const bool external = spec.gravity || !spec.radial.empty();
+  auto unsupported = [&](const std::string& what) {
+    lammps_close(lammps_);
+    lammps_ = nullptr;
+    std::error_code ignored;
+    std::filesystem::remove(data_path_, ignored);
+    throw UnsupportedModel("this LAMMPS has no " + what);
+  };
   for (const char* fix : {"gravity", "addforce"}) {
     if (external && !lammps_has_style(lammps_, "fix", fix)) {
-      lammps_close(lammps_);
-      lammps_ = nullptr;
-      std::error_code ignored;
-      std::filesystem::remove(data_path_, ignored);
-      throw UnsupportedModel(std::string("this LAMMPS has no fix ") + fix +
-                             " (needed for the input's external field)");
+      unsupported(std::string("fix ") + fix + " (needed for the input's external field)");
+    }
+  }
+  for (const auto& [kind, bonded] : {std::pair{"bond", &spec.bond}, {"angle", &spec.angle}}) {
+    if (*bonded && !lammps_has_style(lammps_, kind, (*bonded)->style->lammps_style.c_str())) {
+      unsupported(std::string(kind) + "_style " + (*bonded)->style->lammps_style);
     }
   }
 
@@ -92,22 +106,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     command("pair_style zero 1.0");
     command("pair_coeff * *");
   }
-  if (spec.bond) {
-    if (spec.bond->style == BondSpec::Style::harmonic) {
-      command("bond_style harmonic");
-      for (std::size_t t = 0; t < spec.bond->harmonic.size(); ++t) {
-        const HarmonicBond::Params& p = spec.bond->harmonic[t];
-        command("bond_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " + number(p.r0));
-      }
-    } else {
-      command("bond_style fene");
-      for (std::size_t t = 0; t < spec.bond->fene.size(); ++t) {
-        const FeneBond::Params& p = spec.bond->fene[t];
-        command("bond_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " + number(p.r0) +
-                " " + number(p.epsilon) + " " + number(p.sigma));
-      }
-    }
-  }
+  if (spec.bond) bonded_style("bond", *spec.bond);
   if (bonds && !spec.bond) {  // rods: bonds for the exclusions, no force
     command("bond_style zero");
     command("bond_coeff *");
@@ -166,18 +165,26 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     command("fix_modify " + tag + "fix energy yes");
     external_fixes_.push_back(tag + "fix");
   }
-  if (spec.angle) {
-    command("angle_style harmonic");
-    for (std::size_t t = 0; t < spec.angle->harmonic.size(); ++t) {
-      const HarmonicAngle::Params& p = spec.angle->harmonic[t];
-      command("angle_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " +
-              number(p.theta0 * 180.0 / std::numbers::pi));
-    }
-  }
+  if (spec.angle) bonded_style("angle", *spec.angle);
   command("compute deli_virial all pressure NULL virial");
   command("compute deli_unwrapped all property/atom xu yu zu");
   command("thermo_style custom step pe ke evdwl ebond eangle press vol c_deli_virial");
   command("thermo_modify norm no");
+}
+
+// "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
+// coefficients in order, angles back in degrees.
+void LammpsBridge::bonded_style(const std::string& kind, const BondedSpec& bonded) {
+  command(kind + "_style " + bonded.style->lammps_style);
+  for (std::size_t t = 0; t < bonded.by_type.size(); ++t) {
+    std::string line = kind + "_coeff " + std::to_string(t + 1);
+    for (std::size_t k = 0; k < bonded.by_type[t].size(); ++k) {
+      const double v = bonded.by_type[t][k];
+      line +=
+          " " + number(bonded.style->coefficients[k].degrees ? v * 180.0 / std::numbers::pi : v);
+    }
+    command(line);
+  }
 }
 
 LammpsBridge::~LammpsBridge() {

@@ -138,37 +138,34 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
       delete scaled;
     }
   }
-  if (spec.bond) {
-    if (spec.bond->style == BondSpec::Style::harmonic) {
-      auto* bonds = new OpenMM::HarmonicBondForce();
-      for (const Bond& b : sys.topology.bonds) {
-        const HarmonicBond::Params& p = spec.bond->harmonic[b.type];
-        bonds->addBond(b.i, b.j, p.r0, 2.0 * p.k);
-      }
-      bonds->setUsesPeriodicBoundaryConditions(m.periodic);
-      bonds->setForceGroup(kBondGroup);
-      m.system.addForce(bonds);
-    } else {
-      auto* bonds = new OpenMM::CustomBondForce(
-          "-0.5*k*r0^2*log(1 - (r/r0)^2) + step(2^(1/6)*sig - r)*(4*eps*((sig/r)^12 - "
-          "(sig/r)^6) + eps)");
-      for (const char* p : {"k", "r0", "eps", "sig"}) bonds->addPerBondParameter(p);
-      for (const Bond& b : sys.topology.bonds) {
-        const FeneBond::Params& p = spec.bond->fene[b.type];
-        bonds->addBond(b.i, b.j, {p.k, p.r0, p.epsilon, p.sigma});
-      }
-      bonds->setUsesPeriodicBoundaryConditions(m.periodic);
-      bonds->setForceGroup(kBondGroup);
-      m.system.addForce(bonds);
+  // Bonds and angles: each style's registered energy expression, its coefficients as
+  // per-bond (per-angle) parameters.
+  auto unavailable = [](const BondedSpec& bonded, const char* kind) {
+    if (bonded.style->openmm_energy.empty()) {
+      throw UnsupportedModel(std::string("OpenMM has no ") + kind + " style '" +
+                             bonded.style->name + "' here");
     }
+    return bonded.style->openmm_energy;
+  };
+  if (spec.bond) {
+    auto* bonds = new OpenMM::CustomBondForce(unavailable(*spec.bond, "bond"));
+    for (const StyleCoefficient& c : spec.bond->style->coefficients) {
+      bonds->addPerBondParameter(c.name);
+    }
+    for (const Bond& b : sys.topology.bonds) bonds->addBond(b.i, b.j, spec.bond->by_type[b.type]);
+    bonds->setUsesPeriodicBoundaryConditions(m.periodic);
+    bonds->setForceGroup(kBondGroup);
+    m.system.addForce(bonds);
     m.term_names.push_back("bond");
     m.term_groups.push_back(1 << kBondGroup);
   }
   if (spec.angle) {
-    auto* angles = new OpenMM::HarmonicAngleForce();
+    auto* angles = new OpenMM::CustomAngleForce(unavailable(*spec.angle, "angle"));
+    for (const StyleCoefficient& c : spec.angle->style->coefficients) {
+      angles->addPerAngleParameter(c.name);
+    }
     for (const Angle& a : sys.topology.angles) {
-      const HarmonicAngle::Params& p = spec.angle->harmonic[a.type];
-      angles->addAngle(a.i, a.j, a.k, p.theta0, 2.0 * p.k);
+      angles->addAngle(a.i, a.j, a.k, spec.angle->by_type[a.type]);
     }
     angles->setUsesPeriodicBoundaryConditions(m.periodic);
     angles->setForceGroup(kAngleGroup);

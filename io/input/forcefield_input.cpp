@@ -5,8 +5,7 @@
 #include <numbers>
 #include <set>
 
-#include "bonded/bond_styles.hpp"
-#include "bonded/harmonic_angle.hpp"
+#include "bonded/bonded_style.hpp"
 #include "core/error.hpp"
 #include "pair/pair_coefficients.hpp"
 
@@ -124,14 +123,12 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
 }
 
 // Coefficients per type: from the data file's section first (`from_data` turns a row's
-// numbers into Params), then the input's coeffs, which win; every type must have some.
-template <class Style>
-std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::string& what,
-                                            const auto& read_one, const DataCoefficients& data,
-                                            const CoefficientSection& section,
-                                            const auto& from_data,
-                                            std::vector<std::string>& notes) {
-  std::vector<typename Style::Params> params(static_cast<std::size_t>(types));
+// numbers into coefficients), then the input's coeffs, which win; every type must have some.
+std::vector<std::vector<double>> by_type(TomlTable& t, int types, const std::string& what,
+                                         const auto& read_one, const DataCoefficients& data,
+                                         const CoefficientSection& section, const auto& from_data,
+                                         std::vector<std::string>& notes) {
+  std::vector<std::vector<double>> params(static_cast<std::size_t>(types));
   std::vector<bool> given(static_cast<std::size_t>(types), false), in_data(given);
   for (const CoefficientRow& row : section.rows) {
     params[row.types.front()] = from_data(row);
@@ -174,10 +171,64 @@ void expect_values(const DataCoefficients& data, const CoefficientRow& row, std:
   }
 }
 
-std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& system,
-                                  bool rigid_bonds, const DataCoefficients& data,
-                                  std::vector<std::string>& notes) {
-  const int types = system.topology.bond_types;
+double to_radians(double degrees) {
+  return degrees * std::numbers::pi / 180.0;
+}
+
+std::vector<std::string> style_names(BondedKind kind) {
+  std::vector<std::string> names;
+  for (const BondedStyle* style : bonded_styles(kind)) names.push_back(style->name);
+  return names;
+}
+
+// "a", "a" or "b", "a", "b" or "c": the styles a missing table could name.
+std::string alternatives(const std::vector<std::string>& names) {
+  std::string text;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (k > 0) text += k + 1 == names.size() ? " or " : ", ";
+    text += "\"" + names[k] + "\"";
+  }
+  return text;
+}
+
+// [forcefield.bond] or [forcefield.angle]: a registered style and its coefficients by
+// type, read as the style's registration describes them.
+BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::string& what,
+                       const DataCoefficients& data, const CoefficientSection& section,
+                       const char* section_name, std::vector<std::string>& notes) {
+  const std::string name = t.choice("style", style_names(kind));
+  check_data_style(data, section, section_name, {name}, name);
+  const BondedStyle& style = *find_bonded_style(kind, name);
+  BondedSpec spec;
+  spec.style = &style;
+  spec.by_type = by_type(
+      t, types, what,
+      [&](TomlTable& c) {
+        std::vector<double> values;
+        for (const StyleCoefficient& k : style.coefficients) {
+          const double v =
+              k.check == StyleCoefficient::Check::positive ? positive(c, k.name) : c.number(k.name);
+          values.push_back(k.degrees ? to_radians(v) : v);
+        }
+        return values;
+      },
+      data, section,
+      [&](const CoefficientRow& row) {
+        expect_values(data, row, style.coefficients.size(), style.data_form);
+        std::vector<double> values = row.values;
+        for (std::size_t k = 0; k < values.size(); ++k) {
+          if (style.coefficients[k].degrees) values[k] = to_radians(values[k]);
+        }
+        return values;
+      },
+      notes);
+  t.finish();
+  return spec;
+}
+
+std::optional<BondedSpec> read_bond(std::optional<TomlTable> t, const System& system,
+                                    bool rigid_bonds, const DataCoefficients& data,
+                                    std::vector<std::string>& notes) {
   if (rigid_bonds) {
     if (t) t->fail("bonds are rigid rods ([constraints] bonds = \"rigid\"): remove this table");
     return std::nullopt;
@@ -186,71 +237,29 @@ std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& syst
     if (!system.topology.bonds.empty()) {
       throw InputError(
           "the system has bonds but the input has no [forcefield.bond] table; "
-          "add one with style = \"harmonic\" or \"fene\" and its coeffs");
+          "add one with style = " +
+          alternatives(style_names(BondedKind::bond)) + " and its coeffs");
     }
     return std::nullopt;
   }
-  BondSpec spec;
-  const std::string style = t->choice("style", {"harmonic", "fene"});
-  check_data_style(data, data.bond, "Bond Coeffs", {style}, style);
-  if (style == "harmonic") {
-    spec.style = BondSpec::Style::harmonic;
-    spec.harmonic = by_type<HarmonicBond>(
-        *t, types, "bond",
-        [](TomlTable& c) {
-          return HarmonicBond::Params{c.number("k"), positive(c, "r0")};
-        },
-        data, data.bond,
-        [&](const CoefficientRow& row) {
-          expect_values(data, row, 2, "harmonic bond coefficients K r0");
-          return HarmonicBond::Params{row.values[0], row.values[1]};
-        },
-        notes);
-  } else {
-    spec.style = BondSpec::Style::fene;
-    spec.fene = by_type<FeneBond>(
-        *t, types, "bond",
-        [](TomlTable& c) {
-          return FeneBond::Params{positive(c, "k"), positive(c, "r0"), c.number("epsilon"),
-                                  positive(c, "sigma")};
-        },
-        data, data.bond,
-        [&](const CoefficientRow& row) {
-          expect_values(data, row, 4, "fene bond coefficients K R0 epsilon sigma");
-          return FeneBond::Params{row.values[0], row.values[1], row.values[2], row.values[3]};
-        },
-        notes);
-  }
-  t->finish();
-  return spec;
+  return read_bonded(*t, BondedKind::bond, system.topology.bond_types, "bond", data, data.bond,
+                     "Bond Coeffs", notes);
 }
 
-std::optional<AngleSpec> read_angle(std::optional<TomlTable> t, const System& system,
-                                    const DataCoefficients& data, std::vector<std::string>& notes) {
+std::optional<BondedSpec> read_angle(std::optional<TomlTable> t, const System& system,
+                                     const DataCoefficients& data,
+                                     std::vector<std::string>& notes) {
   if (!t) {
     if (!system.topology.angles.empty()) {
       throw InputError(
           "the system has angles but the input has no [forcefield.angle] table; "
-          "add one with style = \"harmonic\" and its coeffs");
+          "add one with style = " +
+          alternatives(style_names(BondedKind::angle)) + " and its coeffs");
     }
     return std::nullopt;
   }
-  const std::string style = t->choice("style", {"harmonic"});
-  check_data_style(data, data.angle, "Angle Coeffs", {style}, style);
-  AngleSpec spec;
-  spec.harmonic = by_type<HarmonicAngle>(
-      *t, system.topology.angle_types, "angle",
-      [](TomlTable& c) {
-        return HarmonicAngle::Params{c.number("k"), c.number("theta0") * std::numbers::pi / 180.0};
-      },
-      data, data.angle,
-      [&](const CoefficientRow& row) {
-        expect_values(data, row, 2, "harmonic angle coefficients K theta0");
-        return HarmonicAngle::Params{row.values[0], row.values[1] * std::numbers::pi / 180.0};
-      },
-      notes);
-  t->finish();
-  return spec;
+  return read_bonded(*t, BondedKind::angle, system.topology.angle_types, "angle", data, data.angle,
+                     "Angle Coeffs", notes);
 }
 
 }  // namespace
