@@ -7,10 +7,12 @@ namespace deli {
 const BondedStyle& harmonic_bond_style();
 const BondedStyle& fene_bond_style();
 const BondedStyle& harmonic_angle_style();
+const BondedStyle& cosine_angle_style();
 
 const std::vector<const BondedStyle*>& bonded_styles(BondedKind kind) {
   static const std::vector<const BondedStyle*> bonds{&harmonic_bond_style(), &fene_bond_style()};
-  static const std::vector<const BondedStyle*> angles{&harmonic_angle_style()};
+  static const std::vector<const BondedStyle*> angles{&harmonic_angle_style(),
+                                                      &cosine_angle_style()};
   return kind == BondedKind::bond ? bonds : angles;
 }
 

@@ -68,6 +68,8 @@ INSTANTIATE_TEST_SUITE_P(
         Model{"kremer_grest_fene_wca", "inputs/lj_chains/melt.toml"},
         Model{"chains_harmonic_angles_scaled_13",
               "tests/crosscheck/inputs/chains_harmonic_angles.toml", 100},
+        Model{"semiflexible_chains_cosine_angles",
+              "tests/crosscheck/inputs/chains_cosine_angles.toml", 100},
         Model{"mixture_explicit_pairs", "tests/crosscheck/inputs/mixture_explicit.toml"},
         Model{"mixture_lorentz_berthelot", "tests/crosscheck/inputs/mixture_mixed.toml"},
         Model{"open_cluster", "tests/crosscheck/inputs/open_cluster.toml", 100}),
