@@ -4,8 +4,6 @@
 
 #include "external/gravity.hpp"
 #include "external/radial_potentials.hpp"
-#include "pair/lennard_jones.hpp"
-#include "pair/pair_force.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -36,17 +34,9 @@ std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const 
   auto ff = std::make_unique<ForceField>();
   ff->special_lj = spec.special_lj;
   if (spec.pair) {
-    const PairCoefficients& c = spec.pair->coefficients;
-    std::vector<LennardJones::Params> table;
-    for (int a = 0; a < c.type_count(); ++a) {
-      for (int b = 0; b < c.type_count(); ++b) {
-        const PairCoefficient& p = c.at(a, b);
-        table.push_back(LennardJones::make(p.epsilon, p.sigma, p.cutoff, spec.pair->shift));
-      }
-    }
-    ff->add(std::make_unique<PairForce<LennardJones>>(
-        "pair", c.type_count(), std::move(table), spec.pair->max_cutoff(),
-        scaled_special_pairs(system, spec.special_lj)));
+    ff->add(spec.pair->style->make_term(spec.pair->coefficients, spec.pair->shift,
+                                        spec.pair->max_cutoff(),
+                                        scaled_special_pairs(system, spec.special_lj)));
   }
   if (spec.bond) ff->add(spec.bond->style->make_term(spec.bond->by_type));
   if (spec.angle) ff->add(spec.angle->style->make_term(spec.angle->by_type));

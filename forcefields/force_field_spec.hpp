@@ -8,7 +8,7 @@
 
 #include "bonded/bonded_style.hpp"
 #include "forces/force_field.hpp"
-#include "pair/pair_coefficients.hpp"
+#include "pair/pair_style.hpp"
 
 namespace deli {
 
@@ -18,8 +18,7 @@ struct System;
 // covered): what deli builds its force terms from, and what the OpenMM and LAMMPS
 // bridges translate, so that all three engines see the same model.
 struct PairSpec {
-  enum class Style { lj_cut, wca };
-  Style style = Style::lj_cut;
+  const PairStyle* style = nullptr;
   bool shift = false;
   PairCoefficients coefficients{1, 0.0};  // per type pair, cutoffs included
   double max_cutoff() const;

@@ -5,16 +5,9 @@
 #include <vector>
 
 #include "forces/force_term.hpp"
+#include "style_coefficient.hpp"
 
 namespace deli {
-
-// One coefficient of a bond or angle style, in LAMMPS' coefficient order.
-struct StyleCoefficient {
-  enum class Check { any, positive };
-  std::string name;  // the key in the input's coeffs, and the OpenMM parameter's name
-  Check check = Check::any;
-  bool degrees = false;  // given (input, data file, LAMMPS) in degrees, held in radians
-};
 
 enum class BondedKind { bond, angle };
 

@@ -23,6 +23,9 @@ std::string number(double v) {
 }  // namespace
 
 LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin) {
+  if (spec.pair && spec.pair->style->lammps_style.empty()) {
+    throw UnsupportedModel("LAMMPS has no pair style '" + spec.pair->style->name + "'");
+  }
   for (const std::optional<BondedSpec>* bonded : {&spec.bond, &spec.angle}) {
     if (*bonded && (*bonded)->style->lammps_style.empty()) {
       throw UnsupportedModel("LAMMPS has no " +
@@ -74,6 +77,9 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
       unsupported(std::string("fix ") + fix + " (needed for the input's external field)");
     }
   }
+  if (spec.pair && !lammps_has_style(lammps_, "pair", spec.pair->style->lammps_style.c_str())) {
+    unsupported("pair_style " + spec.pair->style->lammps_style);
+  }
   for (const auto& [kind, bonded] : {std::pair{"bond", &spec.bond}, {"angle", &spec.angle}}) {
     if (*bonded && !lammps_has_style(lammps_, kind, (*bonded)->style->lammps_style.c_str())) {
       unsupported(std::string(kind) + "_style " + (*bonded)->style->lammps_style);
@@ -93,12 +99,13 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
           " " + number(spec.special_lj[2]));
   if (spec.pair) {
     const PairCoefficients& c = spec.pair->coefficients;
-    command("pair_style lj/cut " + number(spec.pair->max_cutoff()));
+    command("pair_style " + spec.pair->style->lammps_style + " " + number(spec.pair->max_cutoff()));
     for (int a = 0; a < c.type_count(); ++a) {
       for (int b = a; b < c.type_count(); ++b) {
         const PairCoefficient& p = c.at(a, b);
-        command("pair_coeff " + std::to_string(a + 1) + " " + std::to_string(b + 1) + " " +
-                number(p.epsilon) + " " + number(p.sigma) + " " + number(p.cutoff));
+        std::string line = "pair_coeff " + std::to_string(a + 1) + " " + std::to_string(b + 1);
+        for (double v : p.values) line += " " + number(v);
+        command(line + " " + number(p.cutoff));
       }
     }
     command(std::string("pair_modify shift ") + (spec.pair->shift ? "yes" : "no"));

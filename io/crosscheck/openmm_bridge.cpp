@@ -31,8 +31,6 @@ constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup 
 // k_B N_A in kJ/mol/K, exactly as OpenMM's BOLTZ (SI 2019 constants).
 constexpr double kBoltzmannKJPerMolK = 1.380649e-23 * 6.02214076e23 / 1000.0;
 
-const char* kLennardJones = "4*eps*((sig/r)^12 - (sig/r)^6) - shift";
-
 }  // namespace
 
 struct OpenMMBridge::Impl {
@@ -83,28 +81,36 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
 
   const SpecialPairs special = find_special_pairs(sys.topology, sys.particles.size());
   if (spec.pair) {
+    const PairStyle& style = *spec.pair->style;
+    if (style.openmm_energy.empty()) {
+      throw UnsupportedModel("OpenMM has no pair style '" + style.name + "' here");
+    }
     const PairCoefficients& c = spec.pair->coefficients;
     const int types = c.type_count();
-    std::vector<double> eps, sig, cut, shift;
+    const std::size_t count = style.coefficients.size();
+    // Per type pair: the coefficients, then the cutoff and the shift, each a table.
+    std::vector<std::vector<double>> tables(count + 2);
     for (int b = 0; b < types; ++b) {
       for (int a = 0; a < types; ++a) {
         const PairCoefficient& p = c.at(a, b);
-        eps.push_back(p.epsilon);
-        sig.push_back(p.sigma);
-        cut.push_back(p.cutoff);
-        const double sr6 = std::pow(p.sigma / p.cutoff, 6);
-        shift.push_back(spec.pair->shift ? 4 * p.epsilon * (sr6 * sr6 - sr6) : 0.0);
+        for (std::size_t k = 0; k < count; ++k) tables[k].push_back(p.values[k]);
+        tables[count].push_back(p.cutoff);
+        tables[count + 1].push_back(spec.pair->shift ? style.energy(p.values, p.cutoff) : 0.0);
       }
     }
-    const std::string expression = std::string("step(cut - r)*(") + kLennardJones +
-                                   "); eps = epsT(t1, t2); sig = sigT(t1, t2); "
-                                   "cut = cutT(t1, t2); shift = shiftT(t1, t2)";
+    std::vector<std::string> names;
+    for (const StyleCoefficient& k : style.coefficients) names.push_back(k.name);
+    names.push_back("cut");
+    names.push_back("shift");
+    const std::string energy = "step(cut - r)*(" + style.openmm_energy + " - shift)";
+    std::string expression = energy;
+    for (const std::string& n : names) expression += "; " + n + " = " + n + "T(t1, t2)";
     auto* pair = new OpenMM::CustomNonbondedForce(expression);
     pair->addPerParticleParameter("t");
-    pair->addTabulatedFunction("epsT", new OpenMM::Discrete2DFunction(types, types, eps));
-    pair->addTabulatedFunction("sigT", new OpenMM::Discrete2DFunction(types, types, sig));
-    pair->addTabulatedFunction("cutT", new OpenMM::Discrete2DFunction(types, types, cut));
-    pair->addTabulatedFunction("shiftT", new OpenMM::Discrete2DFunction(types, types, shift));
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      pair->addTabulatedFunction(names[k] + "T",
+                                 new OpenMM::Discrete2DFunction(types, types, tables[k]));
+    }
     pair->setNonbondedMethod(m.periodic ? OpenMM::CustomNonbondedForce::CutoffPeriodic
                                         : OpenMM::CustomNonbondedForce::CutoffNonPeriodic);
     pair->setCutoffDistance(spec.pair->max_cutoff());
@@ -114,9 +120,9 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     pair->setForceGroup(kPairGroup);
 
     // Special pairs: excluded from the nonbonded force; scaled ones come back as bonds.
-    auto* scaled =
-        new OpenMM::CustomBondForce(std::string("f*step(cut - r)*(") + kLennardJones + ")");
-    for (const char* p : {"f", "eps", "sig", "cut", "shift"}) scaled->addPerBondParameter(p);
+    auto* scaled = new OpenMM::CustomBondForce("f*" + energy);
+    scaled->addPerBondParameter("f");
+    for (const std::string& n : names) scaled->addPerBondParameter(n);
     scaled->setUsesPeriodicBoundaryConditions(m.periodic);
     scaled->setForceGroup(kScaledPairGroup);
     for (int s = 0; s < 3; ++s) {
@@ -126,7 +132,9 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
         if (spec.special_lj[s] == 0.0) continue;
         const int ti = sys.particles.type[i], tj = sys.particles.type[j];
         const std::size_t k = static_cast<std::size_t>(ti + types * tj);
-        scaled->addBond(i, j, {spec.special_lj[s], eps[k], sig[k], cut[k], shift[k]});
+        std::vector<double> parameters{spec.special_lj[s]};
+        for (const std::vector<double>& table : tables) parameters.push_back(table[k]);
+        scaled->addBond(i, j, parameters);
       }
     }
     m.system.addForce(pair);

@@ -7,7 +7,7 @@
 
 #include "bonded/bonded_style.hpp"
 #include "core/error.hpp"
-#include "pair/pair_coefficients.hpp"
+#include "pair/pair_style.hpp"
 
 namespace deli {
 
@@ -43,17 +43,37 @@ std::string counted(std::size_t n, const std::string& what) {
   return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
 }
 
+// One coefficient from the input, checked as its style's registration says.
+double read_coefficient(TomlTable& c, const StyleCoefficient& k) {
+  switch (k.check) {
+    case StyleCoefficient::Check::positive:
+      return positive(c, k.name);
+    case StyleCoefficient::Check::non_negative: {
+      const double v = c.number(k.name);
+      if (v < 0) c.fail("must not be negative", k.name);
+      return v;
+    }
+    case StyleCoefficient::Check::any:
+      break;
+  }
+  return c.number(k.name);
+}
+
 std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const DataCoefficients& data,
                                   std::vector<std::string>& notes) {
-  const std::string style = t.choice("style", {"lj/cut", "wca", "none"});
-  if (style == "none") {
+  std::vector<std::string> names;
+  for (const PairStyle* style : pair_styles()) names.push_back(style->name);
+  names.push_back("none");
+  const std::string name = t.choice("style", names);
+  if (name == "none") {
     t.finish();
     return std::nullopt;
   }
+  const PairStyle& style = *find_pair_style(name);
+  const std::size_t count = style.coefficients.size();
   const int types = static_cast<int>(system.atom_types.size());
-  const bool wca = style == "wca";
-  const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
-  const bool shift = wca ? true : t.boolean("shift", false);
+  const double global_cutoff = style.fixed_cutoff ? 0.0 : positive(t, "cutoff");
+  const bool shift = style.always_shifted ? true : t.boolean("shift", false);
   const Mixing mixing = t.choice("mixing", {"arithmetic", "geometric"}, "geometric") == "arithmetic"
                             ? Mixing::arithmetic
                             : Mixing::geometric;
@@ -63,21 +83,22 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
   const CoefficientSection* sections[] = {&data.pair, &data.pair_ij};
   for (const CoefficientSection* section : sections) {
     check_data_style(data, *section, section == &data.pair ? "Pair Coeffs" : "PairIJ Coeffs",
-                     {"lj/cut"}, style);
+                     {style.lammps_style}, name);
     for (const CoefficientRow& row : section->rows) {
       const int a = row.types.front(), b = row.types.back();
-      if (row.values.size() < 2 || row.values.size() > 3) {
-        throw InputError(located(data.file, row.line,
-                                 "lj/cut coefficients are epsilon sigma [cutoff], found " +
-                                     std::to_string(row.values.size()) + " numbers"));
+      if (row.values.size() < count || row.values.size() > count + 1) {
+        throw InputError(
+            located(data.file, row.line,
+                    style.data_form + ", found " + std::to_string(row.values.size()) + " numbers"));
       }
+      std::vector<double> values(row.values.begin(), row.values.begin() + count);
       std::optional<double> cutoff;
-      if (wca) {
-        cutoff = std::pow(2.0, 1.0 / 6.0) * row.values[1];
-      } else if (row.values.size() == 3) {
-        cutoff = row.values[2];
+      if (style.fixed_cutoff) {
+        cutoff = style.fixed_cutoff(values);
+      } else if (row.values.size() == count + 1) {
+        cutoff = row.values[count];
       }
-      coeffs.set(a, b, row.values[0], row.values[1], cutoff);
+      coeffs.set(a, b, std::move(values), cutoff);
       ++from_data;
     }
   }
@@ -86,18 +107,17 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
     const auto pair = c.numbers("types", 2);
     const int a = type_index(c, "types", pair[0], types, "atom");
     const int b = type_index(c, "types", pair[1], types, "atom");
-    const double epsilon = c.number("epsilon");
-    if (epsilon < 0) c.fail("must not be negative", "epsilon");
-    const double sigma = positive(c, "sigma");
+    std::vector<double> values;
+    for (const StyleCoefficient& k : style.coefficients) values.push_back(read_coefficient(c, k));
     std::optional<double> cutoff;
-    if (wca) {
-      cutoff = std::pow(2.0, 1.0 / 6.0) * sigma;
+    if (style.fixed_cutoff) {
+      cutoff = style.fixed_cutoff(values);
     } else if (c.has("cutoff")) {
       cutoff = positive(c, "cutoff");
     }
     if (!given.insert({std::min(a, b), std::max(a, b)}).second)
       c.fail("coefficients for this type pair were already given", "types");
-    coeffs.set(a, b, epsilon, sigma, cutoff);
+    coeffs.set(a, b, std::move(values), cutoff);
     c.finish();
   }
   if (from_data > 0) {
@@ -107,16 +127,18 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
                                    : ", " + counted(given.size(), "entry") +
                                          " from the input (the input's win)"));
   }
-  const std::vector<int> missing = coeffs.resolve(mixing);
+  const std::vector<int> missing = coeffs.resolve(mixing, style.mixing);
   if (!missing.empty()) {
-    t.fail("no coefficients for atom type " + std::to_string(missing.front() + 1) +
-               " with itself; add {types = [" + std::to_string(missing.front() + 1) + ", " +
-               std::to_string(missing.front() + 1) + "], epsilon = ..., sigma = ...} to coeffs",
+    const std::string type = std::to_string(missing.front() + 1);
+    std::string keys;
+    for (const StyleCoefficient& k : style.coefficients) keys += ", " + k.name + " = ...";
+    t.fail("no coefficients for atom type " + type + " with itself; add {types = [" + type + ", " +
+               type + "]" + keys + "} to coeffs",
            "coeffs");
   }
   t.finish();
   PairSpec spec;
-  spec.style = wca ? PairSpec::Style::wca : PairSpec::Style::lj_cut;
+  spec.style = &style;
   spec.shift = shift;
   spec.coefficients = std::move(coeffs);
   return spec;
@@ -206,8 +228,7 @@ BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::stri
       [&](TomlTable& c) {
         std::vector<double> values;
         for (const StyleCoefficient& k : style.coefficients) {
-          const double v =
-              k.check == StyleCoefficient::Check::positive ? positive(c, k.name) : c.number(k.name);
+          const double v = read_coefficient(c, k);
           values.push_back(k.degrees ? to_radians(v) : v);
         }
         return values;

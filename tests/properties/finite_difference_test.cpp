@@ -129,13 +129,13 @@ INSTANTIATE_TEST_SUITE_P(AllForces, FiniteDifference, ::testing::ValuesIn(cases(
 TEST(PairMixing, LorentzBerthelotMatchesAnalyticEnergy) {
   for (const double r : {0.9, 1.1, 1.7, 2.2}) {
     PairCoefficients coeffs(2, 3.0);
-    coeffs.set(0, 0, 1.0, 1.0, std::nullopt);
-    coeffs.set(1, 1, 0.5, 1.4, std::nullopt);
-    ASSERT_TRUE(coeffs.resolve(Mixing::arithmetic).empty());
+    coeffs.set(0, 0, {1.0, 1.0}, std::nullopt);  // epsilon, sigma
+    coeffs.set(1, 1, {0.5, 1.4}, std::nullopt);
+    ASSERT_TRUE(coeffs.resolve(Mixing::arithmetic, {MixRule::geometric, MixRule::chosen}).empty());
     const PairCoefficient& mixed = coeffs.at(0, 1);
-    EXPECT_DOUBLE_EQ(mixed.epsilon, std::sqrt(0.5));
-    EXPECT_DOUBLE_EQ(mixed.sigma, 1.2);
-    const auto params = LennardJones::make(mixed.epsilon, mixed.sigma, mixed.cutoff, false);
+    EXPECT_DOUBLE_EQ(mixed.values[0], std::sqrt(0.5));
+    EXPECT_DOUBLE_EQ(mixed.values[1], 1.2);
+    const auto params = LennardJones::make(mixed.values[0], mixed.values[1], mixed.cutoff, false);
     double f_over_r, e;
     LennardJones::evaluate(params, r * r, f_over_r, e);
     const double sr6 = std::pow(1.2 / r, 6);
