@@ -27,8 +27,11 @@ struct PairSpec {
 // The bonds' or the angles' style and its coefficients by type, each in the style's
 // coefficient order (angles in radians).
 struct BondedSpec {
-  const BondedStyle* style = nullptr;
+  const BondedStyle* style = nullptr;             // the table's
+  std::vector<const BondedStyle*> style_by_type;  // the table's, or the type's own
   std::vector<std::vector<double>> by_type;
+  // The styles in use, each once, in the order of their first type.
+  std::vector<const BondedStyle*> styles() const;
 };
 
 struct ForceFieldSpec {

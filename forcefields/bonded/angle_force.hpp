@@ -20,13 +20,15 @@ concept AngleEvaluator = std::default_initializable<typename E::Params> &&
   { E::evaluate(p, c, de_dcos) } -> std::convertible_to<double>;
 };
 
-// All angles of one style; params indexed by angle type.
+// All angles of one style (or of the types set in own_types, when the system has several);
+// params indexed by angle type.
 template <AngleEvaluator Evaluator>
 class AngleForce final : public ForceTerm {
  public:
   using Params = typename Evaluator::Params;
 
-  explicit AngleForce(std::vector<Params> by_type) : by_type_(std::move(by_type)) {}
+  explicit AngleForce(std::vector<Params> by_type, std::vector<char> own_types = {})
+      : by_type_(std::move(by_type)), own_types_(std::move(own_types)) {}
 
   std::string name() const override { return "angle"; }
 
@@ -35,6 +37,7 @@ class AngleForce final : public ForceTerm {
     const std::vector<Vec3>& x = system.particles.position;
     double energy = 0.0;
     for (const Angle& a : system.topology.angles) {
+      if (!own_types_.empty() && !own_types_[a.type]) continue;
       const Vec3 d1 = system.box.minimum_image(x[a.i] - x[a.j]);
       const Vec3 d2 = system.box.minimum_image(x[a.k] - x[a.j]);
       const double r1sq = norm2(d1), r2sq = norm2(d2);
@@ -56,6 +59,7 @@ class AngleForce final : public ForceTerm {
 
  private:
   std::vector<Params> by_type_;
+  std::vector<char> own_types_;  // empty: every type
 };
 
 }  // namespace deli

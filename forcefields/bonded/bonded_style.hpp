@@ -20,9 +20,11 @@ struct BondedStyle {
   std::string name;  // the input's style, which is LAMMPS' too
   std::vector<StyleCoefficient> coefficients;
   std::string data_form;  // what a data-file row holds, for errors: "harmonic bond ... K r0"
-  // The term for every bond (angle) of the system, from the coefficients by type (each in
-  // `coefficients`' order, angles in radians).
-  std::unique_ptr<ForceTerm> (*make_term)(const std::vector<std::vector<double>>& by_type);
+  // The term for the bonds (angles) of the system, from the coefficients by type (each in
+  // `coefficients`' order, angles in radians): of every type, or of those set in
+  // `own_types` (a system of several styles; the other types' rows are zeros).
+  std::unique_ptr<ForceTerm> (*make_term)(const std::vector<std::vector<double>>& by_type,
+                                          std::vector<char> own_types);
   // The energy as an OpenMM CustomBondForce (of r) or CustomAngleForce (of theta)
   // expression in the coefficients' names; empty: not available in OpenMM.
   std::string openmm_energy;

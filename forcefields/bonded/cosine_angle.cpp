@@ -21,18 +21,20 @@ static_assert(AngleEvaluator<CosineAngle>);
 }  // namespace
 
 const BondedStyle& cosine_angle_style() {
-  static const BondedStyle style{
-      BondedKind::angle,
-      "cosine",
-      {{"k"}},
-      "cosine angle coefficients K",
-      [](const std::vector<std::vector<double>>& by_type) -> std::unique_ptr<ForceTerm> {
-        std::vector<CosineAngle::Params> params;
-        for (const std::vector<double>& c : by_type) params.push_back({c[0]});
-        return std::make_unique<AngleForce<CosineAngle>>(std::move(params));
-      },
-      "k*(1 + cos(theta))",
-      "cosine"};
+  static const BondedStyle style{BondedKind::angle,
+                                 "cosine",
+                                 {{"k"}},
+                                 "cosine angle coefficients K",
+                                 [](const std::vector<std::vector<double>>& by_type,
+                                    std::vector<char> own_types) -> std::unique_ptr<ForceTerm> {
+                                   std::vector<CosineAngle::Params> params;
+                                   for (const std::vector<double>& c : by_type)
+                                     params.push_back({c[0]});
+                                   return std::make_unique<AngleForce<CosineAngle>>(
+                                       std::move(params), std::move(own_types));
+                                 },
+                                 "k*(1 + cos(theta))",
+                                 "cosine"};
   return style;
 }
 

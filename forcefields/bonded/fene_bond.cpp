@@ -53,10 +53,12 @@ const BondedStyle& fene_bond_style() {
       "fene",
       {{"k", Check::positive}, {"r0", Check::positive}, {"epsilon"}, {"sigma", Check::positive}},
       "fene bond coefficients K R0 epsilon sigma",
-      [](const std::vector<std::vector<double>>& by_type) -> std::unique_ptr<ForceTerm> {
+      [](const std::vector<std::vector<double>>& by_type,
+         std::vector<char> own_types) -> std::unique_ptr<ForceTerm> {
         std::vector<FeneBond::Params> params;
         for (const std::vector<double>& c : by_type) params.push_back({c[0], c[1], c[2], c[3]});
-        return std::make_unique<BondForce<FeneBond>>("bond", std::move(params));
+        return std::make_unique<BondForce<FeneBond>>("bond", std::move(params),
+                                                     std::move(own_types));
       },
       "-0.5*k*r0^2*log(1 - (r/r0)^2) + step(2^(1/6)*sigma - r)*(4*epsilon*((sigma/r)^12 - "
       "(sigma/r)^6) + epsilon)",

@@ -29,18 +29,20 @@ static_assert(AngleEvaluator<HarmonicAngle>);
 }  // namespace
 
 const BondedStyle& harmonic_angle_style() {
-  static const BondedStyle style{
-      BondedKind::angle,
-      "harmonic",
-      {{"k"}, {"theta0", StyleCoefficient::Check::any, true}},
-      "harmonic angle coefficients K theta0",
-      [](const std::vector<std::vector<double>>& by_type) -> std::unique_ptr<ForceTerm> {
-        std::vector<HarmonicAngle::Params> params;
-        for (const std::vector<double>& c : by_type) params.push_back({c[0], c[1]});
-        return std::make_unique<AngleForce<HarmonicAngle>>(std::move(params));
-      },
-      "k*(theta - theta0)^2",
-      "harmonic"};
+  static const BondedStyle style{BondedKind::angle,
+                                 "harmonic",
+                                 {{"k"}, {"theta0", StyleCoefficient::Check::any, true}},
+                                 "harmonic angle coefficients K theta0",
+                                 [](const std::vector<std::vector<double>>& by_type,
+                                    std::vector<char> own_types) -> std::unique_ptr<ForceTerm> {
+                                   std::vector<HarmonicAngle::Params> params;
+                                   for (const std::vector<double>& c : by_type)
+                                     params.push_back({c[0], c[1]});
+                                   return std::make_unique<AngleForce<HarmonicAngle>>(
+                                       std::move(params), std::move(own_types));
+                                 },
+                                 "k*(theta - theta0)^2",
+                                 "harmonic"};
   return style;
 }
 

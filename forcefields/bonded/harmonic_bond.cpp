@@ -26,18 +26,20 @@ static_assert(BondEvaluator<HarmonicBond>);
 }  // namespace
 
 const BondedStyle& harmonic_bond_style() {
-  static const BondedStyle style{
-      BondedKind::bond,
-      "harmonic",
-      {{"k"}, {"r0", StyleCoefficient::Check::positive}},
-      "harmonic bond coefficients K r0",
-      [](const std::vector<std::vector<double>>& by_type) -> std::unique_ptr<ForceTerm> {
-        std::vector<HarmonicBond::Params> params;
-        for (const std::vector<double>& c : by_type) params.push_back({c[0], c[1]});
-        return std::make_unique<BondForce<HarmonicBond>>("bond", std::move(params));
-      },
-      "k*(r - r0)^2",
-      "harmonic"};
+  static const BondedStyle style{BondedKind::bond,
+                                 "harmonic",
+                                 {{"k"}, {"r0", StyleCoefficient::Check::positive}},
+                                 "harmonic bond coefficients K r0",
+                                 [](const std::vector<std::vector<double>>& by_type,
+                                    std::vector<char> own_types) -> std::unique_ptr<ForceTerm> {
+                                   std::vector<HarmonicBond::Params> params;
+                                   for (const std::vector<double>& c : by_type)
+                                     params.push_back({c[0], c[1]});
+                                   return std::make_unique<BondForce<HarmonicBond>>(
+                                       "bond", std::move(params), std::move(own_types));
+                                 },
+                                 "k*(r - r0)^2",
+                                 "harmonic"};
   return style;
 }
 

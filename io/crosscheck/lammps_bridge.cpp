@@ -27,10 +27,13 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     throw UnsupportedModel("LAMMPS has no pair style '" + spec.pair->style->name + "'");
   }
   for (const std::optional<BondedSpec>* bonded : {&spec.bond, &spec.angle}) {
-    if (*bonded && (*bonded)->style->lammps_style.empty()) {
-      throw UnsupportedModel("LAMMPS has no " +
-                             std::string(bonded == &spec.bond ? "bond" : "angle") + " style '" +
-                             (*bonded)->style->name + "'");
+    if (!*bonded) continue;
+    for (const BondedStyle* style : (*bonded)->styles()) {
+      if (style->lammps_style.empty()) {
+        throw UnsupportedModel("LAMMPS has no " +
+                               std::string(bonded == &spec.bond ? "bond" : "angle") + " style '" +
+                               style->name + "'");
+      }
     }
   }
   const bool bonds = !system.topology.bonds.empty(), angles = !system.topology.angles.empty();
@@ -81,8 +84,14 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     unsupported("pair_style " + spec.pair->style->lammps_style);
   }
   for (const auto& [kind, bonded] : {std::pair{"bond", &spec.bond}, {"angle", &spec.angle}}) {
-    if (*bonded && !lammps_has_style(lammps_, kind, (*bonded)->style->lammps_style.c_str())) {
-      unsupported(std::string(kind) + "_style " + (*bonded)->style->lammps_style);
+    if (!*bonded) continue;
+    std::vector<std::string> needed;
+    for (const BondedStyle* style : (*bonded)->styles()) needed.push_back(style->lammps_style);
+    if (needed.size() > 1) needed.push_back("hybrid");
+    for (const std::string& name : needed) {
+      if (!lammps_has_style(lammps_, kind, name.c_str())) {
+        unsupported(std::string(kind) + "_style " + name);
+      }
     }
   }
 
@@ -181,14 +190,21 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
 
 // "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
 // coefficients in order, angles back in degrees.
+// "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
+// coefficients in order, angles back in degrees; several styles as LAMMPS' hybrid, each
+// coeff line naming its type's style.
 void LammpsBridge::bonded_style(const std::string& kind, const BondedSpec& bonded) {
-  command(kind + "_style " + bonded.style->lammps_style);
+  const std::vector<const BondedStyle*> styles = bonded.styles();
+  const bool hybrid = styles.size() > 1;
+  std::string line = kind + "_style" + (hybrid ? " hybrid" : "");
+  for (const BondedStyle* style : styles) line += " " + style->lammps_style;
+  command(line);
   for (std::size_t t = 0; t < bonded.by_type.size(); ++t) {
-    std::string line = kind + "_coeff " + std::to_string(t + 1);
+    const BondedStyle& style = *bonded.style_by_type[t];
+    line = kind + "_coeff " + std::to_string(t + 1) + (hybrid ? " " + style.lammps_style : "");
     for (std::size_t k = 0; k < bonded.by_type[t].size(); ++k) {
       const double v = bonded.by_type[t][k];
-      line +=
-          " " + number(bonded.style->coefficients[k].degrees ? v * 180.0 / std::numbers::pi : v);
+      line += " " + number(style.coefficients[k].degrees ? v * 180.0 / std::numbers::pi : v);
     }
     command(line);
   }

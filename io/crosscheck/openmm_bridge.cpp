@@ -146,38 +146,42 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
       delete scaled;
     }
   }
-  // Bonds and angles: each style's registered energy expression, its coefficients as
-  // per-bond (per-angle) parameters.
-  auto unavailable = [](const BondedSpec& bonded, const char* kind) {
-    if (bonded.style->openmm_energy.empty()) {
-      throw UnsupportedModel(std::string("OpenMM has no ") + kind + " style '" +
-                             bonded.style->name + "' here");
+  // Bonds and angles: per style, its registered energy expression with its coefficients
+  // as per-bond (per-angle) parameters, for the bonds of that style's types.
+  auto checked = [](const BondedStyle& style, const char* kind) {
+    if (style.openmm_energy.empty()) {
+      throw UnsupportedModel(std::string("OpenMM has no ") + kind + " style '" + style.name +
+                             "' here");
     }
-    return bonded.style->openmm_energy;
+    return style.openmm_energy;
   };
   if (spec.bond) {
-    auto* bonds = new OpenMM::CustomBondForce(unavailable(*spec.bond, "bond"));
-    for (const StyleCoefficient& c : spec.bond->style->coefficients) {
-      bonds->addPerBondParameter(c.name);
+    for (const BondedStyle* style : spec.bond->styles()) {
+      auto* bonds = new OpenMM::CustomBondForce(checked(*style, "bond"));
+      for (const StyleCoefficient& c : style->coefficients) bonds->addPerBondParameter(c.name);
+      for (const Bond& b : sys.topology.bonds) {
+        if (spec.bond->style_by_type[b.type] != style) continue;
+        bonds->addBond(b.i, b.j, spec.bond->by_type[b.type]);
+      }
+      bonds->setUsesPeriodicBoundaryConditions(m.periodic);
+      bonds->setForceGroup(kBondGroup);
+      m.system.addForce(bonds);
     }
-    for (const Bond& b : sys.topology.bonds) bonds->addBond(b.i, b.j, spec.bond->by_type[b.type]);
-    bonds->setUsesPeriodicBoundaryConditions(m.periodic);
-    bonds->setForceGroup(kBondGroup);
-    m.system.addForce(bonds);
     m.term_names.push_back("bond");
     m.term_groups.push_back(1 << kBondGroup);
   }
   if (spec.angle) {
-    auto* angles = new OpenMM::CustomAngleForce(unavailable(*spec.angle, "angle"));
-    for (const StyleCoefficient& c : spec.angle->style->coefficients) {
-      angles->addPerAngleParameter(c.name);
+    for (const BondedStyle* style : spec.angle->styles()) {
+      auto* angles = new OpenMM::CustomAngleForce(checked(*style, "angle"));
+      for (const StyleCoefficient& c : style->coefficients) angles->addPerAngleParameter(c.name);
+      for (const Angle& a : sys.topology.angles) {
+        if (spec.angle->style_by_type[a.type] != style) continue;
+        angles->addAngle(a.i, a.j, a.k, spec.angle->by_type[a.type]);
+      }
+      angles->setUsesPeriodicBoundaryConditions(m.periodic);
+      angles->setForceGroup(kAngleGroup);
+      m.system.addForce(angles);
     }
-    for (const Angle& a : sys.topology.angles) {
-      angles->addAngle(a.i, a.j, a.k, spec.angle->by_type[a.type]);
-    }
-    angles->setUsesPeriodicBoundaryConditions(m.periodic);
-    angles->setForceGroup(kAngleGroup);
-    m.system.addForce(angles);
     m.term_names.push_back("angle");
     m.term_groups.push_back(1 << kAngleGroup);
   }

@@ -160,7 +160,7 @@ std::vector<std::vector<double>> by_type(TomlTable& t, int types, const std::str
   for (TomlTable& c : t.tables("coeffs")) {
     const int k = type_index(c, "type", c.number("type"), types, what);
     if (given[k]) c.fail("coefficients for this " + what + " type were already given", "type");
-    params[k] = read_one(c);
+    params[k] = read_one(c, k);
     given[k] = true;
     ++from_input;
     c.finish();
@@ -214,7 +214,9 @@ std::string alternatives(const std::vector<std::string>& names) {
 }
 
 // [forcefield.bond] or [forcefield.angle]: a registered style and its coefficients by
-// type, read as the style's registration describes them.
+// type, read as the style's registration describes them. A type's coeffs may name a style
+// of their own (several styles in one system, as LAMMPS' hybrid); the data file's section
+// is for the table's style.
 BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::string& what,
                        const DataCoefficients& data, const CoefficientSection& section,
                        const char* section_name, std::vector<std::string>& notes) {
@@ -223,11 +225,15 @@ BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::stri
   const BondedStyle& style = *find_bonded_style(kind, name);
   BondedSpec spec;
   spec.style = &style;
+  spec.style_by_type.assign(static_cast<std::size_t>(types), &style);
   spec.by_type = by_type(
       t, types, what,
-      [&](TomlTable& c) {
+      [&](TomlTable& c, int type) {
+        const BondedStyle& own =
+            c.has("style") ? *find_bonded_style(kind, c.choice("style", style_names(kind))) : style;
+        spec.style_by_type[static_cast<std::size_t>(type)] = &own;
         std::vector<double> values;
-        for (const StyleCoefficient& k : style.coefficients) {
+        for (const StyleCoefficient& k : own.coefficients) {
           const double v = read_coefficient(c, k);
           values.push_back(k.degrees ? to_radians(v) : v);
         }
