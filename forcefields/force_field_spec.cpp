@@ -2,11 +2,9 @@
 
 #include <algorithm>
 
-#include "bonded/bond_force.hpp"
+#include "bonded/term_sum.hpp"
 #include "external/gravity.hpp"
 #include "external/radial_potentials.hpp"
-#include "pair/lennard_jones.hpp"
-#include "pair/pair_force.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -31,32 +29,45 @@ std::vector<ScaledPair> scaled_special_pairs(const System& system,
   }
   return scaled;
 }
+// One style's term, or, when types differ in style, one term per style (each computing the
+// bonds of its own types) summed under the kind's name, as LAMMPS' hybrid styles do.
+std::unique_ptr<ForceTerm> bonded_term(const BondedSpec& spec, const std::string& name) {
+  const std::vector<const BondedStyle*> styles = spec.styles();
+  if (styles.size() == 1) return styles.front()->make_term(spec.by_type, {});
+  auto sum = std::make_unique<TermSum>(name);
+  for (const BondedStyle* style : styles) {
+    std::vector<std::vector<double>> by_type = spec.by_type;
+    std::vector<char> own(by_type.size(), 0);
+    for (std::size_t t = 0; t < by_type.size(); ++t) {
+      own[t] = spec.style_by_type[t] == style;
+      if (!own[t]) by_type[t].assign(style->coefficients.size(), 0.0);
+    }
+    sum->add(style->make_term(by_type, own));
+  }
+  return sum;
+}
+
 }  // namespace
+
+std::vector<const BondedStyle*> BondedSpec::styles() const {
+  std::vector<const BondedStyle*> distinct;
+  for (const BondedStyle* s : style_by_type) {
+    if (std::find(distinct.begin(), distinct.end(), s) == distinct.end()) distinct.push_back(s);
+  }
+  if (distinct.empty()) distinct.push_back(style);  // a kind with no types
+  return distinct;
+}
 
 std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const System& system) {
   auto ff = std::make_unique<ForceField>();
   ff->special_lj = spec.special_lj;
   if (spec.pair) {
-    const PairCoefficients& c = spec.pair->coefficients;
-    std::vector<LennardJones::Params> table;
-    for (int a = 0; a < c.type_count(); ++a) {
-      for (int b = 0; b < c.type_count(); ++b) {
-        const PairCoefficient& p = c.at(a, b);
-        table.push_back(LennardJones::make(p.epsilon, p.sigma, p.cutoff, spec.pair->shift));
-      }
-    }
-    ff->add(std::make_unique<PairForce<LennardJones>>(
-        "pair", c.type_count(), std::move(table), spec.pair->max_cutoff(),
-        scaled_special_pairs(system, spec.special_lj)));
+    ff->add(spec.pair->style->make_term(spec.pair->coefficients, spec.pair->shift,
+                                        spec.pair->max_cutoff(),
+                                        scaled_special_pairs(system, spec.special_lj)));
   }
-  if (spec.bond) {
-    if (spec.bond->style == BondSpec::Style::harmonic) {
-      ff->add(std::make_unique<BondForce<HarmonicBond>>("bond", spec.bond->harmonic));
-    } else {
-      ff->add(std::make_unique<BondForce<FeneBond>>("bond", spec.bond->fene));
-    }
-  }
-  if (spec.angle) ff->add(std::make_unique<HarmonicAngle>(spec.angle->harmonic));
+  if (spec.bond) ff->add(bonded_term(*spec.bond, "bond"));
+  if (spec.angle) ff->add(bonded_term(*spec.angle, "angle"));
   if (spec.gravity) ff->add(std::make_unique<Gravity>(*spec.gravity));
   for (const ForceFieldSpec::Radial& r : spec.radial) {
     ff->add(std::make_unique<RadialPotential>(r.inverse_square

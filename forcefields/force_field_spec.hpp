@@ -6,10 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "bonded/bond_styles.hpp"
-#include "bonded/harmonic_angle.hpp"
+#include "bonded/bonded_style.hpp"
 #include "forces/force_field.hpp"
-#include "pair/pair_coefficients.hpp"
+#include "pair/pair_style.hpp"
 
 namespace deli {
 
@@ -19,29 +18,27 @@ struct System;
 // covered): what deli builds its force terms from, and what the OpenMM and LAMMPS
 // bridges translate, so that all three engines see the same model.
 struct PairSpec {
-  enum class Style { lj_cut, wca };
-  Style style = Style::lj_cut;
+  const PairStyle* style = nullptr;
   bool shift = false;
   PairCoefficients coefficients{1, 0.0};  // per type pair, cutoffs included
   double max_cutoff() const;
 };
 
-struct BondSpec {
-  enum class Style { harmonic, fene };
-  Style style = Style::harmonic;
-  std::vector<HarmonicBond::Params> harmonic;  // by bond type
-  std::vector<FeneBond::Params> fene;
-};
-
-struct AngleSpec {
-  std::vector<HarmonicAngle::Params> harmonic;  // by angle type; theta0 in radians
+// The bonds' or the angles' style and its coefficients by type, each in the style's
+// coefficient order (angles in radians).
+struct BondedSpec {
+  const BondedStyle* style = nullptr;             // the table's
+  std::vector<const BondedStyle*> style_by_type;  // the table's, or the type's own
+  std::vector<std::vector<double>> by_type;
+  // The styles in use, each once, in the order of their first type.
+  std::vector<const BondedStyle*> styles() const;
 };
 
 struct ForceFieldSpec {
   std::array<double, 3> special_lj{0.0, 0.0, 0.0};  // LAMMPS special_bonds lj 1-2 1-3 1-4
   std::optional<PairSpec> pair;
-  std::optional<BondSpec> bond;
-  std::optional<AngleSpec> angle;
+  std::optional<BondedSpec> bond;
+  std::optional<BondedSpec> angle;
   std::optional<Vec3> gravity;  // uniform field, force per unit mass
   struct Radial {
     bool inverse_square = false;  // else polynomial in |x - c|^2

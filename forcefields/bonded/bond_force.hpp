@@ -11,14 +11,15 @@
 
 namespace deli {
 
-// All bonds of one style; params indexed by bond type.
+// All bonds of one style (or of the types set in own_types, when the system has several);
+// params indexed by bond type.
 template <BondEvaluator Evaluator>
 class BondForce final : public ForceTerm {
  public:
   using Params = typename Evaluator::Params;
 
-  BondForce(std::string name, std::vector<Params> by_type)
-      : name_(std::move(name)), by_type_(std::move(by_type)) {}
+  BondForce(std::string name, std::vector<Params> by_type, std::vector<char> own_types = {})
+      : name_(std::move(name)), by_type_(std::move(by_type)), own_types_(std::move(own_types)) {}
 
   std::string name() const override { return name_; }
 
@@ -27,6 +28,7 @@ class BondForce final : public ForceTerm {
     const std::vector<Vec3>& x = system.particles.position;
     for (const Bond& b : system.topology.bonds) {
       if (!mask.empty() && !mask[b.i] && !mask[b.j]) continue;
+      if (!own_types_.empty() && !own_types_[b.type]) continue;
       const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
       const double r2 = norm2(d);
       double f_over_r, e;
@@ -44,6 +46,7 @@ class BondForce final : public ForceTerm {
     const std::vector<Vec3>& x = system.particles.position;
     double energy = 0.0;
     for (const Bond& b : system.topology.bonds) {
+      if (!own_types_.empty() && !own_types_[b.type]) continue;
       const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
       double f_over_r, e;
       if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) {
@@ -71,6 +74,7 @@ class BondForce final : public ForceTerm {
  private:
   std::string name_;
   std::vector<Params> by_type_;
+  std::vector<char> own_types_;  // empty: every type
 };
 
 }  // namespace deli

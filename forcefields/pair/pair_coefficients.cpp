@@ -10,9 +10,8 @@ PairCoefficients::PairCoefficients(int type_count, double global_cutoff)
       table_(static_cast<std::size_t>(type_count * type_count)),
       given_(static_cast<std::size_t>(type_count * type_count), false) {}
 
-void PairCoefficients::set(int a, int b, double epsilon, double sigma,
-                           std::optional<double> cutoff) {
-  const PairCoefficient c{epsilon, sigma, cutoff.value_or(global_cutoff_)};
+void PairCoefficients::set(int a, int b, std::vector<double> values, std::optional<double> cutoff) {
+  const PairCoefficient c{std::move(values), cutoff.value_or(global_cutoff_)};
   table_[a * type_count_ + b] = table_[b * type_count_ + a] = c;
   given_[a * type_count_ + b] = given_[b * type_count_ + a] = true;
 }
@@ -21,7 +20,7 @@ bool PairCoefficients::is_set(int a, int b) const {
   return given_[a * type_count_ + b];
 }
 
-std::vector<int> PairCoefficients::resolve(Mixing mixing) {
+std::vector<int> PairCoefficients::resolve(Mixing mixing, const std::vector<MixRule>& rules) {
   std::vector<int> missing;
   for (int a = 0; a < type_count_; ++a) {
     if (!is_set(a, a)) missing.push_back(a);
@@ -35,8 +34,12 @@ std::vector<int> PairCoefficients::resolve(Mixing mixing) {
       if (is_set(a, b)) continue;
       const PairCoefficient& ca = at(a, a);
       const PairCoefficient& cb = at(b, b);
-      const PairCoefficient c{std::sqrt(ca.epsilon * cb.epsilon), mix(ca.sigma, cb.sigma),
-                              mix(ca.cutoff, cb.cutoff)};
+      PairCoefficient c;
+      for (std::size_t k = 0; k < rules.size(); ++k) {
+        const double x = ca.values[k], y = cb.values[k];
+        c.values.push_back(rules[k] == MixRule::geometric ? std::sqrt(x * y) : mix(x, y));
+      }
+      c.cutoff = mix(ca.cutoff, cb.cutoff);
       table_[a * type_count_ + b] = table_[b * type_count_ + a] = c;
     }
   }

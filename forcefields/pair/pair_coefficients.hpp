@@ -8,23 +8,28 @@ namespace deli {
 
 enum class Mixing { arithmetic, geometric };
 
-// epsilon, sigma and cutoff for one pair of types.
+// How an unlike pair's coefficient follows from the like pairs': always their geometric
+// mean (LJ's epsilon), or by the input's mixing rule (LJ's sigma; the cutoff always).
+enum class MixRule { geometric, chosen };
+
+// One pair of types: the style's coefficients (its registration's order) and the cutoff.
 struct PairCoefficient {
-  double epsilon = 0, sigma = 0, cutoff = 0;
+  std::vector<double> values;
+  double cutoff = 0;
 };
 
-// Per-type-pair coefficients as given by the user, completed by mixing: a pair not given
-// takes epsilon = sqrt(eps_i eps_j) and sigma, cutoff mixed from the like pairs
-// (arithmetic: Lorentz-Berthelot; geometric), as LAMMPS' pair_modify mix does.
+// Per-type-pair coefficients as given by the user, completed by mixing (as LAMMPS'
+// pair_modify mix does): arithmetic is Lorentz-Berthelot for LJ.
 class PairCoefficients {
  public:
   PairCoefficients(int type_count, double global_cutoff);
 
   int type_count() const { return type_count_; }
-  void set(int type_a, int type_b, double epsilon, double sigma, std::optional<double> cutoff);
+  void set(int type_a, int type_b, std::vector<double> values, std::optional<double> cutoff);
   bool is_set(int type_a, int type_b) const;
-  // Fills unset unlike pairs; returns the like pairs that are missing (0-based types).
-  std::vector<int> resolve(Mixing mixing);
+  // Fills unset unlike pairs, coefficient k by rules[k]; returns the like pairs that are
+  // missing (0-based types).
+  std::vector<int> resolve(Mixing mixing, const std::vector<MixRule>& rules);
   const PairCoefficient& at(int type_a, int type_b) const {
     return table_[type_a * type_count_ + type_b];
   }

@@ -23,6 +23,19 @@ std::string number(double v) {
 }  // namespace
 
 LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, double skin) {
+  if (spec.pair && spec.pair->style->lammps_style.empty()) {
+    throw UnsupportedModel("LAMMPS has no pair style '" + spec.pair->style->name + "'");
+  }
+  for (const std::optional<BondedSpec>* bonded : {&spec.bond, &spec.angle}) {
+    if (!*bonded) continue;
+    for (const BondedStyle* style : (*bonded)->styles()) {
+      if (style->lammps_style.empty()) {
+        throw UnsupportedModel("LAMMPS has no " +
+                               std::string(bonded == &spec.bond ? "bond" : "angle") + " style '" +
+                               style->name + "'");
+      }
+    }
+  }
   const bool bonds = !system.topology.bonds.empty(), angles = !system.topology.angles.empty();
   // Terms as deli has them: bonds held as rods are in the topology but not in the force field.
   has_bonds_ = bonds && spec.bond;
@@ -55,14 +68,30 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   lammps_ = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   // A missing style would be a LAMMPS error, which ends the process: ask first.
   const bool external = spec.gravity || !spec.radial.empty();
+  auto unsupported = [&](const std::string& what) {
+    lammps_close(lammps_);
+    lammps_ = nullptr;
+    std::error_code ignored;
+    std::filesystem::remove(data_path_, ignored);
+    throw UnsupportedModel("this LAMMPS has no " + what);
+  };
   for (const char* fix : {"gravity", "addforce"}) {
     if (external && !lammps_has_style(lammps_, "fix", fix)) {
-      lammps_close(lammps_);
-      lammps_ = nullptr;
-      std::error_code ignored;
-      std::filesystem::remove(data_path_, ignored);
-      throw UnsupportedModel(std::string("this LAMMPS has no fix ") + fix +
-                             " (needed for the input's external field)");
+      unsupported(std::string("fix ") + fix + " (needed for the input's external field)");
+    }
+  }
+  if (spec.pair && !lammps_has_style(lammps_, "pair", spec.pair->style->lammps_style.c_str())) {
+    unsupported("pair_style " + spec.pair->style->lammps_style);
+  }
+  for (const auto& [kind, bonded] : {std::pair{"bond", &spec.bond}, {"angle", &spec.angle}}) {
+    if (!*bonded) continue;
+    std::vector<std::string> needed;
+    for (const BondedStyle* style : (*bonded)->styles()) needed.push_back(style->lammps_style);
+    if (needed.size() > 1) needed.push_back("hybrid");
+    for (const std::string& name : needed) {
+      if (!lammps_has_style(lammps_, kind, name.c_str())) {
+        unsupported(std::string(kind) + "_style " + name);
+      }
     }
   }
 
@@ -79,12 +108,13 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
           " " + number(spec.special_lj[2]));
   if (spec.pair) {
     const PairCoefficients& c = spec.pair->coefficients;
-    command("pair_style lj/cut " + number(spec.pair->max_cutoff()));
+    command("pair_style " + spec.pair->style->lammps_style + " " + number(spec.pair->max_cutoff()));
     for (int a = 0; a < c.type_count(); ++a) {
       for (int b = a; b < c.type_count(); ++b) {
         const PairCoefficient& p = c.at(a, b);
-        command("pair_coeff " + std::to_string(a + 1) + " " + std::to_string(b + 1) + " " +
-                number(p.epsilon) + " " + number(p.sigma) + " " + number(p.cutoff));
+        std::string line = "pair_coeff " + std::to_string(a + 1) + " " + std::to_string(b + 1);
+        for (double v : p.values) line += " " + number(v);
+        command(line + " " + number(p.cutoff));
       }
     }
     command(std::string("pair_modify shift ") + (spec.pair->shift ? "yes" : "no"));
@@ -92,22 +122,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     command("pair_style zero 1.0");
     command("pair_coeff * *");
   }
-  if (spec.bond) {
-    if (spec.bond->style == BondSpec::Style::harmonic) {
-      command("bond_style harmonic");
-      for (std::size_t t = 0; t < spec.bond->harmonic.size(); ++t) {
-        const HarmonicBond::Params& p = spec.bond->harmonic[t];
-        command("bond_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " + number(p.r0));
-      }
-    } else {
-      command("bond_style fene");
-      for (std::size_t t = 0; t < spec.bond->fene.size(); ++t) {
-        const FeneBond::Params& p = spec.bond->fene[t];
-        command("bond_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " + number(p.r0) +
-                " " + number(p.epsilon) + " " + number(p.sigma));
-      }
-    }
-  }
+  if (spec.bond) bonded_style("bond", *spec.bond);
   if (bonds && !spec.bond) {  // rods: bonds for the exclusions, no force
     command("bond_style zero");
     command("bond_coeff *");
@@ -166,18 +181,33 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     command("fix_modify " + tag + "fix energy yes");
     external_fixes_.push_back(tag + "fix");
   }
-  if (spec.angle) {
-    command("angle_style harmonic");
-    for (std::size_t t = 0; t < spec.angle->harmonic.size(); ++t) {
-      const HarmonicAngle::Params& p = spec.angle->harmonic[t];
-      command("angle_coeff " + std::to_string(t + 1) + " " + number(p.k) + " " +
-              number(p.theta0 * 180.0 / std::numbers::pi));
-    }
-  }
+  if (spec.angle) bonded_style("angle", *spec.angle);
   command("compute deli_virial all pressure NULL virial");
   command("compute deli_unwrapped all property/atom xu yu zu");
   command("thermo_style custom step pe ke evdwl ebond eangle press vol c_deli_virial");
   command("thermo_modify norm no");
+}
+
+// "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
+// coefficients in order, angles back in degrees.
+// "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
+// coefficients in order, angles back in degrees; several styles as LAMMPS' hybrid, each
+// coeff line naming its type's style.
+void LammpsBridge::bonded_style(const std::string& kind, const BondedSpec& bonded) {
+  const std::vector<const BondedStyle*> styles = bonded.styles();
+  const bool hybrid = styles.size() > 1;
+  std::string line = kind + "_style" + (hybrid ? " hybrid" : "");
+  for (const BondedStyle* style : styles) line += " " + style->lammps_style;
+  command(line);
+  for (std::size_t t = 0; t < bonded.by_type.size(); ++t) {
+    const BondedStyle& style = *bonded.style_by_type[t];
+    line = kind + "_coeff " + std::to_string(t + 1) + (hybrid ? " " + style.lammps_style : "");
+    for (std::size_t k = 0; k < bonded.by_type[t].size(); ++k) {
+      const double v = bonded.by_type[t][k];
+      line += " " + number(style.coefficients[k].degrees ? v * 180.0 / std::numbers::pi : v);
+    }
+    command(line);
+  }
 }
 
 LammpsBridge::~LammpsBridge() {

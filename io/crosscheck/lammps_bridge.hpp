@@ -40,6 +40,7 @@ class LammpsBridge {
  private:
   void command(const std::string& line);
   std::vector<Vec3> per_atom(const char* compute_or_name, bool is_compute);
+  void bonded_style(const std::string& kind, const BondedSpec& bonded);
 
   void* lammps_ = nullptr;
   std::string data_path_;

@@ -31,8 +31,6 @@ constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup 
 // k_B N_A in kJ/mol/K, exactly as OpenMM's BOLTZ (SI 2019 constants).
 constexpr double kBoltzmannKJPerMolK = 1.380649e-23 * 6.02214076e23 / 1000.0;
 
-const char* kLennardJones = "4*eps*((sig/r)^12 - (sig/r)^6) - shift";
-
 }  // namespace
 
 struct OpenMMBridge::Impl {
@@ -83,28 +81,36 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
 
   const SpecialPairs special = find_special_pairs(sys.topology, sys.particles.size());
   if (spec.pair) {
+    const PairStyle& style = *spec.pair->style;
+    if (style.openmm_energy.empty()) {
+      throw UnsupportedModel("OpenMM has no pair style '" + style.name + "' here");
+    }
     const PairCoefficients& c = spec.pair->coefficients;
     const int types = c.type_count();
-    std::vector<double> eps, sig, cut, shift;
+    const std::size_t count = style.coefficients.size();
+    // Per type pair: the coefficients, then the cutoff and the shift, each a table.
+    std::vector<std::vector<double>> tables(count + 2);
     for (int b = 0; b < types; ++b) {
       for (int a = 0; a < types; ++a) {
         const PairCoefficient& p = c.at(a, b);
-        eps.push_back(p.epsilon);
-        sig.push_back(p.sigma);
-        cut.push_back(p.cutoff);
-        const double sr6 = std::pow(p.sigma / p.cutoff, 6);
-        shift.push_back(spec.pair->shift ? 4 * p.epsilon * (sr6 * sr6 - sr6) : 0.0);
+        for (std::size_t k = 0; k < count; ++k) tables[k].push_back(p.values[k]);
+        tables[count].push_back(p.cutoff);
+        tables[count + 1].push_back(spec.pair->shift ? style.energy(p.values, p.cutoff) : 0.0);
       }
     }
-    const std::string expression = std::string("step(cut - r)*(") + kLennardJones +
-                                   "); eps = epsT(t1, t2); sig = sigT(t1, t2); "
-                                   "cut = cutT(t1, t2); shift = shiftT(t1, t2)";
+    std::vector<std::string> names;
+    for (const StyleCoefficient& k : style.coefficients) names.push_back(k.name);
+    names.push_back("cut");
+    names.push_back("shift");
+    const std::string energy = "step(cut - r)*(" + style.openmm_energy + " - shift)";
+    std::string expression = energy;
+    for (const std::string& n : names) expression += "; " + n + " = " + n + "T(t1, t2)";
     auto* pair = new OpenMM::CustomNonbondedForce(expression);
     pair->addPerParticleParameter("t");
-    pair->addTabulatedFunction("epsT", new OpenMM::Discrete2DFunction(types, types, eps));
-    pair->addTabulatedFunction("sigT", new OpenMM::Discrete2DFunction(types, types, sig));
-    pair->addTabulatedFunction("cutT", new OpenMM::Discrete2DFunction(types, types, cut));
-    pair->addTabulatedFunction("shiftT", new OpenMM::Discrete2DFunction(types, types, shift));
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      pair->addTabulatedFunction(names[k] + "T",
+                                 new OpenMM::Discrete2DFunction(types, types, tables[k]));
+    }
     pair->setNonbondedMethod(m.periodic ? OpenMM::CustomNonbondedForce::CutoffPeriodic
                                         : OpenMM::CustomNonbondedForce::CutoffNonPeriodic);
     pair->setCutoffDistance(spec.pair->max_cutoff());
@@ -114,9 +120,9 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     pair->setForceGroup(kPairGroup);
 
     // Special pairs: excluded from the nonbonded force; scaled ones come back as bonds.
-    auto* scaled =
-        new OpenMM::CustomBondForce(std::string("f*step(cut - r)*(") + kLennardJones + ")");
-    for (const char* p : {"f", "eps", "sig", "cut", "shift"}) scaled->addPerBondParameter(p);
+    auto* scaled = new OpenMM::CustomBondForce("f*" + energy);
+    scaled->addPerBondParameter("f");
+    for (const std::string& n : names) scaled->addPerBondParameter(n);
     scaled->setUsesPeriodicBoundaryConditions(m.periodic);
     scaled->setForceGroup(kScaledPairGroup);
     for (int s = 0; s < 3; ++s) {
@@ -126,7 +132,9 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
         if (spec.special_lj[s] == 0.0) continue;
         const int ti = sys.particles.type[i], tj = sys.particles.type[j];
         const std::size_t k = static_cast<std::size_t>(ti + types * tj);
-        scaled->addBond(i, j, {spec.special_lj[s], eps[k], sig[k], cut[k], shift[k]});
+        std::vector<double> parameters{spec.special_lj[s]};
+        for (const std::vector<double>& table : tables) parameters.push_back(table[k]);
+        scaled->addBond(i, j, parameters);
       }
     }
     m.system.addForce(pair);
@@ -138,24 +146,22 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
       delete scaled;
     }
   }
+  // Bonds and angles: per style, its registered energy expression with its coefficients
+  // as per-bond (per-angle) parameters, for the bonds of that style's types.
+  auto checked = [](const BondedStyle& style, const char* kind) {
+    if (style.openmm_energy.empty()) {
+      throw UnsupportedModel(std::string("OpenMM has no ") + kind + " style '" + style.name +
+                             "' here");
+    }
+    return style.openmm_energy;
+  };
   if (spec.bond) {
-    if (spec.bond->style == BondSpec::Style::harmonic) {
-      auto* bonds = new OpenMM::HarmonicBondForce();
+    for (const BondedStyle* style : spec.bond->styles()) {
+      auto* bonds = new OpenMM::CustomBondForce(checked(*style, "bond"));
+      for (const StyleCoefficient& c : style->coefficients) bonds->addPerBondParameter(c.name);
       for (const Bond& b : sys.topology.bonds) {
-        const HarmonicBond::Params& p = spec.bond->harmonic[b.type];
-        bonds->addBond(b.i, b.j, p.r0, 2.0 * p.k);
-      }
-      bonds->setUsesPeriodicBoundaryConditions(m.periodic);
-      bonds->setForceGroup(kBondGroup);
-      m.system.addForce(bonds);
-    } else {
-      auto* bonds = new OpenMM::CustomBondForce(
-          "-0.5*k*r0^2*log(1 - (r/r0)^2) + step(2^(1/6)*sig - r)*(4*eps*((sig/r)^12 - "
-          "(sig/r)^6) + eps)");
-      for (const char* p : {"k", "r0", "eps", "sig"}) bonds->addPerBondParameter(p);
-      for (const Bond& b : sys.topology.bonds) {
-        const FeneBond::Params& p = spec.bond->fene[b.type];
-        bonds->addBond(b.i, b.j, {p.k, p.r0, p.epsilon, p.sigma});
+        if (spec.bond->style_by_type[b.type] != style) continue;
+        bonds->addBond(b.i, b.j, spec.bond->by_type[b.type]);
       }
       bonds->setUsesPeriodicBoundaryConditions(m.periodic);
       bonds->setForceGroup(kBondGroup);
@@ -165,14 +171,17 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     m.term_groups.push_back(1 << kBondGroup);
   }
   if (spec.angle) {
-    auto* angles = new OpenMM::HarmonicAngleForce();
-    for (const Angle& a : sys.topology.angles) {
-      const HarmonicAngle::Params& p = spec.angle->harmonic[a.type];
-      angles->addAngle(a.i, a.j, a.k, p.theta0, 2.0 * p.k);
+    for (const BondedStyle* style : spec.angle->styles()) {
+      auto* angles = new OpenMM::CustomAngleForce(checked(*style, "angle"));
+      for (const StyleCoefficient& c : style->coefficients) angles->addPerAngleParameter(c.name);
+      for (const Angle& a : sys.topology.angles) {
+        if (spec.angle->style_by_type[a.type] != style) continue;
+        angles->addAngle(a.i, a.j, a.k, spec.angle->by_type[a.type]);
+      }
+      angles->setUsesPeriodicBoundaryConditions(m.periodic);
+      angles->setForceGroup(kAngleGroup);
+      m.system.addForce(angles);
     }
-    angles->setUsesPeriodicBoundaryConditions(m.periodic);
-    angles->setForceGroup(kAngleGroup);
-    m.system.addForce(angles);
     m.term_names.push_back("angle");
     m.term_groups.push_back(1 << kAngleGroup);
   }

@@ -153,12 +153,8 @@ CutoffPairs pairs_at_cutoff(const RunInput& input, const System& s, double force
       const double r = norm(s.box.minimum_image(s.particles.position[j] - s.particles.position[i]));
       const double rc = c.cutoff, inner = rc * (1.0 - virial_band) - force_band;
       if (std::abs(r - rc) > std::max(force_band, virial_band * rc)) continue;
-      auto force_at = [&](double x) {
-        const double sr6 = std::pow(c.sigma / x, 6);
-        return std::abs(24.0 * c.epsilon * (2.0 * sr6 * sr6 - sr6) / x);
-      };
-      const double sr6 = std::pow(c.sigma / rc, 6);
-      const double jump = pair->shift ? 0.0 : std::abs(4.0 * c.epsilon * (sr6 * sr6 - sr6));
+      auto force_at = [&](double x) { return pair->style->force(c.values, x); };
+      const double jump = pair->shift ? 0.0 : std::abs(pair->style->energy(c.values, rc));
       const double f = std::max(force_at(inner), force_at(rc));
       if (std::abs(r - rc) <= force_band) {
         per_atom[i] += f;

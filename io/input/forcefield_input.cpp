@@ -5,10 +5,9 @@
 #include <numbers>
 #include <set>
 
-#include "bonded/bond_styles.hpp"
-#include "bonded/harmonic_angle.hpp"
+#include "bonded/bonded_style.hpp"
 #include "core/error.hpp"
-#include "pair/pair_coefficients.hpp"
+#include "pair/pair_style.hpp"
 
 namespace deli {
 
@@ -44,17 +43,37 @@ std::string counted(std::size_t n, const std::string& what) {
   return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
 }
 
+// One coefficient from the input, checked as its style's registration says.
+double read_coefficient(TomlTable& c, const StyleCoefficient& k) {
+  switch (k.check) {
+    case StyleCoefficient::Check::positive:
+      return positive(c, k.name);
+    case StyleCoefficient::Check::non_negative: {
+      const double v = c.number(k.name);
+      if (v < 0) c.fail("must not be negative", k.name);
+      return v;
+    }
+    case StyleCoefficient::Check::any:
+      break;
+  }
+  return c.number(k.name);
+}
+
 std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const DataCoefficients& data,
                                   std::vector<std::string>& notes) {
-  const std::string style = t.choice("style", {"lj/cut", "wca", "none"});
-  if (style == "none") {
+  std::vector<std::string> names;
+  for (const PairStyle* style : pair_styles()) names.push_back(style->name);
+  names.push_back("none");
+  const std::string name = t.choice("style", names);
+  if (name == "none") {
     t.finish();
     return std::nullopt;
   }
+  const PairStyle& style = *find_pair_style(name);
+  const std::size_t count = style.coefficients.size();
   const int types = static_cast<int>(system.atom_types.size());
-  const bool wca = style == "wca";
-  const double global_cutoff = wca ? 0.0 : positive(t, "cutoff");
-  const bool shift = wca ? true : t.boolean("shift", false);
+  const double global_cutoff = style.fixed_cutoff ? 0.0 : positive(t, "cutoff");
+  const bool shift = style.always_shifted ? true : t.boolean("shift", false);
   const Mixing mixing = t.choice("mixing", {"arithmetic", "geometric"}, "geometric") == "arithmetic"
                             ? Mixing::arithmetic
                             : Mixing::geometric;
@@ -64,21 +83,22 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
   const CoefficientSection* sections[] = {&data.pair, &data.pair_ij};
   for (const CoefficientSection* section : sections) {
     check_data_style(data, *section, section == &data.pair ? "Pair Coeffs" : "PairIJ Coeffs",
-                     {"lj/cut"}, style);
+                     {style.lammps_style}, name);
     for (const CoefficientRow& row : section->rows) {
       const int a = row.types.front(), b = row.types.back();
-      if (row.values.size() < 2 || row.values.size() > 3) {
-        throw InputError(located(data.file, row.line,
-                                 "lj/cut coefficients are epsilon sigma [cutoff], found " +
-                                     std::to_string(row.values.size()) + " numbers"));
+      if (row.values.size() < count || row.values.size() > count + 1) {
+        throw InputError(
+            located(data.file, row.line,
+                    style.data_form + ", found " + std::to_string(row.values.size()) + " numbers"));
       }
+      std::vector<double> values(row.values.begin(), row.values.begin() + count);
       std::optional<double> cutoff;
-      if (wca) {
-        cutoff = std::pow(2.0, 1.0 / 6.0) * row.values[1];
-      } else if (row.values.size() == 3) {
-        cutoff = row.values[2];
+      if (style.fixed_cutoff) {
+        cutoff = style.fixed_cutoff(values);
+      } else if (row.values.size() == count + 1) {
+        cutoff = row.values[count];
       }
-      coeffs.set(a, b, row.values[0], row.values[1], cutoff);
+      coeffs.set(a, b, std::move(values), cutoff);
       ++from_data;
     }
   }
@@ -87,18 +107,17 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
     const auto pair = c.numbers("types", 2);
     const int a = type_index(c, "types", pair[0], types, "atom");
     const int b = type_index(c, "types", pair[1], types, "atom");
-    const double epsilon = c.number("epsilon");
-    if (epsilon < 0) c.fail("must not be negative", "epsilon");
-    const double sigma = positive(c, "sigma");
+    std::vector<double> values;
+    for (const StyleCoefficient& k : style.coefficients) values.push_back(read_coefficient(c, k));
     std::optional<double> cutoff;
-    if (wca) {
-      cutoff = std::pow(2.0, 1.0 / 6.0) * sigma;
+    if (style.fixed_cutoff) {
+      cutoff = style.fixed_cutoff(values);
     } else if (c.has("cutoff")) {
       cutoff = positive(c, "cutoff");
     }
     if (!given.insert({std::min(a, b), std::max(a, b)}).second)
       c.fail("coefficients for this type pair were already given", "types");
-    coeffs.set(a, b, epsilon, sigma, cutoff);
+    coeffs.set(a, b, std::move(values), cutoff);
     c.finish();
   }
   if (from_data > 0) {
@@ -108,30 +127,30 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
                                    : ", " + counted(given.size(), "entry") +
                                          " from the input (the input's win)"));
   }
-  const std::vector<int> missing = coeffs.resolve(mixing);
+  const std::vector<int> missing = coeffs.resolve(mixing, style.mixing);
   if (!missing.empty()) {
-    t.fail("no coefficients for atom type " + std::to_string(missing.front() + 1) +
-               " with itself; add {types = [" + std::to_string(missing.front() + 1) + ", " +
-               std::to_string(missing.front() + 1) + "], epsilon = ..., sigma = ...} to coeffs",
+    const std::string type = std::to_string(missing.front() + 1);
+    std::string keys;
+    for (const StyleCoefficient& k : style.coefficients) keys += ", " + k.name + " = ...";
+    t.fail("no coefficients for atom type " + type + " with itself; add {types = [" + type + ", " +
+               type + "]" + keys + "} to coeffs",
            "coeffs");
   }
   t.finish();
   PairSpec spec;
-  spec.style = wca ? PairSpec::Style::wca : PairSpec::Style::lj_cut;
+  spec.style = &style;
   spec.shift = shift;
   spec.coefficients = std::move(coeffs);
   return spec;
 }
 
 // Coefficients per type: from the data file's section first (`from_data` turns a row's
-// numbers into Params), then the input's coeffs, which win; every type must have some.
-template <class Style>
-std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::string& what,
-                                            const auto& read_one, const DataCoefficients& data,
-                                            const CoefficientSection& section,
-                                            const auto& from_data,
-                                            std::vector<std::string>& notes) {
-  std::vector<typename Style::Params> params(static_cast<std::size_t>(types));
+// numbers into coefficients), then the input's coeffs, which win; every type must have some.
+std::vector<std::vector<double>> by_type(TomlTable& t, int types, const std::string& what,
+                                         const auto& read_one, const DataCoefficients& data,
+                                         const CoefficientSection& section, const auto& from_data,
+                                         std::vector<std::string>& notes) {
+  std::vector<std::vector<double>> params(static_cast<std::size_t>(types));
   std::vector<bool> given(static_cast<std::size_t>(types), false), in_data(given);
   for (const CoefficientRow& row : section.rows) {
     params[row.types.front()] = from_data(row);
@@ -141,7 +160,7 @@ std::vector<typename Style::Params> by_type(TomlTable& t, int types, const std::
   for (TomlTable& c : t.tables("coeffs")) {
     const int k = type_index(c, "type", c.number("type"), types, what);
     if (given[k]) c.fail("coefficients for this " + what + " type were already given", "type");
-    params[k] = read_one(c);
+    params[k] = read_one(c, k);
     given[k] = true;
     ++from_input;
     c.finish();
@@ -174,10 +193,69 @@ void expect_values(const DataCoefficients& data, const CoefficientRow& row, std:
   }
 }
 
-std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& system,
-                                  bool rigid_bonds, const DataCoefficients& data,
-                                  std::vector<std::string>& notes) {
-  const int types = system.topology.bond_types;
+double to_radians(double degrees) {
+  return degrees * std::numbers::pi / 180.0;
+}
+
+std::vector<std::string> style_names(BondedKind kind) {
+  std::vector<std::string> names;
+  for (const BondedStyle* style : bonded_styles(kind)) names.push_back(style->name);
+  return names;
+}
+
+// "a", "a" or "b", "a", "b" or "c": the styles a missing table could name.
+std::string alternatives(const std::vector<std::string>& names) {
+  std::string text;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (k > 0) text += k + 1 == names.size() ? " or " : ", ";
+    text += "\"" + names[k] + "\"";
+  }
+  return text;
+}
+
+// [forcefield.bond] or [forcefield.angle]: a registered style and its coefficients by
+// type, read as the style's registration describes them. A type's coeffs may name a style
+// of their own (several styles in one system, as LAMMPS' hybrid); the data file's section
+// is for the table's style.
+BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::string& what,
+                       const DataCoefficients& data, const CoefficientSection& section,
+                       const char* section_name, std::vector<std::string>& notes) {
+  const std::string name = t.choice("style", style_names(kind));
+  check_data_style(data, section, section_name, {name}, name);
+  const BondedStyle& style = *find_bonded_style(kind, name);
+  BondedSpec spec;
+  spec.style = &style;
+  spec.style_by_type.assign(static_cast<std::size_t>(types), &style);
+  spec.by_type = by_type(
+      t, types, what,
+      [&](TomlTable& c, int type) {
+        const BondedStyle& own =
+            c.has("style") ? *find_bonded_style(kind, c.choice("style", style_names(kind))) : style;
+        spec.style_by_type[static_cast<std::size_t>(type)] = &own;
+        std::vector<double> values;
+        for (const StyleCoefficient& k : own.coefficients) {
+          const double v = read_coefficient(c, k);
+          values.push_back(k.degrees ? to_radians(v) : v);
+        }
+        return values;
+      },
+      data, section,
+      [&](const CoefficientRow& row) {
+        expect_values(data, row, style.coefficients.size(), style.data_form);
+        std::vector<double> values = row.values;
+        for (std::size_t k = 0; k < values.size(); ++k) {
+          if (style.coefficients[k].degrees) values[k] = to_radians(values[k]);
+        }
+        return values;
+      },
+      notes);
+  t.finish();
+  return spec;
+}
+
+std::optional<BondedSpec> read_bond(std::optional<TomlTable> t, const System& system,
+                                    bool rigid_bonds, const DataCoefficients& data,
+                                    std::vector<std::string>& notes) {
   if (rigid_bonds) {
     if (t) t->fail("bonds are rigid rods ([constraints] bonds = \"rigid\"): remove this table");
     return std::nullopt;
@@ -186,71 +264,29 @@ std::optional<BondSpec> read_bond(std::optional<TomlTable> t, const System& syst
     if (!system.topology.bonds.empty()) {
       throw InputError(
           "the system has bonds but the input has no [forcefield.bond] table; "
-          "add one with style = \"harmonic\" or \"fene\" and its coeffs");
+          "add one with style = " +
+          alternatives(style_names(BondedKind::bond)) + " and its coeffs");
     }
     return std::nullopt;
   }
-  BondSpec spec;
-  const std::string style = t->choice("style", {"harmonic", "fene"});
-  check_data_style(data, data.bond, "Bond Coeffs", {style}, style);
-  if (style == "harmonic") {
-    spec.style = BondSpec::Style::harmonic;
-    spec.harmonic = by_type<HarmonicBond>(
-        *t, types, "bond",
-        [](TomlTable& c) {
-          return HarmonicBond::Params{c.number("k"), positive(c, "r0")};
-        },
-        data, data.bond,
-        [&](const CoefficientRow& row) {
-          expect_values(data, row, 2, "harmonic bond coefficients K r0");
-          return HarmonicBond::Params{row.values[0], row.values[1]};
-        },
-        notes);
-  } else {
-    spec.style = BondSpec::Style::fene;
-    spec.fene = by_type<FeneBond>(
-        *t, types, "bond",
-        [](TomlTable& c) {
-          return FeneBond::Params{positive(c, "k"), positive(c, "r0"), c.number("epsilon"),
-                                  positive(c, "sigma")};
-        },
-        data, data.bond,
-        [&](const CoefficientRow& row) {
-          expect_values(data, row, 4, "fene bond coefficients K R0 epsilon sigma");
-          return FeneBond::Params{row.values[0], row.values[1], row.values[2], row.values[3]};
-        },
-        notes);
-  }
-  t->finish();
-  return spec;
+  return read_bonded(*t, BondedKind::bond, system.topology.bond_types, "bond", data, data.bond,
+                     "Bond Coeffs", notes);
 }
 
-std::optional<AngleSpec> read_angle(std::optional<TomlTable> t, const System& system,
-                                    const DataCoefficients& data, std::vector<std::string>& notes) {
+std::optional<BondedSpec> read_angle(std::optional<TomlTable> t, const System& system,
+                                     const DataCoefficients& data,
+                                     std::vector<std::string>& notes) {
   if (!t) {
     if (!system.topology.angles.empty()) {
       throw InputError(
           "the system has angles but the input has no [forcefield.angle] table; "
-          "add one with style = \"harmonic\" and its coeffs");
+          "add one with style = " +
+          alternatives(style_names(BondedKind::angle)) + " and its coeffs");
     }
     return std::nullopt;
   }
-  const std::string style = t->choice("style", {"harmonic"});
-  check_data_style(data, data.angle, "Angle Coeffs", {style}, style);
-  AngleSpec spec;
-  spec.harmonic = by_type<HarmonicAngle>(
-      *t, system.topology.angle_types, "angle",
-      [](TomlTable& c) {
-        return HarmonicAngle::Params{c.number("k"), c.number("theta0") * std::numbers::pi / 180.0};
-      },
-      data, data.angle,
-      [&](const CoefficientRow& row) {
-        expect_values(data, row, 2, "harmonic angle coefficients K theta0");
-        return HarmonicAngle::Params{row.values[0], row.values[1] * std::numbers::pi / 180.0};
-      },
-      notes);
-  t->finish();
-  return spec;
+  return read_bonded(*t, BondedKind::angle, system.topology.angle_types, "angle", data, data.angle,
+                     "Angle Coeffs", notes);
 }
 
 }  // namespace

@@ -83,10 +83,10 @@ void read_integrator(TomlTable& root, RunInput& input) {
                              ? ReflectionEnergy::shadow
                              : ReflectionEnergy::hamiltonian;
       if (input.gvi.energy == ReflectionEnergy::shadow && input.force_field_spec.angle) {
-        r->fail(
-            "shadow-Hamiltonian reflections need the potential's pairwise Hessian, which "
-            "harmonic angles lack: use energy = \"hamiltonian\"",
-            "energy");
+        r->fail("shadow-Hamiltonian reflections need the potential's pairwise Hessian, which " +
+                    input.force_field_spec.angle->style->name +
+                    " angles lack: use energy = \"hamiltonian\"",
+                "energy");
       }
       if (input.gvi.energy == ReflectionEnergy::shadow &&
           input.gvi.lagrangian != Lagrangian::verlet) {

@@ -92,7 +92,7 @@ TEST_P(LammpsWrittenData, RunsWithItsCoefficients) {
   const RunInput stiffer = testing::input_from(
       input_for(data, "coeffs = [{ type = 1, k = 40.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 }]\n"));
   RunInput reference_stiffer = load_run_input(kSource + "/inputs/lj_chains/melt.toml");
-  reference_stiffer.force_field_spec.bond->fene[0].k = 40.0;
+  reference_stiffer.force_field_spec.bond->by_type[0][0] = 40.0;  // FENE K
   reference_stiffer.force_field =
       build_force_field(reference_stiffer.force_field_spec, reference_stiffer.system);
   EXPECT_NEAR(testing::evaluate(stiffer).evaluation.potential,

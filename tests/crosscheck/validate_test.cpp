@@ -68,6 +68,9 @@ INSTANTIATE_TEST_SUITE_P(
         Model{"kremer_grest_fene_wca", "inputs/lj_chains/melt.toml"},
         Model{"chains_harmonic_angles_scaled_13",
               "tests/crosscheck/inputs/chains_harmonic_angles.toml", 100},
+        Model{"semiflexible_chains_cosine_angles",
+              "tests/crosscheck/inputs/chains_cosine_angles.toml", 100},
+        Model{"two_bond_styles_fene_and_harmonic", "tests/crosscheck/inputs/mixed_bonds.toml"},
         Model{"mixture_explicit_pairs", "tests/crosscheck/inputs/mixture_explicit.toml"},
         Model{"mixture_lorentz_berthelot", "tests/crosscheck/inputs/mixture_mixed.toml"},
         Model{"open_cluster", "tests/crosscheck/inputs/open_cluster.toml", 100}),
@@ -89,7 +92,7 @@ TEST(OpenMMCpuPlatform, AgreesToSinglePrecision) {
 // (epsilon 1.0 against 1.0 + 1e-9) is caught and named.
 TEST(Validate, DisagreementIsCaughtAndNamed) {
   RunInput input = load({"cluster", "tests/crosscheck/inputs/open_cluster.toml"});
-  input.force_field_spec.pair->coefficients.set(0, 0, 1.0 + 1e-9, 1.0, 3.0);
+  input.force_field_spec.pair->coefficients.set(0, 0, {1.0 + 1e-9, 1.0}, 3.0);
   ValidateOptions options;
   options.trajectory_steps = 0;
   const ValidationReport report = validate(input, options);
@@ -136,7 +139,8 @@ TEST(Validate, RodTrajectoryDisagreementIsCaught) {
   EXPECT_EQ(report.checks.back().quantity, "max |dx| after 20 steps");
   EXPECT_TRUE(report.checks.back().within());
   const PairCoefficient& c = input.force_field_spec.pair->coefficients.at(0, 0);
-  input.force_field_spec.pair->coefficients.set(0, 0, c.epsilon * (1 + 1e-6), c.sigma, c.cutoff);
+  input.force_field_spec.pair->coefficients.set(0, 0, {c.values[0] * (1 + 1e-6), c.values[1]},
+                                                c.cutoff);
   report = validate(input, options);
   EXPECT_EQ(report.checks.back().quantity, "max |dx| after 20 steps");
   EXPECT_FALSE(report.checks.back().within()) << report.checks.back().difference;

@@ -38,6 +38,10 @@ const std::string kPairLj =
 const std::string kBondedTail =
     "[forcefield.bond]\nstyle = \"harmonic\"\ncoeffs = [{type = 1, k = 100.0, r0 = 1.0}]\n"
     "[forcefield.angle]\nstyle = \"harmonic\"\ncoeffs = [{type = 1, k = 5.0, theta0 = 110.0}]\n";
+// LAMMPS' angle_style cosine, E = K [1 + cos(theta)], of semiflexible chains.
+const std::string kCosineAngleTail =
+    "[forcefield.bond]\nstyle = \"harmonic\"\ncoeffs = [{type = 1, k = 100.0, r0 = 1.0}]\n"
+    "[forcefield.angle]\nstyle = \"cosine\"\ncoeffs = [{type = 1, k = 1.5}]\n";
 const std::string kFeneTail =
     "[forcefield.bond]\nstyle = \"fene\"\ncoeffs = [{type = 1, k = 30.0, r0 = 1.5, epsilon = "
     "1.0, sigma = 1.0}]\n";
@@ -54,6 +58,8 @@ std::vector<Case> cases() {
       {"lj_harmonic_angle_open", chains_input("fff", "[forcefield]\n" + kPairLj + kBondedTail)},
       {"lj_shifted_mixed_boundary",
        chains_input("ppf", "[forcefield]\n" + lj_shifted + kBondedTail)},
+      {"lj_cosine_angle_mixed_boundary",
+       chains_input("ppf", "[forcefield]\n" + kPairLj + kCosineAngleTail)},
       {"wca_fene_kremer_grest", chains_input("ppp", "[forcefield]\n" + wca + kFeneTail, false)},
       {"lj_special_scaled",
        chains_input("ppp", "[forcefield]\n[forcefield.special_bonds]\nlj = [0.0, 0.5, 0.8]\n" +
@@ -123,13 +129,13 @@ INSTANTIATE_TEST_SUITE_P(AllForces, FiniteDifference, ::testing::ValuesIn(cases(
 TEST(PairMixing, LorentzBerthelotMatchesAnalyticEnergy) {
   for (const double r : {0.9, 1.1, 1.7, 2.2}) {
     PairCoefficients coeffs(2, 3.0);
-    coeffs.set(0, 0, 1.0, 1.0, std::nullopt);
-    coeffs.set(1, 1, 0.5, 1.4, std::nullopt);
-    ASSERT_TRUE(coeffs.resolve(Mixing::arithmetic).empty());
+    coeffs.set(0, 0, {1.0, 1.0}, std::nullopt);  // epsilon, sigma
+    coeffs.set(1, 1, {0.5, 1.4}, std::nullopt);
+    ASSERT_TRUE(coeffs.resolve(Mixing::arithmetic, {MixRule::geometric, MixRule::chosen}).empty());
     const PairCoefficient& mixed = coeffs.at(0, 1);
-    EXPECT_DOUBLE_EQ(mixed.epsilon, std::sqrt(0.5));
-    EXPECT_DOUBLE_EQ(mixed.sigma, 1.2);
-    const auto params = LennardJones::make(mixed.epsilon, mixed.sigma, mixed.cutoff, false);
+    EXPECT_DOUBLE_EQ(mixed.values[0], std::sqrt(0.5));
+    EXPECT_DOUBLE_EQ(mixed.values[1], 1.2);
+    const auto params = LennardJones::make(mixed.values[0], mixed.values[1], mixed.cutoff, false);
     double f_over_r, e;
     LennardJones::evaluate(params, r * r, f_over_r, e);
     const double sr6 = std::pow(1.2 / r, 6);

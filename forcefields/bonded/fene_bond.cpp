@@ -1,31 +1,15 @@
-#pragma once
-
 #include <cmath>
 
-#include "bonded/bond_evaluator.hpp"
+#include "bonded/bond_force.hpp"
+#include "bonded/bonded_style.hpp"
 
 namespace deli {
 
-// Bond evaluators: evaluate(params, r2, f_over_r, energy) returns false where the
-// potential is undefined (the caller reports the bond). Coefficients follow LAMMPS.
-
-// E = K (r - r0)^2 (LAMMPS bond_style harmonic: no factor 1/2).
-struct HarmonicBond {
-  struct Params {
-    double k = 0, r0 = 0;
-  };
-  static bool evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
-    const double r = std::sqrt(r2);
-    const double dr = r - p.r0;
-    energy = p.k * dr * dr;
-    f_over_r = r > 0.0 ? -2.0 * p.k * dr / r : 0.0;
-    return true;
-  }
-  static double second_derivative(const Params& p, double /*r2*/) { return 2.0 * p.k; }
-};
+namespace {
 
 // Kremer-Grest FENE (LAMMPS bond_style fene): -K R0^2/2 ln(1 - (r/R0)^2), plus the WCA
-// repulsion 4 eps [(sig/r)^12 - (sig/r)^6] + eps for r < 2^(1/6) sig.
+// repulsion 4 eps [(sig/r)^12 - (sig/r)^6] + eps for r < 2^(1/6) sig. Undefined from
+// r = R0 on: evaluate() returns false there and the bond loop reports the bond.
 struct FeneBond {
   struct Params {
     double k = 0, r0 = 0, epsilon = 0, sigma = 0;
@@ -58,7 +42,28 @@ struct FeneBond {
     return d2;
   }
 };
+static_assert(BondEvaluator<FeneBond>);
 
-static_assert(BondEvaluator<HarmonicBond> && BondEvaluator<FeneBond>);
+}  // namespace
+
+const BondedStyle& fene_bond_style() {
+  using Check = StyleCoefficient::Check;
+  static const BondedStyle style{
+      BondedKind::bond,
+      "fene",
+      {{"k", Check::positive}, {"r0", Check::positive}, {"epsilon"}, {"sigma", Check::positive}},
+      "fene bond coefficients K R0 epsilon sigma",
+      [](const std::vector<std::vector<double>>& by_type,
+         std::vector<char> own_types) -> std::unique_ptr<ForceTerm> {
+        std::vector<FeneBond::Params> params;
+        for (const std::vector<double>& c : by_type) params.push_back({c[0], c[1], c[2], c[3]});
+        return std::make_unique<BondForce<FeneBond>>("bond", std::move(params),
+                                                     std::move(own_types));
+      },
+      "-0.5*k*r0^2*log(1 - (r/r0)^2) + step(2^(1/6)*sigma - r)*(4*epsilon*((sigma/r)^12 - "
+      "(sigma/r)^6) + epsilon)",
+      "fene"};
+  return style;
+}
 
 }  // namespace deli

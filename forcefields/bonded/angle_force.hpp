@@ -1,0 +1,65 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "forces/force_term.hpp"
+#include "system/system.hpp"
+
+namespace deli {
+
+// What AngleForce needs of an angle style: per angle type Params; evaluate(p, c, de_dcos)
+// returns the energy at cos(theta) = c and sets de_dcos = dE/d(cos theta).
+template <class E>
+concept AngleEvaluator = std::default_initializable<typename E::Params> &&
+    requires(const typename E::Params& p, double c, double& de_dcos) {
+  { E::evaluate(p, c, de_dcos) } -> std::convertible_to<double>;
+};
+
+// All angles of one style (or of the types set in own_types, when the system has several);
+// params indexed by angle type.
+template <AngleEvaluator Evaluator>
+class AngleForce final : public ForceTerm {
+ public:
+  using Params = typename Evaluator::Params;
+
+  explicit AngleForce(std::vector<Params> by_type, std::vector<char> own_types = {})
+      : by_type_(std::move(by_type)), own_types_(std::move(own_types)) {}
+
+  std::string name() const override { return "angle"; }
+
+  double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
+                 SymTensor& virial, bool /*tally*/) const override {
+    const std::vector<Vec3>& x = system.particles.position;
+    double energy = 0.0;
+    for (const Angle& a : system.topology.angles) {
+      if (!own_types_.empty() && !own_types_[a.type]) continue;
+      const Vec3 d1 = system.box.minimum_image(x[a.i] - x[a.j]);
+      const Vec3 d2 = system.box.minimum_image(x[a.k] - x[a.j]);
+      const double r1sq = norm2(d1), r2sq = norm2(d2);
+      const double r1 = std::sqrt(r1sq), r2 = std::sqrt(r2sq);
+      const double c = std::clamp(dot(d1, d2) / (r1 * r2), -1.0, 1.0);
+      double g;  // dE/d(cos theta)
+      energy += Evaluator::evaluate(by_type_[a.type], c, g);
+      const double a11 = g * c / r1sq, a12 = -g / (r1 * r2), a22 = g * c / r2sq;
+      const Vec3 f1 = d1 * a11 + d2 * a12;
+      const Vec3 f3 = d2 * a22 + d1 * a12;
+      force[a.i] += f1;
+      force[a.j] -= f1 + f3;
+      force[a.k] += f3;
+      virial.add_outer(d1, f1);
+      virial.add_outer(d2, f3);
+    }
+    return energy;
+  }
+
+ private:
+  std::vector<Params> by_type_;
+  std::vector<char> own_types_;  // empty: every type
+};
+
+}  // namespace deli
