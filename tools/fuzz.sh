@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# libFuzzer on the readers of untrusted files: the TOML run input, LAMMPS data files and
+# checkpoints. Built with clang in build-fuzz/ (deli_core instrumented with ASan + UBSan).
+#   tools/fuzz.sh                  CI: every target, a bounded number of runs from its seed
+#                                  corpus (tests/fuzz/corpus/TARGET), fixed seed
+#   tools/fuzz.sh TARGET SECONDS   by hand: one target (toml_input, lammps_data,
+#                                  checkpoint) for SECONDS, with every core
+# New inputs found go to build-fuzz/corpus/TARGET (not the committed seeds); a crash
+# leaves its input as build-fuzz/crash-* : make it a test (tests/errors catalogue)
+# and, if it is worth keeping, a seed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=${DELI_JOBS:-$(nproc)}
+# -Wno-unknown-warning-option: deli_core names a GCC-only warning (-Wno-restrict).
+flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -Wno-unknown-warning-option"
+if [ ! -f build-fuzz/Makefile ]; then
+  cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Fuzz -DDELI_FUZZ=ON \
+    -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+    -DCMAKE_CXX_FLAGS_FUZZ="$flags" -DCMAKE_C_FLAGS_FUZZ="$flags" \
+    -DCMAKE_EXE_LINKER_FLAGS_FUZZ="-fsanitize=address,undefined"
+fi
+targets=(toml_input lammps_data checkpoint)
+cmake --build build-fuzz -j "$jobs" --target "${targets[@]/#/deli_fuzz_}"
+
+export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:suppressions=$PWD/tools/sanitizers/asan.supp"
+export LSAN_OPTIONS="suppressions=$PWD/tools/sanitizers/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+# -timeout: one input taking longer is a hang; -rss_limit_mb/-malloc_limit_mb: an input
+# that makes a reader allocate more (a hostile count believed) is a finding.
+limits=(-timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=1024 -max_len=65536)
+run_target() {  # target, then libFuzzer's own arguments
+  local target=$1
+  shift
+  mkdir -p "build-fuzz/corpus/$target"
+  (cd build-fuzz && "tests/fuzz/deli_fuzz_$target" "${limits[@]}" "$@" "corpus/$target" \
+    "../tests/fuzz/corpus/$target")
+}
+
+if [ $# -eq 0 ]; then
+  # CI: a bounded amount, the same every time (fixed seed); every target must end clean.
+  runs=${DELI_FUZZ_RUNS:-20000}
+  for target in "${targets[@]}"; do
+    echo "fuzz: $target, $runs runs"
+    run_target "$target" -seed=1 -runs="$runs" -max_total_time=60 -print_final_stats=1
+  done
+else
+  target=$1 seconds=${2:-600}
+  run_target "$target" -max_total_time="$seconds" -jobs="$jobs" -workers="$jobs"
+fi
