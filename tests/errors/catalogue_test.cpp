@@ -792,6 +792,13 @@ void message_cases(std::vector<Case>& cases) {
        }) {
     cases.push_back(c);
   }
+  // Found by fuzzing (tools/fuzz.sh toml_input): beads no closer than min_distance >=
+  // bond_length cannot form a chain, and the builder spent seconds on every try first.
+  cases.push_back({"chains_min_distance_not_below_bond_length",
+                   with(kFene, "bond_length = 0.97\n", "bond_length = 0.97\nmin_distance = 1.96\n"),
+                   "",
+                   1,
+                   {"in.toml:", "'system.chains.min_distance'", "must be less than bond_length"}});
   cases.push_back({"fene_k_negative",
                    with(kFene, "k = 30.0", "k = -30.0"),
                    "",
