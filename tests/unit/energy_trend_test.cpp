@@ -30,7 +30,8 @@ TEST(EnergyTrend, PureLinearDriftIsAllTrend) {
 TEST(EnergyTrend, BoundedOscillationHasNoTrend) {
   // 100 periods: the fitted slope of a sine over whole periods is zero up to the end effect.
   const EnergyTrend t = energy_trend(series(0.0, 1e-3, 100.0));
-  EXPECT_NEAR(t.fluctuation, 1e-3, 1e-6);
+  // The amplitude, and a little more at the ends where the small fitted slope adds (1 %).
+  EXPECT_NEAR(t.fluctuation, 1e-3, 2e-5);
   EXPECT_LT(t.ratio(), 0.05);
 }
 
