@@ -10,7 +10,7 @@
 #include "h5md/checkpoint.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static FuzzFile file;
+  static FuzzFile file(/*on_disk=*/true);
   const std::string path = file.hold(data, size);
   try {
     deli::read_checkpoint(path);
