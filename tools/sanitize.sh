@@ -6,8 +6,7 @@
 # is a failing test, never a line in a log. OpenMM and LAMMPS (with OpenMPI) are
 # uninstrumented Debian shared libraries; their leaks are suppressed by
 # tools/sanitizers/lsan.supp, a heap overflow inside HDF5 by asan.supp, each entry scoped
-# to a library and explained there. deli code
-# is never exempt.
+# to a library and explained there. deli code is never exempt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 here=$PWD/tools/sanitizers
