@@ -18,8 +18,10 @@ esac
 
 packages=(g++ make cmake pkg-config libeigen3-dev libhdf5-dev libgtest-dev libgmock-dev
   libtomlplusplus-dev libopenmm-dev libopenmm-plugins liblammps-dev)
-# The trajectory tests read deli's H5MD files as a user would, with Debian's Python.
-[ "$action" = test ] && packages+=(python3-h5py python3-numpy python3-mdanalysis python3-matplotlib)
+# The trajectory tests read deli's H5MD files as a user would, with Debian's Python; CI
+# (.ci/run) also builds the fuzz targets with clang's libFuzzer (tools/fuzz.sh).
+[ "$action" = test ] && packages+=(python3-h5py python3-numpy python3-mdanalysis python3-matplotlib
+  clang libclang-rt-14-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

@@ -50,8 +50,16 @@ ForceEvaluation ForceField::compute(const System& system, const NeighborList& ne
     // Terms that read the neighbour list are the pair forces; the rest are bonded terms.
     const TimedPhase timed(term->neighbor_cutoff() > 0 ? Phase::pair : Phase::bonded);
     const double e = term->compute(system, neighbors, force, result.virial, tally);
-    result.names.push_back(term->name());
-    result.energies.push_back(e);
+    // Terms of one name (gravity and the radial fields are all "external") are one term:
+    // the thermo CSV and the H5MD observables have one column or series per name.
+    const std::string name = term->name();
+    const auto same = std::find(result.names.begin(), result.names.end(), name);
+    if (same == result.names.end()) {
+      result.names.push_back(name);
+      result.energies.push_back(e);
+    } else {
+      result.energies[static_cast<std::size_t>(same - result.names.begin())] += e;
+    }
     result.potential += e;
   }
   return result;

@@ -591,7 +591,19 @@ LammpsDataFile DataReader::read() {
       }
     }
     // Like LAMMPS' read_data, an atom outside a periodic box is mapped back into it with its
-    // image flag counting the crossings, so that its unwrapped position is kept.
+    // image flag counting the crossings, so that its unwrapped position is kept; a count
+    // beyond a 32-bit image flag cannot be (found by fuzzing: the cast overflowed).
+    for (int a = 0; a < 3; ++a) {
+      if (!options_.periodic[a]) continue;
+      const double crossings =
+          std::floor((atom.position[a] - lo_[a]) / (hi_[a] - lo_[a])) + atom.image[a];
+      if (!(std::abs(crossings) <= std::numeric_limits<int>::max())) {
+        fail(line, std::string(1, kAxisName[a]) + " of " + who + " is " +
+                       std::string(tokens[columns.x + a]) +
+                       ", so far outside the periodic box that its image flag would not fit in "
+                       "32 bits; expected a position in or near the box");
+      }
+    }
     Box({lo_[0], lo_[1], lo_[2]}, {hi_[0], hi_[1], hi_[2]}, options_.periodic)
         .wrap(atom.position, atom.image);
     if (mass_line.empty() || mass_line[atom.type] == 0) {

@@ -103,6 +103,14 @@ System read_system(TomlTable& t, const fs::path& input_dir, DataCoefficients& co
     c.density = positive(*chains, "density");
     c.bond_length = positive(*chains, "bond_length", 0.97);
     c.min_distance = positive(*chains, "min_distance", 0.9);
+    // Each bead is placed bond_length from the one before it and at least min_distance from
+    // every bead placed, that one included: otherwise no chain can grow, and the builder
+    // would spend its every try (seconds) before saying so.
+    if (c.length > 1 && !(c.min_distance < c.bond_length)) {
+      chains->fail("must be less than bond_length (" + std::to_string(c.bond_length) +
+                       "): each bead sits bond_length from the one before it",
+                   "min_distance");
+    }
     c.mass = positive(*chains, "mass", 1.0);
     c.angles = chains->boolean("angles", false);
     c.seed = static_cast<std::uint64_t>(chains->integer("seed", 1));

@@ -9,6 +9,7 @@
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "simulation/run_loop.hpp"
+#include "support/energy_trend.hpp"
 
 namespace deli {
 namespace {
@@ -24,15 +25,12 @@ struct Trace {
     for (double e : energy) worst = std::max(worst, std::abs(e - energy.front()));
     return worst / std::abs(energy.front());
   }
-  // Largest error in the second half over the largest in the first: about 1 when bounded.
-  double growth() const {
-    const std::size_t half = energy.size() / 2;
-    double first = 0, second = 0;
-    for (std::size_t k = 0; k < energy.size(); ++k) {
-      (k < half ? first : second) =
-          std::max(k < half ? first : second, std::abs(energy[k] - energy.front()));
-    }
-    return second / std::max(first, 1e-300);
+  // Bounded or drifting: the fitted trend of (E - E0) / |E0| over the run against its
+  // fluctuation about that line (support/energy_trend.hpp).
+  testing::EnergyTrend trend() const {
+    std::vector<double> error;
+    for (double e : energy) error.push_back((e - energy.front()) / std::abs(energy.front()));
+    return testing::energy_trend(error);
   }
   double max_angular_change() const {
     double worst = 0;
@@ -48,6 +46,11 @@ struct Trace {
   if (t.min_gap > -1e-10) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "smallest gap " << t.min_gap;
 }
+
+// Bounded, not drifting: the energy error's fitted trend over the whole run stays below half
+// its fluctuation about the fit. The paper's claim is boundedness (no figure to compare
+// with); a drift as large as the oscillation would give 1 or more.
+constexpr double kBounded = 0.5;
 
 class Record final : public Observer {
  public:
@@ -85,19 +88,21 @@ TEST(PaperExamples, ParticleDropKeepsItsEnergy) {
 
 TEST(PaperExamples, SpringAndSphereSmooth) {
   const Trace t = run_example("spring_sphere_smooth");
-  std::printf("spring and sphere, smooth: max |dE|/E0 %.3e, growth %.2f, |dL| %.3e\n",
-              t.max_relative_energy_error(), t.growth(), t.max_angular_change());
-  EXPECT_LT(t.max_relative_energy_error(), 0.08);  // measured 6.7e-2 at h = 0.5
-  EXPECT_LT(t.growth(), 1.2);
+  std::printf("spring and sphere, smooth: max |dE|/E0 %.3e, trend/fluctuation %.3f, |dL| %.3e\n",
+              t.max_relative_energy_error(), t.trend().ratio(), t.max_angular_change());
+  // Regression pin: deli's own envelope (6.7e-2 at h = 0.5) plus a margin; the paper gives
+  // no number, only the boundedness checked by the trend.
+  EXPECT_LT(t.max_relative_energy_error(), 0.08);
+  EXPECT_LT(t.trend().ratio(), kBounded);
   EXPECT_LT(t.max_angular_change(), 1e-11 * std::abs(t.angular_z.front()));
   EXPECT_TRUE(no_overlap(t));
 }
 
 TEST(PaperExamples, SpringAndSphereMixed) {
   const Trace t = run_example("spring_sphere_mixed");
-  std::printf("spring and sphere, mixed: max |dE|/E0 %.3e, growth %.2f, |dL| %.3e\n",
-              t.max_relative_energy_error(), t.growth(), t.max_angular_change());
-  EXPECT_LT(t.max_relative_energy_error(), 0.12);  // measured 9.9e-2 at h = 0.5
+  std::printf("spring and sphere, mixed: max |dE|/E0 %.3e, trend/fluctuation %.3f, |dL| %.3e\n",
+              t.max_relative_energy_error(), t.trend().ratio(), t.max_angular_change());
+  EXPECT_LT(t.max_relative_energy_error(), 0.12);  // regression pin: deli's 9.9e-2 at h = 0.5
   EXPECT_LT(t.max_angular_change(), 1e-11 * std::abs(t.angular_z.front()));
   EXPECT_TRUE(no_overlap(t));
 }
@@ -108,10 +113,12 @@ TEST(PaperExamples, NonlinearOscillatorKeepsAngularMomentumLinearisedLosesIt) {
   std::printf("oscillator: |dE|/E0 %.3e, |dL| %.3e; linearised: |dE|/E0 %.3e, |dL| %.3e\n",
               exact.max_relative_energy_error(), exact.max_angular_change(),
               linear.max_relative_energy_error(), linear.max_angular_change());
-  EXPECT_LT(exact.max_relative_energy_error(), 0.03);  // measured 2.4e-2 (every step)
-  EXPECT_LT(exact.growth(), 1.2);
+  // Regression pins: deli's own envelopes (2.4e-2, 2.6e-2, every step) plus a margin. The
+  // paper's claim tested independently of them: L kept by one, lost by the other.
+  EXPECT_LT(exact.max_relative_energy_error(), 0.03);
+  EXPECT_LT(exact.trend().ratio(), kBounded);
   EXPECT_LT(exact.max_angular_change(), 1e-12 * std::abs(exact.angular_z.front()));
-  EXPECT_LT(linear.max_relative_energy_error(), 0.03);  // energy still kept (2.6e-2)
+  EXPECT_LT(linear.max_relative_energy_error(), 0.03);
   EXPECT_GT(linear.max_angular_change(), 0.1 * std::abs(linear.angular_z.front()));
 }
 
@@ -121,24 +128,27 @@ TEST(PaperExamples, NewtonsCradleSweep) {
   for (const char* h : {"0.03", "0.02", "0.01", "0.005"}) {
     const Trace t = run_example(std::string("newtons_cradle_h") + h);
     errors.push_back(t.max_relative_energy_error());
-    EXPECT_LT(t.growth(), 1.5) << "h = " << h;
+    EXPECT_LT(t.trend().ratio(), kBounded) << "h = " << h;
     EXPECT_TRUE(no_overlap(t)) << "h = " << h;
   }
   std::printf("cradle |dE|/|E0|: %.3e %.3e %.3e %.3e\n", errors[0], errors[1], errors[2],
               errors[3]);
-  EXPECT_LT(errors[2], 5e-5);
+  EXPECT_LT(errors[2], 5e-5);  // regression pin: deli's 2.2e-5 at h = 0.01
+  // The independent check: a second-order method's error falls by 4 when h halves.
   const double ratio = errors[2] / errors[3];
   EXPECT_GT(ratio, 3.0);
   EXPECT_LT(ratio, 5.0);
 }
 
 // The pogo stick to the paper's 1e5 time units (1e6 steps): the envelope of the first
-// 1e4 (2.3e-2, the notes' figure) is never left.
+// 1e4 (2.3e-2, the GVI notes' figure measured with deli: a regression pin) is never left,
+// and the error has no trend (the paper's claim).
 TEST(PaperExamples, PogoStickBoundedTo1e5) {
   const Trace t = run_example("pogo_stick", -1, 1);
-  std::printf("pogo: max |dE|/E0 %.3e, growth %.2f\n", t.max_relative_energy_error(), t.growth());
+  std::printf("pogo: max |dE|/E0 %.3e, trend/fluctuation %.3f\n", t.max_relative_energy_error(),
+              t.trend().ratio());
   EXPECT_LT(t.max_relative_energy_error(), 0.025);
-  EXPECT_LT(t.growth(), 1.05);
+  EXPECT_LT(t.trend().ratio(), kBounded);
   EXPECT_TRUE(no_overlap(t));
 }
 
@@ -172,13 +182,14 @@ namespace deli {
 namespace {
 
 // The paper's LJ chain to 2000 time units: rods exact, no overlap, angular momentum
-// exact, energy within the band of the first half (measured 0.14 then 0.21 of |E0|).
+// exact, energy without trend (the paper's claims). The envelope bound is a regression
+// pin (deli measured 0.14 then 0.21 of |E0| in the two halves).
 TEST(PaperExamples, LjChainTo2000) {
   const Trace t = run_example("lj_chain", -1, 100);
-  std::printf("LJ chain: max |dE|/|E0| %.3e, growth %.2f, |dL| %.3e\n",
-              t.max_relative_energy_error(), t.growth(), t.max_angular_change());
+  std::printf("LJ chain: max |dE|/|E0| %.3e, trend/fluctuation %.3f, |dL| %.3e\n",
+              t.max_relative_energy_error(), t.trend().ratio(), t.max_angular_change());
   EXPECT_LT(t.max_relative_energy_error(), 0.3);
-  EXPECT_LT(t.growth(), 2.0);
+  EXPECT_LT(t.trend().ratio(), kBounded);
   EXPECT_LT(t.max_angular_change(), 1e-11);
   EXPECT_TRUE(no_overlap(t));
 }

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "simulation/thermo.hpp"
 #include "support/atoms_input.hpp"
+#include "support/energy_trend.hpp"
 
 namespace deli {
 namespace {
@@ -241,10 +242,15 @@ TEST(Gvi, SphereHitsTwoTouchingSpheres) {
 }
 
 // The paper's LJ example: six beads joined by rods, hard cores between all pairs not
-// joined by a rod, LJ between all pairs, inside a bounding sphere. Rotation invariant:
-// angular momentum about the centre is kept to 1e-12 relative over 1e5 steps, rods to
-// 1e-10 relative at every step, and no overlap.
-TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
+// joined by a rod, LJ between all pairs, inside a bounding sphere, 1e5 steps.
+struct LjChainResult {
+  Vec3 l0, l;
+  double worst_energy = 0, e0 = 0;
+  testing::EnergyTrend trend;
+  std::vector<std::pair<std::string, double>> stats;
+};
+
+LjChainResult lj_chain_in_sphere(const std::string& feasibility) {
   std::vector<Atom> atoms;
   for (int k = 0; k < 6; ++k) {
     atoms.push_back({{-2.5 + k, 0.3 * (k % 2), 0},
@@ -254,30 +260,68 @@ TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
   for (int k = 1; k < 6; ++k)
     rods += "{ atoms = [" + std::to_string(k) + ", " + std::to_string(k + 1) + "], length = 1.0 },";
   rods += "]\n";
-  GviRun run(input_with_atoms("ljchain", atoms, "fff", {-6, -6, -6}, {6, 6, 6},
-                              "[forcefield.special_bonds]\nlj = [1.0, 1.0, 1.0]\n"
-                              "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 3.0\n"
-                              "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 0.6 }]\n"
-                              "[constraints]\n" +
-                                  rods +
-                                  "hard_spheres = { diameter = 0.6 }\n"
-                                  "walls = [{ type = \"inside_sphere\", radius = 5.0 }]\n" +
-                                  with_timestep(0.01)));
-  const Vec3 l0 = angular_momentum(run.particles(), run.system().box);
-  const double e0 = run.energy();
-  double worst_e = 0;
+  GviRun run(
+      input_with_atoms("ljchain_" + feasibility, atoms, "fff", {-6, -6, -6}, {6, 6, 6},
+                       "[forcefield.special_bonds]\nlj = [1.0, 1.0, 1.0]\n"
+                       "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 3.0\n"
+                       "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 0.6 }]\n"
+                       "[constraints]\n" +
+                           rods +
+                           "hard_spheres = { diameter = 0.6 }\n"
+                           "walls = [{ type = \"inside_sphere\", radius = 5.0 }]\n"
+                           "[integrator]\ntype = \"gvi\"\ntimestep = 0.01\nfeasibility = \"" +
+                           feasibility + "\"\n[run]\nsteps = 0\n"));
+  LjChainResult r;
+  r.l0 = angular_momentum(run.particles(), run.system().box);
+  r.e0 = run.energy();
+  std::vector<double> error;  // every 100 steps
   for (int n = 0; n < 100000; ++n) {
     run.step();
-    worst_e = std::max(worst_e, std::abs(run.energy() - e0));
+    r.worst_energy = std::max(r.worst_energy, std::abs(run.energy() - r.e0));
+    if (n % 100 == 0) error.push_back(run.energy() - r.e0);
   }
-  const auto stats = run.gvi->take_statistics();
-  EXPECT_LT(statistic(stats, "max_rod_violation"), 1e-10);
-  EXPECT_GT(statistic(stats, "min_gap"), -1e-10) << "overlap";
-  EXPECT_TRUE(std::isfinite(statistic(stats, "min_gap"))) << "no contact was ever in reach";
-  const Vec3 l = angular_momentum(run.particles(), run.system().box);
-  EXPECT_LT(norm(l - l0), 1e-12 * std::max(1.0, norm(l0)));
-  std::printf("LJ chain: max |E - E0| = %.3e (E0 = %.4f), |dL| = %.3e\n", worst_e, e0,
-              norm(l - l0));
+  r.stats = run.gvi->take_statistics();
+  r.l = angular_momentum(run.particles(), run.system().box);
+  r.trend = testing::energy_trend(error);
+  std::printf(
+      "LJ chain, feasibility %s: max |E - E0| = %.3e (E0 = %.4f), |dL| = %.3e, trend "
+      "%.3e, fluctuation %.3e\n",
+      feasibility.c_str(), r.worst_energy, r.e0, norm(r.l - r.l0), r.trend.trend,
+      r.trend.fluctuation);
+  return r;
+}
+
+// With the default guard: angular momentum about the centre kept to 1e-12 relative (rotation
+// invariance), rods to 1e-10 relative at every step, no overlap.
+TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
+  const LjChainResult r = lj_chain_in_sphere("restore");
+  EXPECT_LT(statistic(r.stats, "max_rod_violation"), 1e-10);
+  EXPECT_GT(statistic(r.stats, "min_gap"), -1e-10) << "overlap";
+  EXPECT_TRUE(std::isfinite(statistic(r.stats, "min_gap"))) << "no contact was ever in reach";
+  EXPECT_LT(norm(r.l - r.l0), 1e-12 * std::max(1.0, norm(r.l0)));
+}
+
+// The paper's claim for its algorithm (feasibility = "none", the literal Algorithm 1): the
+// energy error stays bounded, no trend beyond half its fluctuation over 1e5 steps
+// (measured: trend 1.5e-2, fluctuation 0.10). The literal algorithm lets steps end
+// overlapped here (about 100 steps, to -1.8e-3): that is what the guard is for.
+TEST(Gvi, LjChainInSphereLiteralAlgorithmKeepsEnergyBounded) {
+  const LjChainResult r = lj_chain_in_sphere("none");
+  EXPECT_LT(r.trend.ratio(), 0.5);
+  EXPECT_GT(statistic(r.stats, "penetrating_steps"), 0) << "expected the literal algorithm "
+                                                           "to end some steps overlapped";
+  EXPECT_LT(norm(r.l - r.l0), 1e-12 * std::max(1.0, norm(r.l0)));
+}
+
+// KNOWN FAILURE (issue 17, found by asserting this test's energy instead of printing it):
+// with a feasibility guard the energy drifts, because every landing changes it: 1e5 steps
+// give -1.2 (restore, 137 landings, no deficit reported), +5.6 (reflect), +11 (inelastic)
+// against |E0| = 0.28, while the literal algorithm's error is bounded (0.15). Here the hard
+// core equals the LJ sigma, so a landing moves a bead on the steep wall of the potential.
+// Disabled until the guard is fixed; run it with --gtest_also_run_disabled_tests.
+TEST(Gvi, DISABLED_LjChainInSphereRestoreGuardKeepsEnergyBounded) {
+  const LjChainResult r = lj_chain_in_sphere("restore");
+  EXPECT_LT(r.trend.ratio(), 0.5);
 }
 
 // Pair contacts exchange momentum only: a hard-sphere gas in a periodic box keeps its total
@@ -351,6 +395,19 @@ TEST(GviFeasibility, SlowLandingLiteralAlgorithmOverlaps) {
   double gap = 0;
   slow_landing(Feasibility::none, gap);
   EXPECT_LT(gap, -0.02) << "the literal algorithm is expected to end steps below the floor";
+}
+
+// "reflect" lands the ball at contact and reflects what still approaches, elastically,
+// but does not give back the potential energy the landing changed: m g times the lift, the
+// lift at most g h^2 / 2, so at most 0.48 here. No overlap, and the energy error stays
+// within one landing's worth over 1e5 steps (measured 4.2e-2: no accumulation).
+TEST(GviFeasibility, SlowLandingReflectBouncesWithoutOverlap) {
+  double gap = 0;
+  const double error = slow_landing(Feasibility::reflect, gap);
+  std::printf("slow landing, reflect: energy error %.3e\n", error);
+  EXPECT_GT(gap, -1e-10);
+  EXPECT_GT(error, 1e-12) << "reflect is not expected to restore the energy exactly";
+  EXPECT_LT(error, 9.8 * 9.8 * 0.1 * 0.1 / 2);
 }
 
 TEST(GviFeasibility, SlowLandingInelasticLosesEnergy) {

@@ -615,3 +615,24 @@ TEST_F(LammpsDataTest, MissingFileIsAnError) {
 
 }  // namespace
 }  // namespace deli
+
+namespace deli {
+namespace {
+
+// Found by fuzzing (tools/fuzz.sh lammps_data): an atom 4e16 box lengths outside a periodic
+// box made the wrap cast its crossing count to int (undefined). Refused, with its line;
+// one a few boxes away is still mapped back, as LAMMPS does.
+TEST_F(LammpsDataTest, AtomTooFarOutsideAPeriodicBoxIsAnError) {
+  const std::string head =
+      "far atom\n\n2 atoms\n1 atom types\n\n-6 6 xlo xhi\n-6 6 ylo yhi\n-6 6 zlo zhi\n\n"
+      "Masses\n\n1 1\n\nAtoms # atomic\n\n1 1 0.5 0 0\n";
+  const std::string far = write_file(head + "2 1 43301270189221935 -0.25 0\n");
+  expect_error_at(read_error(far), far, 17, {"x of atom 2", "43301270189221935", "32 bits"});
+  const std::string near = write_file(head + "2 1 30.5 -0.25 0\n");
+  const LammpsDataFile file = read_lammps_data(near, {});
+  EXPECT_EQ(file.system.particles.image[1][0], 3);
+  EXPECT_DOUBLE_EQ(file.system.particles.position[1].x, -5.5);
+}
+
+}  // namespace
+}  // namespace deli

@@ -1,0 +1,109 @@
+// The first 100 steps of the default input (inputs/lj_chains/rigid_slit.toml: GVI with
+// rods, contacts, walls, shadow-H reflections, the constrained predictor, inside its
+// Langevin thermostat) against tests/golden/default_input_100_steps.txt: energies every
+// step and three atoms' positions and velocities, at 17 significant digits.
+//
+// Compared bit for bit (as text that round-trips every double): deli is IEEE-exact (no
+// -ffast-math, no FMA contraction on x86-64 without -march) and its results do not depend
+// on the optimisation level, so any change of a result shows here. The libm functions the
+// run calls (log and exp in the thermostat's noise) are glibc's, fixed on Debian 12; on
+// another libm the first difference would be in the last digits, and the failure message
+// gives the relative size of the first difference to tell that from a change of method.
+//
+// A change of results that is intended (a new solver, a reordered sum) regenerates the file:
+//   DELI_GOLDEN_UPDATE=1 build/tests/deli_property_tests --gtest_filter='Golden.*'
+// and the commit says why the numbers moved.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "input/run_input.hpp"
+#include "simulation/run_loop.hpp"
+
+namespace deli {
+namespace {
+
+const std::string kGolden =
+    std::string(DELI_SOURCE_DIR) + "/tests/golden/default_input_100_steps.txt";
+
+std::string format(const char* pattern, auto... values) {
+  char line[512];
+  std::snprintf(line, sizeof line, pattern, values...);
+  return line;
+}
+
+class Record final : public Observer {
+ public:
+  void on_thermo(const ThermoSample& s) override {
+    lines.push_back(format("energy %lld %.17g %.17g %.17g", static_cast<long long>(s.step),
+                           s.kinetic, s.potential, s.total));
+  }
+  void on_step(const System& system) override {
+    const Particles& p = system.particles;
+    for (std::size_t i : {std::size_t{0}, p.size() / 2, p.size() - 1}) {
+      lines.push_back(format("atom %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g",
+                             static_cast<long long>(system.step), static_cast<long long>(p.id[i]),
+                             p.position[i].x, p.position[i].y, p.position[i].z, p.velocity[i].x,
+                             p.velocity[i].y, p.velocity[i].z));
+    }
+  }
+  std::vector<std::string> lines;
+};
+
+std::vector<std::string> run_default_input() {
+  RunInput input = load_run_input(DELI_DEFAULT_INPUT);
+  const std::unique_ptr<Integrator> integrator = make_integrator(input);
+  Record record;
+  RunOptions options;
+  options.degrees_of_freedom = input.degrees_of_freedom;
+  options.start_temperature = input.start_temperature;
+  run(input.system, *integrator, 100, 1, {&record}, options);
+  return record.lines;
+}
+
+// The largest relative difference between the numbers of two lines of the same shape.
+double relative_difference(const std::string& a, const std::string& b) {
+  std::istringstream sa(a), sb(b);
+  std::string ta, tb;
+  double worst = 0;
+  while (sa >> ta && sb >> tb) {
+    char* end = nullptr;
+    const double x = std::strtod(ta.c_str(), &end), y = std::strtod(tb.c_str(), nullptr);
+    if (*end != '\0' || x == y) continue;
+    worst = std::max(worst, std::abs(x - y) / std::max(std::abs(x), std::abs(y)));
+  }
+  return worst;
+}
+
+TEST(Golden, DefaultInputFirst100StepsBitForBit) {
+  const std::vector<std::string> lines = run_default_input();
+  ASSERT_EQ(lines.size(), 101u + 300u);
+  if (std::getenv("DELI_GOLDEN_UPDATE")) {
+    std::ofstream out(kGolden);
+    out << "# deli golden file: tests/properties/golden_default_input_test.cpp says how to\n"
+           "# regenerate it. energy STEP KINETIC POTENTIAL TOTAL; atom STEP ID X Y Z VX VY VZ\n";
+    for (const std::string& line : lines) out << line << "\n";
+    ASSERT_TRUE(out.good()) << "could not write " << kGolden;
+    GTEST_SKIP() << "wrote " << kGolden;
+  }
+  std::ifstream in(kGolden);
+  ASSERT_TRUE(in.good()) << kGolden << " is missing";
+  std::vector<std::string> golden;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#') golden.push_back(line);
+  }
+  ASSERT_EQ(golden.size(), lines.size()) << kGolden;
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    ASSERT_EQ(lines[k], golden[k]) << "first difference from " << kGolden << ", relative size "
+                                   << relative_difference(lines[k], golden[k])
+                                   << ": if the change is intended, regenerate the file (see "
+                                      "the test's header) and say why in the commit";
+  }
+}
+
+}  // namespace
+}  // namespace deli
