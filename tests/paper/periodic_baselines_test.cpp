@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "cli/integrator_factory.hpp"
 #include "input/run_input.hpp"
 #include "simulation/thermo.hpp"
 #include "support/test_systems.hpp"

@@ -21,6 +21,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli/integrator_factory.hpp"
 #include "input/run_input.hpp"
 #include "simulation/run_loop.hpp"
 

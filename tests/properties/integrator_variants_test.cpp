@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "cli/integrator_factory.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/thermo.hpp"
