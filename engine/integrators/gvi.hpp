@@ -9,7 +9,10 @@ namespace deli {
 // The generalized variational integrator (Kaufman & Pai, Algorithm 1) with the Verlet
 // discrete Lagrangian: forward predictor, extended active set, energy-preserving
 // reflection, smooth set, position update (a complementarity problem per cluster),
-// momentum update. With rods only it is RATTLE; with no constraints, velocity Verlet.
+// momentum update. With rods only it is RATTLE; with no constraints, velocity Verlet's
+// algorithm (the same numbers until the first neighbour-list rebuild, after which the pair
+// sums round differently: GVI builds its list from wrapped positions; see
+// tests/properties/integrator_variants_test.cpp).
 // Choices the paper leaves open are documented in the README ("GVI").
 //
 // Feasibility guard (the paper lets a step end overlapped, e.g. a slow particle pulled into

