@@ -13,20 +13,12 @@
 #include "simulation/thermo.hpp"
 #include "support/atoms_input.hpp"
 #include "support/energy_trend.hpp"
+#include "support/statistic.hpp"
 
 namespace deli {
 namespace {
 
-// A named statistic of the integrator; a name it does not report fails the test (a loop
-// over the names would pass without checking anything).
-double statistic(const std::vector<std::pair<std::string, double>>& stats,
-                 const std::string& name) {
-  for (const auto& [n, value] : stats) {
-    if (n == name) return value;
-  }
-  ADD_FAILURE() << "the integrator reports no statistic '" << name << "'";
-  return std::nan("");
-}
+using testing::statistic;
 
 using testing::Atom;
 using testing::input_with_atoms;

@@ -19,18 +19,12 @@
 #include "simulation/thermo.hpp"
 #include "solvers/position_problem.hpp"
 #include "support/atoms_input.hpp"
+#include "support/statistic.hpp"
 
 namespace deli {
 namespace {
 
-double statistic(const std::vector<std::pair<std::string, double>>& stats,
-                 const std::string& name) {
-  for (const auto& [n, value] : stats) {
-    if (n == name) return value;
-  }
-  ADD_FAILURE() << "the integrator reports no statistic '" << name << "'";
-  return std::nan("");
-}
+using testing::statistic;
 
 // The rigid loop of tests/solver_problems/rigid_bipyramid_redundant_rod.txt: a triangular
 // bipyramid (unit masses) held by all ten of its distances, nine independent rods and a
