@@ -1,13 +1,28 @@
 #!/usr/bin/env bash
-# Throughput of deli on the constrained benchmarks, one after the other, with the loop's
-# timing breakdown: the default input (rigid-rod slit, 1200 beads, GVI with shadow-H
-# reflections and contacts), the 4000-bead LJ chain melt with harmonic bonds (velocity
-# Verlet) and with rigid rods (GVI), and the hard-sphere fluid (eta 0.30, N 4000, GVI).
+# Issue 10's table in one go: throughput (atom-steps/s of the integration loop, one core) of
+# deli, OpenMM (C++ API, CPU platform, one thread) and LAMMPS (liblammps in-process) on the
+# same 4000-bead LJ chain melt (inputs/lj_chains/chains_4000_*.toml and their data file),
+# with harmonic bonds (velocity Verlet everywhere) and with every bond a rigid rod (deli GVI;
+# OpenMM CCMA at tolerance 1e-4 and 1e-10; LAMMPS cannot hold chains of rods: fix rattle on
+# the three-bead pieces it can hold, 2/3 of the bonds, the rest harmonic), then deli alone on
+# the default input (rigid-rod slit, 1200 beads, rods + contacts + walls, shadow-H) and the
+# hard-sphere fluid (eta 0.30, N 4000, h 0.005), which no peer integrates. Ends with the
+# summary and each engine's ratio to deli. The peers come from build/bench/peers/deli-peers
+# (built with -DDELI_CROSSCHECK=ON, the default); no `lmp` binary is needed.
+#
 # Usage: bench/constrained.sh [slit|harmonic|rigid|spheres ...] (default: all), with
-# STEPS=n to override every input's step count (DELI=path picks the binary).
+# STEPS=n to override every input's step count, DELI=path to pick deli's binary, PEERS=0 to
+# run deli alone (old/new comparisons), TABLES=1 to print every deli run's timing table.
+# Not a test: numbers depend on the (shared) machine; compare ratios from one run.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 deli=${DELI:-$top/build/deli}
+peers=${PEERS_BIN:-$top/build/bench/peers/deli-peers}
+[[ ${PEERS:-1} == 0 ]] && peers=
+if [[ -n $peers && ! -x $peers ]]; then
+  echo "note: $peers not built (configure with -DDELI_CROSSCHECK=ON): deli alone" >&2
+  peers=
+fi
 work=$(mktemp -d /tmp/deli-bench-constrained.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 declare -A inputs=(
@@ -16,7 +31,18 @@ declare -A inputs=(
   [rigid]=inputs/lj_chains/chains_4000_rigid.toml
   [spheres]=inputs/hard_spheres/hs_4000.toml
 )
-for name in ${@:-slit harmonic rigid spheres}; do
+declare -A title=(
+  [slit]="default input: rigid-rod slit, 1200 beads (GVI, shadow-H)"
+  [harmonic]="melt 100 x 40, harmonic bonds (velocity Verlet)"
+  [rigid]="melt 100 x 40, every bond a rigid rod"
+  [spheres]="hard spheres, eta 0.30, N 4000, h 0.005 (GVI)"
+)
+summary=()
+rate() { sed -n 's/.*[:] \([0-9.e+-]*\) atom-steps\/s.*/\1/p; s/^atom-steps\/s \([0-9.e+-]*\) .*/\1/p'; }
+ratio() { awk -v d="$1" -v p="$2" 'BEGIN { printf "%.2f", d / p }'; }
+row() { summary+=("$(printf '%-58s %-34s %10s %8s' "$1" "$2" "$3" "$4")"); }
+
+for name in ${@:-harmonic rigid slit spheres}; do
   input=$top/${inputs[$name]:?unknown benchmark $name}
   # Run from a copy beside its data file, so the thermo CSV lands in the scratch folder.
   dir=$work/$name
@@ -27,6 +53,35 @@ for name in ${@:-slit harmonic rigid spheres}; do
   else
     cp "$input" "$dir/input.toml"
   fi
-  echo "== $name: ${inputs[$name]}${STEPS:+ ($STEPS steps)}"
-  (cd "$dir" && "$deli" run input.toml | sed -n '/^loop time/,$p')
+  steps=${STEPS:-$(sed -n 's/^steps = //p' "$input" | tail -1)}
+  echo "== $name: ${inputs[$name]} ($steps steps)"
+  out=$(cd "$dir" && "$deli" run input.toml | sed -n '/^loop time/,$p')
+  if [[ ${TABLES:-0} == 1 ]]; then echo "$out"; else echo "$out" | head -1; fi
+  d=$(echo "$out" | rate)
+  case $name in
+    harmonic) label="deli (velocity Verlet)" ;;
+    rigid) label="deli GVI (rods to 1e-10)" ;;
+    *) label="deli GVI" ;;
+  esac
+  row "${title[$name]}" "$label" "$d" 1.00
+  [[ -z $peers || ( $name != harmonic && $name != rigid ) ]] && continue
+  runs=("openmm" "lammps")
+  [[ $name == rigid ]] && runs=("openmm 1e-4" "openmm 1e-10" "lammps")
+  for run in "${runs[@]}"; do
+    line=$(cd "$dir" && "$peers" input.toml "$steps" $run)
+    echo "$line"
+    p=$(echo "$line" | rate)
+    case "$run" in
+      openmm) label="OpenMM CPU (Verlet)" ;;
+      "openmm 1e-4") label="OpenMM CPU (CCMA 1e-4)" ;;
+      "openmm 1e-10") label="OpenMM CPU (CCMA 1e-10)" ;;
+      lammps) label=$([[ $name == rigid ]] && echo "LAMMPS: impossible; rattle on 2/3" ||
+        echo "LAMMPS (fix nve)") ;;
+    esac
+    row "" "$label" "$p" "$(ratio "$d" "$p")"
+  done
 done
+
+echo
+printf '%-58s %-34s %10s %8s\n' "system" "engine" "atom-st/s" "deli/it"
+printf '%s\n' "${summary[@]}"
