@@ -14,29 +14,34 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   const std::vector<double>& radius = particles.radius;
   const std::vector<std::uint8_t>& codes = list.image_codes();
   shifted_ = !codes.empty();
+  const bool bonded_pairs = !set.unconstrained_pairs.empty();
   for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
     for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
       const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
       const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
-      // Generous by far more than rounding: no pair within contact + margin is dropped.
-      const double within = radius[a] + radius[b] + margin_;
-      if (norm2(box.minimum_image(q[a] - q[b])) > within * within * (1.0 + 1e-6) + 1e-300) {
-        continue;
-      }
-      if (std::binary_search(set.unconstrained_pairs.begin(), set.unconstrained_pairs.end(),
-                             std::array<std::int32_t, 2>{a, b})) {
-        continue;
-      }
       Vec3 shift;
       if (shifted_) {
         // The list's shift is for q_i - q_j: negated when i is the pair's second particle.
         shift = list.image_shifts()[codes[k]];
         if (a != static_cast<std::int32_t>(i)) shift = -shift;
       }
-      pairs_.push_back({a, b, radius[a] + radius[b], shift});
+      // Through the list's shift, as collect() measures (the minimum image up to rounding).
+      // Generous by far more than rounding: no pair within contact + margin is dropped.
+      const double d2 =
+          shifted_ ? norm2(q[a] - q[b] - shift) : norm2(box.minimum_image(q[a] - q[b]));
+      const double contact = radius[a] + radius[b];
+      const double within = contact + margin_;
+      if (d2 > within * within * (1.0 + 1e-6) + 1e-300) continue;
+      if (bonded_pairs &&
+          std::binary_search(set.unconstrained_pairs.begin(), set.unconstrained_pairs.end(),
+                             std::array<std::int32_t, 2>{a, b})) {
+        continue;
+      }
+      pairs_.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
     }
   }
   anchor_.assign(q, q + particles.size());
+  moved_.assign(particles.size(), 0.0);
   list_ = &list;
   list_builds_ = list.builds();
 }
@@ -57,7 +62,9 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     if (fresh) {
       double largest2 = 0.0;
       for (std::size_t i = 0; i < anchor_.size(); ++i) {
-        largest2 = std::max(largest2, norm2(q[i] - anchor_[i]));
+        const double moved2 = norm2(q[i] - anchor_[i]);
+        moved_[i] = std::sqrt(moved2);
+        largest2 = std::max(largest2, moved2);
       }
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);
@@ -85,10 +92,18 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       out.push_back(sphere_pair(pair.a, pair.b, particles));
       gap_at_q.push_back(gap);
     };
+    // A pair whose gap at q is certainly beyond the reach (its anchor gap less both
+    // displacements exceeds it by far more than rounding) is one the exact test drops too.
+    const double beyond = reach + 1e-9;
+    const double* moved = moved_.data();
     if (shifted_) {
-      for (const Pair& pair : pairs_) keep_pair(pair, norm2(q[pair.a] - q[pair.b] - pair.shift));
+      for (const Pair& pair : pairs_) {
+        if (pair.anchor_gap - moved[pair.a] - moved[pair.b] > beyond) continue;
+        keep_pair(pair, norm2(q[pair.a] - q[pair.b] - pair.shift));
+      }
     } else {
       for (const Pair& pair : pairs_) {
+        if (pair.anchor_gap - moved[pair.a] - moved[pair.b] > beyond) continue;
         keep_pair(pair, norm2(box.minimum_image(q[pair.a] - q[pair.b])));
       }
     }

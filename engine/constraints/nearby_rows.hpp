@@ -15,7 +15,11 @@ namespace deli {
 // largest displacement since: the short list serves while reach + 2 s <= margin and the
 // neighbour list is the one it was made from; otherwise it is made again. The neighbour
 // list reaches a force cutoff (LJ 2.5 + skin) far beyond contact: the short list holds a
-// fraction of its pairs, and no bonded-pair search is left per call.
+// fraction of its pairs, and no bonded-pair search is left per call. Each short-list pair
+// keeps its gap at the anchor positions: by the triangle inequality its gap at q is at least
+// that less the two particles' displacements since, so a pair whose bound already exceeds
+// the reach is passed over without reading its positions (in the hard-sphere fluid, whose
+// list reaches contact + skin, the short list holds every list pair and most are so passed).
 class NearbyRows {
  public:
   explicit NearbyRows(double margin = 0.5) : margin_(margin) {}
@@ -31,16 +35,18 @@ class NearbyRows {
             const NeighborList& list, const Box& box);
 
   double margin_;
-  // a < b, in the neighbour list's order, with their contact distance and, when the list
-  // has image codes, the periodic shift that makes q_a - q_b - shift their separation.
+  // a < b, in the neighbour list's order, with their contact distance, their gap at the
+  // anchor positions and, when the list has image codes, the periodic shift that makes
+  // q_a - q_b - shift their separation.
   struct Pair {
     std::int32_t a, b;
-    double contact;
+    double contact, anchor_gap;
     Vec3 shift;
   };
   std::vector<Pair> pairs_;
   bool shifted_ = false;
   std::vector<Vec3> anchor_;
+  std::vector<double> moved_;  // per particle, |q - anchor| at the last call
   const NeighborList* list_ = nullptr;
   std::int64_t list_builds_ = -1;
 };
