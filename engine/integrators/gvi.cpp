@@ -130,16 +130,27 @@ void Gvi::start_step(System& system) {
 
 // Candidate rows: those within reach of the largest displacement seen this step, found once
 // and refreshed only if a later displacement outgrows the reach.
-const std::vector<Constraint>& Gvi::candidates_for(const System& system,
-                                                   const std::vector<Vec3>& x) {
+const std::vector<Constraint>& Gvi::candidates_for(const System& system, const std::vector<Vec3>& x,
+                                                   double largest2_bound, bool exact) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
+  ws_.nearby_refreshed = false;
+  // 2 sqrt(s) + tol is monotone in s (each operation correctly rounded): a bound that shows
+  // no refresh due shows what the exact largest would.
+  if (largest2_bound >= 0.0 && 2.0 * std::sqrt(largest2_bound) + gap_tolerance <= ws_.reach) {
+    ws_.largest2 = largest2_bound;
+    return ws_.nearby;
+  }
   // The largest |x - q| as the square root of the largest square: the same number (the
   // square root is monotone and correctly rounded), one root instead of one per particle.
   double largest2 = 0.0;
-  for (std::size_t i = 0; i < q.size(); ++i) largest2 = std::max(largest2, norm2(x[i] - q[i]));
+  if (exact) {
+    largest2 = largest2_bound;
+  } else {
+    for (std::size_t i = 0; i < q.size(); ++i) largest2 = std::max(largest2, norm2(x[i] - q[i]));
+  }
+  ws_.largest2 = largest2;
   const double largest = std::sqrt(largest2);
-  ws_.nearby_refreshed = false;
   if (2.0 * largest + gap_tolerance > ws_.reach) {
     ws_.reach = 4.0 * largest + 2.0 * gap_tolerance;
     if (constraints_.linearized) {
@@ -171,8 +182,12 @@ void Gvi::find_active_set(System& system) {
   active.clear();
   ws_.prediction_changed.assign(n, 1);
   bool settled = false;
+  // After the first round: a bound on max |prediction - q|^2, from the last round's and the
+  // particles whose prediction changed.
+  double largest2_bound = -1.0;
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
-    const std::vector<Constraint>& candidates = candidates_for(system, ws_.predicted);
+    const std::vector<Constraint>& candidates =
+        candidates_for(system, ws_.predicted, largest2_bound);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     bool grew = false;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
@@ -199,10 +214,13 @@ void Gvi::find_active_set(System& system) {
     const TimedPhase predicting(Phase::prediction);
     std::swap(ws_.previous_prediction, ws_.predicted);
     predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
+    largest2_bound = ws_.largest2;
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3& a = ws_.predicted[i];
       const Vec3& b = ws_.previous_prediction[i];
-      ws_.prediction_changed[i] = a.x != b.x || a.y != b.y || a.z != b.z;
+      const bool changed = a.x != b.x || a.y != b.y || a.z != b.z;
+      ws_.prediction_changed[i] = changed;
+      if (changed) largest2_bound = std::max(largest2_bound, norm2(a - ws_.q[i]));
     }
   }
   stats_.active += static_cast<std::int64_t>(active.size());
@@ -227,9 +245,13 @@ void Gvi::displaced(const Particles& P) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
+  double largest2 = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+    largest2 = std::max(largest2, norm2(ws_.x[i] - ws_.q[i]));
   }
+  ws_.x_largest2 = largest2;
+  ws_.x_builds = engine_.neighbors().builds();
 }
 
 // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
@@ -293,7 +315,7 @@ void Gvi::update_positions(System& system) {
     ws_.violated.clear();
     if (feasibility_ != Feasibility::none) {
       // Overlapping beyond tolerance at x (such a row is also active there).
-      for (const Constraint& c : candidates_for(system, ws_.x)) {
+      for (const Constraint& c : candidates_for(system, ws_.x, ws_.x_largest2, true)) {
         if (gap_unless_beyond(c, ws_.x.data(), system.box, -gap_tolerance) < -gap_tolerance &&
             !contains(ws_.held, c)) {
           ws_.violated.push_back(c);
@@ -379,7 +401,13 @@ void Gvi::update_momenta(System& system, bool tally) {
 // step's displacements): they decide overlaps; the exact minimum over every pair is taken on
 // thermo steps, where it is reported.
 void Gvi::check_constraints(const System& system, bool tally) {
-  candidates_for(system, system.particles.position);
+  // The positions are ws_.x unless the force evaluation rebuilt the neighbour list, which
+  // wraps them.
+  if (engine_.neighbors().builds() == ws_.x_builds) {
+    candidates_for(system, system.particles.position, ws_.x_largest2, true);
+  } else {
+    candidates_for(system, system.particles.position);
+  }
   record_geometry(system, ws_.nearby, tally);
 }
 

@@ -80,10 +80,14 @@ class Gvi final : public ConstrainedIntegrator {
   void predict(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& x,
                bool constrained, bool again = false);
   // The candidate rows for a step from q to x (refreshed when x outgrows their reach).
-  const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x);
+  // `largest2_bound`, when given, is at least max |x - q|^2 (the exact value if `exact`):
+  // what decides a refresh without a pass over the particles when it shows none is due.
+  const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
+                                                double largest2_bound = -1.0, bool exact = false);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   void solve_held_positions(System& system);
-  // End positions q + h M^-1 (half + impulse) into ws_.x.
+  // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
+  // ws_.x_largest2.
   void displaced(const Particles& particles);
   double start_energy(System& system);
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,

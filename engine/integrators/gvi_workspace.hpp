@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "constraints/constraint.hpp"
@@ -28,6 +29,7 @@ struct GviWorkspace {
   std::vector<double> nearby_gap_at_q;
   double reach = -1.0;
   bool nearby_refreshed = false;  // by the last candidates call
+  double largest2 = 0.0;          // its bound on max |x - q|^2 (exact when it refreshed)
 
   // Active and smooth sets; particles whose prediction changed in the last round.
   std::vector<Constraint> active, smooth;
@@ -38,6 +40,8 @@ struct GviWorkspace {
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
   std::vector<Vec3> half, impulse, x, free, mid, f_mid;
+  double x_largest2 = 0.0;    // max |x - q|^2
+  std::int64_t x_builds = 0;  // neighbour list builds when x was made (a rebuild wraps)
   std::vector<Constraint> held, landed, violated;
   std::vector<bool> equality;
   double position_virial = 0.0;
