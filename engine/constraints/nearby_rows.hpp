@@ -46,7 +46,8 @@ class NearbyRows {
   std::vector<Pair> pairs_;
   bool shifted_ = false;
   std::vector<Vec3> anchor_;
-  std::vector<double> moved_;  // per particle, |q - anchor| at the last call
+  std::vector<double> moved_;       // per particle, |q - anchor| at the last call
+  std::vector<std::int32_t> near_;  // pairs that may be within reach, by index
   const NeighborList* list_ = nullptr;
   std::int64_t list_builds_ = -1;
 };
