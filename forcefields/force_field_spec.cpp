@@ -68,6 +68,7 @@ std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const 
   }
   if (spec.bond) ff->add(bonded_term(*spec.bond, "bond"));
   if (spec.angle) ff->add(bonded_term(*spec.angle, "angle"));
+  if (spec.dihedral) ff->add(bonded_term(*spec.dihedral, "dihedral"));
   if (spec.gravity) ff->add(std::make_unique<Gravity>(*spec.gravity));
   for (const ForceFieldSpec::Radial& r : spec.radial) {
     ff->add(std::make_unique<RadialPotential>(r.inverse_square

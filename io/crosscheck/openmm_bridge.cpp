@@ -26,7 +26,7 @@ std::vector<Vec3> from_openmm(const std::vector<OpenMM::Vec3>& v) {
 
 // Force groups, one per deli term, so that each term's energy can be read alone.
 constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup = 3,
-              kExternalGroup = 4;
+              kExternalGroup = 4, kDihedralGroup = 5;
 
 // k_B N_A in kJ/mol/K, exactly as OpenMM's BOLTZ (SI 2019 constants).
 constexpr double kBoltzmannKJPerMolK = 1.380649e-23 * 6.02214076e23 / 1000.0;
@@ -184,6 +184,22 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     }
     m.term_names.push_back("angle");
     m.term_groups.push_back(1 << kAngleGroup);
+  }
+  if (spec.dihedral) {
+    for (const BondedStyle* style : spec.dihedral->styles()) {
+      auto* torsions = new OpenMM::CustomTorsionForce(checked(*style, "dihedral"));
+      for (const StyleCoefficient& c : style->coefficients)
+        torsions->addPerTorsionParameter(c.name);
+      for (const Dihedral& d : sys.topology.dihedrals) {
+        if (spec.dihedral->style_by_type[d.type] != style) continue;
+        torsions->addTorsion(d.i, d.j, d.k, d.l, spec.dihedral->by_type[d.type]);
+      }
+      torsions->setUsesPeriodicBoundaryConditions(m.periodic);
+      torsions->setForceGroup(kDihedralGroup);
+      m.system.addForce(torsions);
+    }
+    m.term_names.push_back("dihedral");
+    m.term_groups.push_back(1 << kDihedralGroup);
   }
 
   // External fields, on positions as given (deli's act on positions as stored: the two

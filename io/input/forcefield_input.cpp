@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <set>
+#include <sstream>
 
 #include "bonded/bonded_style.hpp"
 #include "core/error.hpp"
@@ -43,6 +44,12 @@ std::string counted(std::size_t n, const std::string& what) {
   return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
 }
 
+std::string number_text(double v) {
+  std::ostringstream text;
+  text << v;
+  return text.str();
+}
+
 // One coefficient from the input, checked as its style's registration says.
 double read_coefficient(TomlTable& c, const StyleCoefficient& k) {
   switch (k.check) {
@@ -51,6 +58,13 @@ double read_coefficient(TomlTable& c, const StyleCoefficient& k) {
     case StyleCoefficient::Check::non_negative: {
       const double v = c.number(k.name);
       if (v < 0) c.fail("must not be negative", k.name);
+      return v;
+    }
+    case StyleCoefficient::Check::sign:
+    case StyleCoefficient::Check::non_negative_integer: {
+      const double v = c.number(k.name);
+      const std::string violation = coefficient_violation(k.check, v);
+      if (!violation.empty()) c.fail(violation + ", found " + number_text(v), k.name);
       return v;
     }
     case StyleCoefficient::Check::any:
@@ -213,10 +227,10 @@ std::string alternatives(const std::vector<std::string>& names) {
   return text;
 }
 
-// [forcefield.bond] or [forcefield.angle]: a registered style and its coefficients by
-// type, read as the style's registration describes them. A type's coeffs may name a style
-// of their own (several styles in one system, as LAMMPS' hybrid); the data file's section
-// is for the table's style.
+// [forcefield.bond], [forcefield.angle] or [forcefield.dihedral]: a registered style and its
+// coefficients by type, read as the style's registration describes them. A type's coeffs
+// may name a style of their own (several styles in one system, as LAMMPS' hybrid); the data
+// file's section is for the table's style.
 BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::string& what,
                        const DataCoefficients& data, const CoefficientSection& section,
                        const char* section_name, std::vector<std::string>& notes) {
@@ -241,10 +255,19 @@ BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::stri
       },
       data, section,
       [&](const CoefficientRow& row) {
-        expect_values(data, row, style.coefficients.size(), style.data_form);
+        const BondedStyle* own = &style;
+        expect_values(data, row, own->coefficients.size(), own->data_form);
         std::vector<double> values = row.values;
         for (std::size_t k = 0; k < values.size(); ++k) {
-          if (style.coefficients[k].degrees) values[k] = to_radians(values[k]);
+          const StyleCoefficient& coefficient = own->coefficients[k];
+          const std::string violation = coefficient_violation(coefficient.check, values[k]);
+          if (!violation.empty()) {
+            throw InputError(located(data.file, row.line,
+                                     section_name + std::string(": ") + coefficient.name + " " +
+                                         violation + ", found " + number_text(values[k]) +
+                                         " (expected " + own->data_form + ")"));
+          }
+          if (coefficient.degrees) values[k] = to_radians(values[k]);
         }
         return values;
       },
@@ -289,6 +312,22 @@ std::optional<BondedSpec> read_angle(std::optional<TomlTable> t, const System& s
                      "Angle Coeffs", notes);
 }
 
+std::optional<BondedSpec> read_dihedral(std::optional<TomlTable> t, const System& system,
+                                        const DataCoefficients& data,
+                                        std::vector<std::string>& notes) {
+  if (!t) {
+    if (!system.topology.dihedrals.empty()) {
+      throw InputError(
+          "the system has dihedrals but the input has no [forcefield.dihedral] table; "
+          "add one with style = " +
+          alternatives(style_names(BondedKind::dihedral)) + " and its coeffs");
+    }
+    return std::nullopt;
+  }
+  return read_bonded(*t, BondedKind::dihedral, system.topology.dihedral_types, "dihedral", data,
+                     data.dihedral, "Dihedral Coeffs", notes);
+}
+
 }  // namespace
 
 ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigid_bonds,
@@ -309,6 +348,7 @@ ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigi
   spec.pair = read_pair(*pair, system, data, notes);
   spec.bond = read_bond(t->table("bond"), system, rigid_bonds, data, notes);
   spec.angle = read_angle(t->table("angle"), system, data, notes);
+  spec.dihedral = read_dihedral(t->table("dihedral"), system, data, notes);
   if (auto external = t->table("external")) {
     if (external->has("gravity")) {
       const auto g = external->numbers("gravity", 3);
