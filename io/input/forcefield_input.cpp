@@ -28,11 +28,23 @@ std::string where(const DataCoefficients& data, const CoefficientSection& sectio
   return data.file + ":" + std::to_string(section.line);
 }
 
-// The data file's section for a style the input names: its "# style" comment must agree.
+// The data file's section for a style the input names: its "# style" comment must agree,
+// unless it is a hybrid section, whose rows must each name their style (checked against
+// the styles by the caller).
 void check_data_style(const DataCoefficients& data, const CoefficientSection& section,
                       const char* name, const std::vector<std::string>& styles,
                       const std::string& input_style) {
   if (section.line == 0 || section.style.empty()) return;
+  if (section.style == "hybrid") {
+    for (const CoefficientRow& row : section.rows) {
+      if (!row.style.empty()) continue;
+      throw InputError(located(data.file, row.line,
+                               std::string("the data file's ") + name +
+                                   " are marked '# hybrid' but this row names no style: write "
+                                   "it as 'type style coefficients...' (\"1 fene 30 1.5 1 1\")"));
+    }
+    return;
+  }
   if (std::find(styles.begin(), styles.end(), section.style) != styles.end()) return;
   throw InputError(where(data, section) + ": the data file's " + name + " are for style '" +
                    section.style + "', the input's is '" + input_style +
@@ -99,6 +111,13 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
     check_data_style(data, *section, section == &data.pair ? "Pair Coeffs" : "PairIJ Coeffs",
                      {style.lammps_style}, name);
     for (const CoefficientRow& row : section->rows) {
+      if (!row.style.empty() && row.style != style.lammps_style) {
+        throw InputError(located(data.file, row.line,
+                                 "this row is for pair style '" + row.style +
+                                     "', the input's is '" + name +
+                                     "': deli has one pair style per system (no pair_style "
+                                     "hybrid); give the coefficients in the input's coeffs"));
+      }
       const int a = row.types.front(), b = row.types.back();
       if (row.values.size() < count || row.values.size() > count + 1) {
         throw InputError(
@@ -229,8 +248,8 @@ std::string alternatives(const std::vector<std::string>& names) {
 
 // [forcefield.bond], [forcefield.angle] or [forcefield.dihedral]: a registered style and its
 // coefficients by type, read as the style's registration describes them. A type's coeffs
-// may name a style of their own (several styles in one system, as LAMMPS' hybrid); the data
-// file's section is for the table's style.
+// may name a style of their own (several styles in one system, as LAMMPS' hybrid); so may
+// a data file's row (a hybrid section); other rows are for the table's style.
 BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::string& what,
                        const DataCoefficients& data, const CoefficientSection& section,
                        const char* section_name, std::vector<std::string>& notes) {
@@ -255,7 +274,14 @@ BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::stri
       },
       data, section,
       [&](const CoefficientRow& row) {
-        const BondedStyle* own = &style;
+        const BondedStyle* own = row.style.empty() ? &style : find_bonded_style(kind, row.style);
+        if (own == nullptr) {
+          throw InputError(located(data.file, row.line,
+                                   std::string(section_name) + " row names " + what + " style '" +
+                                       row.style + "', which deli does not have; deli's " + what +
+                                       " styles are " + alternatives(style_names(kind))));
+        }
+        spec.style_by_type[static_cast<std::size_t>(row.types.front())] = own;
         expect_values(data, row, own->coefficients.size(), own->data_form);
         std::vector<double> values = row.values;
         for (std::size_t k = 0; k < values.size(); ++k) {

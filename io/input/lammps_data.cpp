@@ -486,7 +486,12 @@ CoefficientSection DataReader::coefficients(const Section& section, const std::s
     CoefficientRow row;
     row.line = line;
     for (int k = 0; k < type_columns; ++k) row.types.push_back(type(tokens[k], line, kind, types));
-    for (std::size_t k = static_cast<std::size_t>(type_columns); k < tokens.size(); ++k) {
+    // A hybrid style's row names its style after the types (LAMMPS' read_data form).
+    std::size_t first_value = static_cast<std::size_t>(type_columns);
+    if (std::isalpha(static_cast<unsigned char>(tokens[first_value].front()))) {
+      row.style = tokens[first_value++];
+    }
+    for (std::size_t k = first_value; k < tokens.size(); ++k) {
       row.values.push_back(real(tokens[k], line, std::string("a coefficient in ") + name));
     }
     if (!seen.insert(row.types).second) {

@@ -16,10 +16,12 @@ struct LammpsDataOptions {
 // A coefficient section as LAMMPS write_data writes it: "Pair Coeffs # lj/cut" then one
 // line per type ("type epsilon sigma"), or "PairIJ Coeffs" per type pair ("i j epsilon
 // sigma cutoff"), "Bond Coeffs # fene", "Angle Coeffs # harmonic" and "Dihedral Coeffs #
-// harmonic" per type. The
-// numbers are kept as written; the force-field reader gives them their meaning.
+// harmonic" per type; a hybrid style's section ("Bond Coeffs # hybrid") names each row's
+// style after its type ("1 fene 30 1.5 1 1"). The numbers are kept as written; the
+// force-field reader gives them their meaning.
 struct CoefficientRow {
   std::vector<int> types;  // 0-based: one type, or two for PairIJ
+  std::string style;       // a hybrid section's row names its style ("1 fene 30 1.5 1 1")
   std::vector<double> values;
   long line = 0;
 };
