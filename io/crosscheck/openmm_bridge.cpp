@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "forces/special_bonds.hpp"
+
 namespace deli {
 
 namespace {
@@ -125,17 +127,14 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     for (const std::string& n : names) scaled->addPerBondParameter(n);
     scaled->setUsesPeriodicBoundaryConditions(m.periodic);
     scaled->setForceGroup(kScaledPairGroup);
-    for (int s = 0; s < 3; ++s) {
-      if (spec.special_lj[s] == 1.0) continue;
-      for (const auto& [i, j] : special.by_separation[s]) {
-        pair->addExclusion(i, j);
-        if (spec.special_lj[s] == 0.0) continue;
-        const int ti = sys.particles.type[i], tj = sys.particles.type[j];
-        const std::size_t k = static_cast<std::size_t>(ti + types * tj);
-        std::vector<double> parameters{spec.special_lj[s]};
-        for (const std::vector<double>& table : tables) parameters.push_back(table[k]);
-        scaled->addBond(i, j, parameters);
-      }
+    for (const ExcludedSpecialPair& p : excluded_special_pairs(special, spec.special_lj)) {
+      pair->addExclusion(p.i, p.j);
+      if (!p.scaled()) continue;
+      const int ti = sys.particles.type[p.i], tj = sys.particles.type[p.j];
+      const std::size_t k = static_cast<std::size_t>(ti + types * tj);
+      std::vector<double> parameters{p.factor};
+      for (const std::vector<double>& table : tables) parameters.push_back(table[k]);
+      scaled->addBond(p.i, p.j, parameters);
     }
     m.system.addForce(pair);
     m.term_names.push_back("pair");
