@@ -5,6 +5,7 @@
 #include "bonded/term_sum.hpp"
 #include "external/gravity.hpp"
 #include "external/radial_potentials.hpp"
+#include "forces/special_bonds.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -23,9 +24,8 @@ std::vector<ScaledPair> scaled_special_pairs(const System& system,
                                              const std::array<double, 3>& factors) {
   std::vector<ScaledPair> scaled;
   const SpecialPairs special = find_special_pairs(system.topology, system.particles.size());
-  for (int s = 0; s < 3; ++s) {
-    if (factors[s] == 0.0 || factors[s] == 1.0) continue;
-    for (const auto& [i, j] : special.by_separation[s]) scaled.push_back({i, j, factors[s]});
+  for (const ExcludedSpecialPair& p : excluded_special_pairs(special, factors)) {
+    if (p.scaled()) scaled.push_back({p.i, p.j, p.factor});
   }
   return scaled;
 }
@@ -68,6 +68,7 @@ std::unique_ptr<ForceField> build_force_field(const ForceFieldSpec& spec, const 
   }
   if (spec.bond) ff->add(bonded_term(*spec.bond, "bond"));
   if (spec.angle) ff->add(bonded_term(*spec.angle, "angle"));
+  if (spec.dihedral) ff->add(bonded_term(*spec.dihedral, "dihedral"));
   if (spec.gravity) ff->add(std::make_unique<Gravity>(*spec.gravity));
   for (const ForceFieldSpec::Radial& r : spec.radial) {
     ff->add(std::make_unique<RadialPotential>(r.inverse_square

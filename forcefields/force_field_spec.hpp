@@ -24,8 +24,8 @@ struct PairSpec {
   double max_cutoff() const;
 };
 
-// The bonds' or the angles' style and its coefficients by type, each in the style's
-// coefficient order (angles in radians).
+// The bonds', angles' or dihedrals' style and its coefficients by type, each in the
+// style's coefficient order (angles in radians).
 struct BondedSpec {
   const BondedStyle* style = nullptr;             // the table's
   std::vector<const BondedStyle*> style_by_type;  // the table's, or the type's own
@@ -39,6 +39,7 @@ struct ForceFieldSpec {
   std::optional<PairSpec> pair;
   std::optional<BondedSpec> bond;
   std::optional<BondedSpec> angle;
+  std::optional<BondedSpec> dihedral;
   std::optional<Vec3> gravity;  // uniform field, force per unit mass
   struct Radial {
     bool inverse_square = false;  // else polynomial in |x - c|^2

@@ -44,7 +44,7 @@ void minimize_if_asked(RunInput& input, RunLog& out) {
 }
 
 std::string style_for(const System& system) {
-  if (!system.topology.angles.empty()) return "molecular";
+  if (!system.topology.angles.empty() || !system.topology.dihedrals.empty()) return "molecular";
   if (!system.topology.bonds.empty()) return "bond";
   return "atomic";
 }
@@ -103,11 +103,13 @@ namespace {
 int run_with_output(RunInput& input, const std::string& path, const std::string& restart,
                     const Checkpoint& checkpoint, std::uint64_t fingerprint, RunLog& out) {
   out.print("deli %s: %s\n", DELI_VERSION, path.c_str());
-  out.print("%zu atoms, %zu bonds, %zu angles; box %g x %g x %g; dt %g, %lld steps\n",
+  const std::size_t dihedrals = input.system.topology.dihedrals.size();
+  out.print("%zu atoms, %zu bonds, %zu angles%s; box %g x %g x %g; dt %g, %lld steps\n",
             input.system.particles.size(), input.system.topology.bonds.size(),
-            input.system.topology.angles.size(), input.system.box.length().x,
-            input.system.box.length().y, input.system.box.length().z, input.timestep,
-            static_cast<long long>(input.steps));
+            input.system.topology.angles.size(),
+            dihedrals == 0 ? "" : (", " + std::to_string(dihedrals) + " dihedrals").c_str(),
+            input.system.box.length().x, input.system.box.length().y, input.system.box.length().z,
+            input.timestep, static_cast<long long>(input.steps));
   for (const std::string& note : input.notes) out.print("%s\n", note.c_str());
   out.print("%s\n", input.degrees_of_freedom.describe().c_str());
   if (input.thermostat) {

@@ -105,6 +105,7 @@ System build_random_chains(const RandomChains& chains) {
     return true;
   };
   system.topology.angle_types = chains.angles && chains.length > 2 ? 1 : 0;
+  system.topology.dihedral_types = chains.dihedrals && chains.length > 3 ? 1 : 0;
 
   Particles& p = system.particles;
   p.resize(total);
@@ -157,6 +158,9 @@ System build_random_chains(const RandomChains& chains) {
       const auto i = static_cast<std::int32_t>(k);
       if (k > first) system.topology.bonds.push_back({i - 1, i, 0});
       if (chains.angles && k > first + 1) system.topology.angles.push_back({i - 2, i - 1, i, 0});
+      if (chains.dihedrals && k > first + 2) {
+        system.topology.dihedrals.push_back({i - 3, i - 2, i - 1, i, 0});
+      }
     }
   }
   return system;

@@ -16,8 +16,9 @@ struct FccLattice {
 System build_fcc(const FccLattice& lattice);
 
 // `count` linear chains of `length` beads (type 0, bonds of type 0, angles of type 0 when
-// `angles`) grown as random walks with fixed bond length in a periodic cubic box at the
-// given bead number density, with no two beads closer than min_distance (minimum image).
+// `angles`, dihedrals of type 0 when `dihedrals`) grown as random walks with fixed bond length in a
+// periodic cubic box at the given bead number density, with no two beads closer than min_distance
+// (minimum image).
 struct RandomChains {
   int count = 100;
   int length = 20;
@@ -26,6 +27,7 @@ struct RandomChains {
   double min_distance = 0.9;
   double mass = 1.0;
   bool angles = false;
+  bool dihedrals = false;
   std::uint64_t seed = 1;
   int attempts_per_bead = 100;
   // Along open axes beads stay within [lo + clearance, hi - clearance] (between walls).

@@ -15,12 +15,18 @@ struct Angle {
   std::int32_t i, j, k;  // j is the vertex
   int type;
 };
+struct Dihedral {
+  std::int32_t i, j, k, l;  // the torsion about the j-k bond
+  int type;
+};
 
 struct Topology {
   std::vector<Bond> bonds;
   std::vector<Angle> angles;
+  std::vector<Dihedral> dihedrals;
   int bond_types = 0;
   int angle_types = 0;
+  int dihedral_types = 0;
 };
 
 // Pairs separated by 1, 2 or 3 bonds (1-2, 1-3, 1-4 neighbours), each pair once with

@@ -9,9 +9,9 @@
 
 namespace deli {
 
-enum class BondedKind { bond, angle };
+enum class BondedKind { bond, angle, dihedral };
 
-// A bond or angle style, described once, in the style's own file: how its coefficients
+// A bond, angle or dihedral style, described once, in the style's own file: how its coefficients
 // are read, the term deli computes, and how OpenMM and LAMMPS express the same potential.
 // The cross-check layer needs only these strings, so the forcefields layer stays free of
 // OpenMM and LAMMPS headers.
@@ -20,15 +20,16 @@ struct BondedStyle {
   std::string name;  // the input's style, which is LAMMPS' too
   std::vector<StyleCoefficient> coefficients;
   std::string data_form;  // what a data-file row holds, for errors: "harmonic bond ... K r0"
-  // The term for the bonds (angles) of the system, from the coefficients by type (each in
-  // `coefficients`' order, angles in radians): of every type, or of those set in
-  // `own_types` (a system of several styles; the other types' rows are zeros).
+  // The term for the bonds (angles, dihedrals) of the system, from the coefficients by type (each
+  // in `coefficients`' order, angles in radians): of every type, or of those set in `own_types` (a
+  // system of several styles; the other types' rows are zeros).
   std::unique_ptr<ForceTerm> (*make_term)(const std::vector<std::vector<double>>& by_type,
                                           std::vector<char> own_types);
-  // The energy as an OpenMM CustomBondForce (of r) or CustomAngleForce (of theta)
-  // expression in the coefficients' names; empty: not available in OpenMM.
+  // The energy as an OpenMM CustomBondForce (of r), CustomAngleForce (of theta) or
+  // CustomTorsionForce (of theta) expression in the coefficients' names; empty: not
+  // available in OpenMM.
   std::string openmm_energy;
-  // LAMMPS' bond_style/angle_style, whose coeff lines take the coefficients in order
+  // LAMMPS' bond_style/angle_style/dihedral_style, whose coeff lines take the coefficients in order
   // (angles in degrees); empty: not available in LAMMPS.
   std::string lammps_style;
 };

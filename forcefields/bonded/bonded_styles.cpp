@@ -8,12 +8,22 @@ const BondedStyle& harmonic_bond_style();
 const BondedStyle& fene_bond_style();
 const BondedStyle& harmonic_angle_style();
 const BondedStyle& cosine_angle_style();
+const BondedStyle& harmonic_dihedral_style();
 
 const std::vector<const BondedStyle*>& bonded_styles(BondedKind kind) {
   static const std::vector<const BondedStyle*> bonds{&harmonic_bond_style(), &fene_bond_style()};
   static const std::vector<const BondedStyle*> angles{&harmonic_angle_style(),
                                                       &cosine_angle_style()};
-  return kind == BondedKind::bond ? bonds : angles;
+  static const std::vector<const BondedStyle*> dihedrals{&harmonic_dihedral_style()};
+  switch (kind) {
+    case BondedKind::bond:
+      return bonds;
+    case BondedKind::angle:
+      return angles;
+    case BondedKind::dihedral:
+      break;
+  }
+  return dihedrals;
 }
 
 const BondedStyle* find_bonded_style(BondedKind kind, const std::string& name) {

@@ -10,7 +10,7 @@
 namespace deli {
 
 // One engine's energies, forces and virial for the same configuration, forces indexed
-// like deli's particles. Energy terms are named as deli names them (pair, bond, angle).
+// like deli's particles. Energy terms are named as deli names them (pair, bond, angle, dihedral).
 struct EngineEvaluation {
   std::string engine;
   std::vector<std::string> term_names;

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,22 +27,25 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   if (spec.pair && spec.pair->style->lammps_style.empty()) {
     throw UnsupportedModel("LAMMPS has no pair style '" + spec.pair->style->name + "'");
   }
-  for (const std::optional<BondedSpec>* bonded : {&spec.bond, &spec.angle}) {
+  const std::array<std::pair<const char*, const std::optional<BondedSpec>*>, 3> kinds{
+      {{"bond", &spec.bond}, {"angle", &spec.angle}, {"dihedral", &spec.dihedral}}};
+  for (const auto& [kind, bonded] : kinds) {
     if (!*bonded) continue;
     for (const BondedStyle* style : (*bonded)->styles()) {
       if (style->lammps_style.empty()) {
-        throw UnsupportedModel("LAMMPS has no " +
-                               std::string(bonded == &spec.bond ? "bond" : "angle") + " style '" +
-                               style->name + "'");
+        throw UnsupportedModel("LAMMPS has no " + std::string(kind) + " style '" + style->name +
+                               "'");
       }
     }
   }
-  const bool bonds = !system.topology.bonds.empty(), angles = !system.topology.angles.empty();
+  const bool bonds = !system.topology.bonds.empty(), angles = !system.topology.angles.empty(),
+             dihedrals = !system.topology.dihedrals.empty();
   // Terms as deli has them: bonds held as rods are in the topology but not in the force field.
   has_bonds_ = bonds && spec.bond;
   has_angles_ = angles && spec.angle;
+  has_dihedrals_ = dihedrals && spec.dihedral;
   has_pair_ = spec.pair.has_value();
-  const std::string style = angles ? "angle" : bonds ? "bond" : "atomic";
+  const std::string style = dihedrals ? "molecular" : angles ? "angle" : bonds ? "bond" : "atomic";
   data_path_ = (std::filesystem::temp_directory_path() /
                 ("deli-validate-" + std::to_string(getpid()) + ".data"))
                    .string();
@@ -83,7 +87,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   if (spec.pair && !lammps_has_style(lammps_, "pair", spec.pair->style->lammps_style.c_str())) {
     unsupported("pair_style " + spec.pair->style->lammps_style);
   }
-  for (const auto& [kind, bonded] : {std::pair{"bond", &spec.bond}, {"angle", &spec.angle}}) {
+  for (const auto& [kind, bonded] : kinds) {
     if (!*bonded) continue;
     std::vector<std::string> needed;
     for (const BondedStyle* style : (*bonded)->styles()) needed.push_back(style->lammps_style);
@@ -131,6 +135,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
     command("angle_style zero");
     command("angle_coeff *");
   }
+  if (spec.dihedral) bonded_style("dihedral", *spec.dihedral);
   // External fields: fix gravity (F = m g, energy -m g.x) and, for each radial field, fix
   // addforce with atom-style variables for the force and the energy (deli's V(s) with
   // s = |x - c|^2: F = -2 V'(s) (x - c)). Both count in pe (fix_modify energy yes) and,
@@ -184,12 +189,10 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   if (spec.angle) bonded_style("angle", *spec.angle);
   command("compute deli_virial all pressure NULL virial");
   command("compute deli_unwrapped all property/atom xu yu zu");
-  command("thermo_style custom step pe ke evdwl ebond eangle press vol c_deli_virial");
+  command("thermo_style custom step pe ke evdwl ebond eangle edihed press vol c_deli_virial");
   command("thermo_modify norm no");
 }
 
-// "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
-// coefficients in order, angles back in degrees.
 // "<kind>_style" and one "<kind>_coeff" line per type: the registered style's name and its
 // coefficients in order, angles back in degrees; several styles as LAMMPS' hybrid, each
 // coeff line naming its type's style.
@@ -250,6 +253,10 @@ EngineEvaluation LammpsBridge::evaluate() {
   if (has_angles_) {
     e.term_names.push_back("angle");
     e.term_energies.push_back(lammps_get_thermo(lammps_, "eangle"));
+  }
+  if (has_dihedrals_) {
+    e.term_names.push_back("dihedral");
+    e.term_energies.push_back(lammps_get_thermo(lammps_, "edihed"));
   }
   if (!external_fixes_.empty()) {
     double external = 0.0;

@@ -12,7 +12,7 @@ namespace deli {
 // The same model in LAMMPS (`units lj`), through its C library in this process: the
 // system goes through a LAMMPS data file written by deli, the force field as LAMMPS
 // commands (lj/cut with every type pair given explicitly, pair_modify shift,
-// special_bonds lj, bond_style harmonic or fene, angle_style harmonic; bonds held as rods
+// special_bonds lj, the registered bond, angle and dihedral styles; bonds held as rods
 // as bond_style zero; gravity as fix gravity, radial fields as fix addforce with atom-style
 // variables). Open axes are
 // shrink-wrapped, never inside the bounds deli gives them (boundary m). Debian's LAMMPS is built
@@ -44,8 +44,9 @@ class LammpsBridge {
 
   void* lammps_ = nullptr;
   std::string data_path_;
-  std::vector<std::int64_t> ids_;                                   // deli index -> atom id
-  bool has_pair_ = false, has_bonds_ = false, has_angles_ = false;  // terms of the force field
+  std::vector<std::int64_t> ids_;  // deli index -> atom id
+  // terms of the force field
+  bool has_pair_ = false, has_bonds_ = false, has_angles_ = false, has_dihedrals_ = false;
   std::vector<std::string> external_fixes_;  // fix ids whose scalar is external energy
 };
 

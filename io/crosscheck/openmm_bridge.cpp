@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "forces/special_bonds.hpp"
+
 namespace deli {
 
 namespace {
@@ -26,7 +28,7 @@ std::vector<Vec3> from_openmm(const std::vector<OpenMM::Vec3>& v) {
 
 // Force groups, one per deli term, so that each term's energy can be read alone.
 constexpr int kPairGroup = 0, kBondGroup = 1, kAngleGroup = 2, kScaledPairGroup = 3,
-              kExternalGroup = 4;
+              kExternalGroup = 4, kDihedralGroup = 5;
 
 // k_B N_A in kJ/mol/K, exactly as OpenMM's BOLTZ (SI 2019 constants).
 constexpr double kBoltzmannKJPerMolK = 1.380649e-23 * 6.02214076e23 / 1000.0;
@@ -125,17 +127,14 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     for (const std::string& n : names) scaled->addPerBondParameter(n);
     scaled->setUsesPeriodicBoundaryConditions(m.periodic);
     scaled->setForceGroup(kScaledPairGroup);
-    for (int s = 0; s < 3; ++s) {
-      if (spec.special_lj[s] == 1.0) continue;
-      for (const auto& [i, j] : special.by_separation[s]) {
-        pair->addExclusion(i, j);
-        if (spec.special_lj[s] == 0.0) continue;
-        const int ti = sys.particles.type[i], tj = sys.particles.type[j];
-        const std::size_t k = static_cast<std::size_t>(ti + types * tj);
-        std::vector<double> parameters{spec.special_lj[s]};
-        for (const std::vector<double>& table : tables) parameters.push_back(table[k]);
-        scaled->addBond(i, j, parameters);
-      }
+    for (const ExcludedSpecialPair& p : excluded_special_pairs(special, spec.special_lj)) {
+      pair->addExclusion(p.i, p.j);
+      if (!p.scaled()) continue;
+      const int ti = sys.particles.type[p.i], tj = sys.particles.type[p.j];
+      const std::size_t k = static_cast<std::size_t>(ti + types * tj);
+      std::vector<double> parameters{p.factor};
+      for (const std::vector<double>& table : tables) parameters.push_back(table[k]);
+      scaled->addBond(p.i, p.j, parameters);
     }
     m.system.addForce(pair);
     m.term_names.push_back("pair");
@@ -184,6 +183,22 @@ OpenMMBridge::OpenMMBridge(const System& sys, const ForceFieldSpec& spec, Platfo
     }
     m.term_names.push_back("angle");
     m.term_groups.push_back(1 << kAngleGroup);
+  }
+  if (spec.dihedral) {
+    for (const BondedStyle* style : spec.dihedral->styles()) {
+      auto* torsions = new OpenMM::CustomTorsionForce(checked(*style, "dihedral"));
+      for (const StyleCoefficient& c : style->coefficients)
+        torsions->addPerTorsionParameter(c.name);
+      for (const Dihedral& d : sys.topology.dihedrals) {
+        if (spec.dihedral->style_by_type[d.type] != style) continue;
+        torsions->addTorsion(d.i, d.j, d.k, d.l, spec.dihedral->by_type[d.type]);
+      }
+      torsions->setUsesPeriodicBoundaryConditions(m.periodic);
+      torsions->setForceGroup(kDihedralGroup);
+      m.system.addForce(torsions);
+    }
+    m.term_names.push_back("dihedral");
+    m.term_groups.push_back(1 << kDihedralGroup);
   }
 
   // External fields, on positions as given (deli's act on positions as stored: the two

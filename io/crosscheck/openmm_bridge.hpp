@@ -15,8 +15,8 @@ namespace deli {
 // so tau = 1 ps and every number carries over unchanged. Pairs go through a
 // CustomNonbondedForce with per-type-pair tables (explicit and mixed coefficients, per
 // pair cutoffs, optional shift; no switching, no long-range correction), excluded exactly
-// where deli excludes them; harmonic bonds and angles through OpenMM's own forces (with
-// OpenMM's k = 2 K), FENE through a CustomBondForce.
+// where deli excludes them; bonds, angles and dihedrals through a CustomBondForce,
+// CustomAngleForce and CustomTorsionForce per style with the style's registered expression.
 class OpenMMBridge {
  public:
   enum class Platform { reference, cpu };

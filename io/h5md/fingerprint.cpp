@@ -34,6 +34,13 @@ std::uint64_t system_fingerprint(const System& system, const std::string& model)
   for (const Angle& a : system.topology.angles) {
     h.add_value(a.i), h.add_value(a.j), h.add_value(a.k), h.add_value(a.type);
   }
+  // Only when there are some: the fingerprints of systems without dihedrals stay as they were.
+  if (!system.topology.dihedrals.empty()) {
+    h.add_value(system.topology.dihedrals.size());
+    for (const Dihedral& d : system.topology.dihedrals) {
+      h.add_value(d.i), h.add_value(d.j), h.add_value(d.k), h.add_value(d.l), h.add_value(d.type);
+    }
+  }
   for (int a = 0; a < 3; ++a) {
     h.add_value(system.box.lo()[a]);
     h.add_value(system.box.hi()[a]);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <set>
+#include <sstream>
 
 #include "bonded/bonded_style.hpp"
 #include "core/error.hpp"
@@ -27,11 +28,23 @@ std::string where(const DataCoefficients& data, const CoefficientSection& sectio
   return data.file + ":" + std::to_string(section.line);
 }
 
-// The data file's section for a style the input names: its "# style" comment must agree.
+// The data file's section for a style the input names: its "# style" comment must agree,
+// unless it is a hybrid section, whose rows must each name their style (checked against
+// the styles by the caller).
 void check_data_style(const DataCoefficients& data, const CoefficientSection& section,
                       const char* name, const std::vector<std::string>& styles,
                       const std::string& input_style) {
   if (section.line == 0 || section.style.empty()) return;
+  if (section.style == "hybrid") {
+    for (const CoefficientRow& row : section.rows) {
+      if (!row.style.empty()) continue;
+      throw InputError(located(data.file, row.line,
+                               std::string("the data file's ") + name +
+                                   " are marked '# hybrid' but this row names no style: write "
+                                   "it as 'type style coefficients...' (\"1 fene 30 1.5 1 1\")"));
+    }
+    return;
+  }
   if (std::find(styles.begin(), styles.end(), section.style) != styles.end()) return;
   throw InputError(where(data, section) + ": the data file's " + name + " are for style '" +
                    section.style + "', the input's is '" + input_style +
@@ -43,6 +56,12 @@ std::string counted(std::size_t n, const std::string& what) {
   return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
 }
 
+std::string number_text(double v) {
+  std::ostringstream text;
+  text << v;
+  return text.str();
+}
+
 // One coefficient from the input, checked as its style's registration says.
 double read_coefficient(TomlTable& c, const StyleCoefficient& k) {
   switch (k.check) {
@@ -51,6 +70,13 @@ double read_coefficient(TomlTable& c, const StyleCoefficient& k) {
     case StyleCoefficient::Check::non_negative: {
       const double v = c.number(k.name);
       if (v < 0) c.fail("must not be negative", k.name);
+      return v;
+    }
+    case StyleCoefficient::Check::sign:
+    case StyleCoefficient::Check::non_negative_integer: {
+      const double v = c.number(k.name);
+      const std::string violation = coefficient_violation(k.check, v);
+      if (!violation.empty()) c.fail(violation + ", found " + number_text(v), k.name);
       return v;
     }
     case StyleCoefficient::Check::any:
@@ -85,6 +111,13 @@ std::optional<PairSpec> read_pair(TomlTable& t, const System& system, const Data
     check_data_style(data, *section, section == &data.pair ? "Pair Coeffs" : "PairIJ Coeffs",
                      {style.lammps_style}, name);
     for (const CoefficientRow& row : section->rows) {
+      if (!row.style.empty() && row.style != style.lammps_style) {
+        throw InputError(located(data.file, row.line,
+                                 "this row is for pair style '" + row.style +
+                                     "', the input's is '" + name +
+                                     "': deli has one pair style per system (no pair_style "
+                                     "hybrid); give the coefficients in the input's coeffs"));
+      }
       const int a = row.types.front(), b = row.types.back();
       if (row.values.size() < count || row.values.size() > count + 1) {
         throw InputError(
@@ -213,10 +246,10 @@ std::string alternatives(const std::vector<std::string>& names) {
   return text;
 }
 
-// [forcefield.bond] or [forcefield.angle]: a registered style and its coefficients by
-// type, read as the style's registration describes them. A type's coeffs may name a style
-// of their own (several styles in one system, as LAMMPS' hybrid); the data file's section
-// is for the table's style.
+// [forcefield.bond], [forcefield.angle] or [forcefield.dihedral]: a registered style and its
+// coefficients by type, read as the style's registration describes them. A type's coeffs
+// may name a style of their own (several styles in one system, as LAMMPS' hybrid); so may
+// a data file's row (a hybrid section); other rows are for the table's style.
 BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::string& what,
                        const DataCoefficients& data, const CoefficientSection& section,
                        const char* section_name, std::vector<std::string>& notes) {
@@ -241,10 +274,26 @@ BondedSpec read_bonded(TomlTable& t, BondedKind kind, int types, const std::stri
       },
       data, section,
       [&](const CoefficientRow& row) {
-        expect_values(data, row, style.coefficients.size(), style.data_form);
+        const BondedStyle* own = row.style.empty() ? &style : find_bonded_style(kind, row.style);
+        if (own == nullptr) {
+          throw InputError(located(data.file, row.line,
+                                   std::string(section_name) + " row names " + what + " style '" +
+                                       row.style + "', which deli does not have; deli's " + what +
+                                       " styles are " + alternatives(style_names(kind))));
+        }
+        spec.style_by_type[static_cast<std::size_t>(row.types.front())] = own;
+        expect_values(data, row, own->coefficients.size(), own->data_form);
         std::vector<double> values = row.values;
         for (std::size_t k = 0; k < values.size(); ++k) {
-          if (style.coefficients[k].degrees) values[k] = to_radians(values[k]);
+          const StyleCoefficient& coefficient = own->coefficients[k];
+          const std::string violation = coefficient_violation(coefficient.check, values[k]);
+          if (!violation.empty()) {
+            throw InputError(located(data.file, row.line,
+                                     section_name + std::string(": ") + coefficient.name + " " +
+                                         violation + ", found " + number_text(values[k]) +
+                                         " (expected " + own->data_form + ")"));
+          }
+          if (coefficient.degrees) values[k] = to_radians(values[k]);
         }
         return values;
       },
@@ -289,6 +338,22 @@ std::optional<BondedSpec> read_angle(std::optional<TomlTable> t, const System& s
                      "Angle Coeffs", notes);
 }
 
+std::optional<BondedSpec> read_dihedral(std::optional<TomlTable> t, const System& system,
+                                        const DataCoefficients& data,
+                                        std::vector<std::string>& notes) {
+  if (!t) {
+    if (!system.topology.dihedrals.empty()) {
+      throw InputError(
+          "the system has dihedrals but the input has no [forcefield.dihedral] table; "
+          "add one with style = " +
+          alternatives(style_names(BondedKind::dihedral)) + " and its coeffs");
+    }
+    return std::nullopt;
+  }
+  return read_bonded(*t, BondedKind::dihedral, system.topology.dihedral_types, "dihedral", data,
+                     data.dihedral, "Dihedral Coeffs", notes);
+}
+
 }  // namespace
 
 ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigid_bonds,
@@ -309,6 +374,7 @@ ForceFieldSpec read_force_field(TomlTable& root, const System& system, bool rigi
   spec.pair = read_pair(*pair, system, data, notes);
   spec.bond = read_bond(t->table("bond"), system, rigid_bonds, data, notes);
   spec.angle = read_angle(t->table("angle"), system, data, notes);
+  spec.dihedral = read_dihedral(t->table("dihedral"), system, data, notes);
   if (auto external = t->table("external")) {
     if (external->has("gravity")) {
       const auto g = external->numbers("gravity", 3);

@@ -88,6 +88,12 @@ void read_integrator(TomlTable& root, RunInput& input) {
                     " angles lack: use energy = \"hamiltonian\"",
                 "energy");
       }
+      if (input.gvi.energy == ReflectionEnergy::shadow && input.force_field_spec.dihedral) {
+        r->fail("shadow-Hamiltonian reflections need the potential's pairwise Hessian, which " +
+                    input.force_field_spec.dihedral->style->name +
+                    " dihedrals lack: use energy = \"hamiltonian\"",
+                "energy");
+      }
       if (input.gvi.energy == ReflectionEnergy::shadow &&
           input.gvi.lagrangian != Lagrangian::verlet) {
         r->fail(

@@ -37,6 +37,9 @@ bool style_has_bonds(std::string_view style) {
 bool style_has_angles(std::string_view style) {
   return style != "atomic" && style != "bond";
 }
+bool style_has_dihedrals(std::string_view style) {
+  return style == "molecular" || style == "full";
+}
 
 // Column positions of one Atoms line; -1 where the style has no such column. Image flags,
 // when present, are the three columns after `columns`.
@@ -177,13 +180,15 @@ class DataReader {
   const LammpsDataOptions& options_;
   std::string text_;
 
-  Count atoms_, bonds_, angles_, atom_types_, bond_types_, angle_types_;
+  Count atoms_, bonds_, angles_, dihedrals_, atom_types_, bond_types_, angle_types_,
+      dihedral_types_;
   std::array<double, 3> lo_{-0.5, -0.5, -0.5}, hi_{0.5, 0.5, 0.5};  // LAMMPS' defaults
   std::array<long, 3> bounds_line_{0, 0, 0};
-  Section masses_, atoms_section_, velocities_, bonds_section_, angles_section_;
-  Section pair_coeffs_, pair_ij_coeffs_, bond_coeffs_, angle_coeffs_;
+  Section masses_, atoms_section_, velocities_, bonds_section_, angles_section_, dihedrals_section_;
+  Section pair_coeffs_, pair_ij_coeffs_, bond_coeffs_, angle_coeffs_, dihedral_coeffs_;
   std::string style_hint_;
-  std::string pair_style_, bond_style_, angle_style_;  // the coefficient sections' comments
+  // the coefficient sections' comments
+  std::string pair_style_, bond_style_, angle_style_, dihedral_style_;
 
   CoefficientSection coefficients(const Section& section, const std::string& style,
                                   const char* name, int type_columns, const Count& types,
@@ -264,6 +269,8 @@ void DataReader::header_line(long line, const std::vector<std::string_view>& tok
   if (keyword == "atom types") return count(atom_types_);
   if (keyword == "bond types") return count(bond_types_);
   if (keyword == "angle types") return count(angle_types_);
+  if (keyword == "dihedrals") return count(dihedrals_);
+  if (keyword == "dihedral types") return count(dihedral_types_);
 
   static constexpr std::array<std::string_view, 3> kBounds = {"xlo xhi", "ylo yhi", "zlo zhi"};
   for (int a = 0; a < 3; ++a) {
@@ -289,9 +296,7 @@ void DataReader::header_line(long line, const std::vector<std::string_view>& tok
                    "; deli boxes are orthorhombic (expected only xlo xhi, ylo yhi, zlo zhi)");
   }
 
-  static const std::vector<std::string> kUnsupportedCounts = {"dihedrals",
-                                                              "impropers",
-                                                              "dihedral types",
+  static const std::vector<std::string> kUnsupportedCounts = {"impropers",
                                                               "improper types",
                                                               "extra bond per atom",
                                                               "extra angle per atom",
@@ -312,15 +317,16 @@ void DataReader::header_line(long line, const std::vector<std::string_view>& tok
     return;
   }
 
-  static const std::vector<std::string> kKnown = {"atoms",      "bonds",      "angles",
-                                                  "atom types", "bond types", "angle types",
-                                                  "xlo xhi",    "ylo yhi",    "zlo zhi"};
+  static const std::vector<std::string> kKnown = {
+      "atoms",       "bonds",          "angles",  "dihedrals", "atom types", "bond types",
+      "angle types", "dihedral types", "xlo xhi", "ylo yhi",   "zlo zhi"};
   std::string message = "unknown header line " + quoted(keyword);
   const std::string suggestion = closest_match(keyword, kKnown);
   if (!suggestion.empty()) message += "; did you mean " + quoted(suggestion) + "?";
   message +=
-      "; expected one of 'N atoms', 'N bonds', 'N angles', 'N atom types', 'N bond types', "
-      "'N angle types', 'lo hi xlo xhi' (and ylo yhi, zlo zhi)";
+      "; expected one of 'N atoms', 'N bonds', 'N angles', 'N dihedrals', 'N atom types', "
+      "'N bond types', 'N angle types', 'N dihedral types', 'lo hi xlo xhi' (and ylo yhi, zlo "
+      "zhi)";
   fail(line, message);
 }
 
@@ -329,16 +335,18 @@ Section& DataReader::section_header(long line, std::string_view content, std::st
   split(content, tokens);
   const std::string name = join(tokens, 0);
 
-  static constexpr std::array<std::pair<std::string_view, Section DataReader::*>, 9> kSections = {{
+  static constexpr std::array<std::pair<std::string_view, Section DataReader::*>, 11> kSections = {{
       {"Masses", &DataReader::masses_},
       {"Atoms", &DataReader::atoms_section_},
       {"Velocities", &DataReader::velocities_},
       {"Bonds", &DataReader::bonds_section_},
       {"Angles", &DataReader::angles_section_},
+      {"Dihedrals", &DataReader::dihedrals_section_},
       {"Pair Coeffs", &DataReader::pair_coeffs_},
       {"PairIJ Coeffs", &DataReader::pair_ij_coeffs_},
       {"Bond Coeffs", &DataReader::bond_coeffs_},
       {"Angle Coeffs", &DataReader::angle_coeffs_},
+      {"Dihedral Coeffs", &DataReader::dihedral_coeffs_},
   }};
   for (const auto& [section_name, member] : kSections) {
     if (name != section_name) continue;
@@ -355,27 +363,28 @@ Section& DataReader::section_header(long line, std::string_view content, std::st
     if (name == "Pair Coeffs" || name == "PairIJ Coeffs") pair_style_ = first;
     if (name == "Bond Coeffs") bond_style_ = first;
     if (name == "Angle Coeffs") angle_style_ = first;
+    if (name == "Dihedral Coeffs") dihedral_style_ = first;
     return section;
   }
 
   if (name.ends_with("Coeffs")) {
     fail(line, "found section " + quoted(name) +
-                   "; deli reads Pair, PairIJ, Bond and Angle Coeffs (no dihedrals or "
-                   "impropers): remove this section");
+                   "; deli reads Pair, PairIJ, Bond, Angle and Dihedral Coeffs (no impropers): "
+                   "remove this section");
   }
-  static const std::vector<std::string> kUnsupported = {"Dihedrals", "Impropers", "Ellipsoids",
-                                                        "Lines",     "Triangles", "Bodies"};
+  static const std::vector<std::string> kUnsupported = {"Impropers", "Ellipsoids", "Lines",
+                                                        "Triangles", "Bodies"};
   if (std::find(kUnsupported.begin(), kUnsupported.end(), name) != kUnsupported.end()) {
     fail(line, "found section " + quoted(name) + "; deli does not support " + name +
-                   " (expected Masses, Atoms, Velocities, Bonds or Angles)");
+                   " (expected Masses, Atoms, Velocities, Bonds, Angles or Dihedrals)");
   }
   std::string message = "unknown section " + quoted(name);
   const std::string suggestion =
-      closest_match(name, {"Masses", "Atoms", "Velocities", "Bonds", "Angles"});
+      closest_match(name, {"Masses", "Atoms", "Velocities", "Bonds", "Angles", "Dihedrals"});
   if (!suggestion.empty()) message += "; did you mean " + quoted(suggestion) + "?";
   message +=
-      "; deli reads Masses, Atoms, Velocities, Bonds, Angles and their Pair, PairIJ, Bond and "
-      "Angle Coeffs";
+      "; deli reads Masses, Atoms, Velocities, Bonds, Angles, Dihedrals and their Pair, PairIJ, "
+      "Bond, Angle and Dihedral Coeffs";
   fail(line, message);
 }
 
@@ -477,7 +486,12 @@ CoefficientSection DataReader::coefficients(const Section& section, const std::s
     CoefficientRow row;
     row.line = line;
     for (int k = 0; k < type_columns; ++k) row.types.push_back(type(tokens[k], line, kind, types));
-    for (std::size_t k = static_cast<std::size_t>(type_columns); k < tokens.size(); ++k) {
+    // A hybrid style's row names its style after the types (LAMMPS' read_data form).
+    std::size_t first_value = static_cast<std::size_t>(type_columns);
+    if (std::isalpha(static_cast<unsigned char>(tokens[first_value].front()))) {
+      row.style = tokens[first_value++];
+    }
+    for (std::size_t k = first_value; k < tokens.size(); ++k) {
       row.values.push_back(real(tokens[k], line, std::string("a coefficient in ") + name));
     }
     if (!seen.insert(row.types).second) {
@@ -507,6 +521,8 @@ LammpsDataFile DataReader::read() {
   result.bond = coefficients(bond_coeffs_, bond_style_, "Bond Coeffs", 1, bond_types_, "bond type");
   result.angle =
       coefficients(angle_coeffs_, angle_style_, "Angle Coeffs", 1, angle_types_, "angle type");
+  result.dihedral = coefficients(dihedral_coeffs_, dihedral_style_, "Dihedral Coeffs", 1,
+                                 dihedral_types_, "dihedral type");
   const std::string& style = result.atom_style;
   if (!style_has_bonds(style) && (bonds_.value > 0 || bonds_section_.line != 0)) {
     fail(bonds_section_.line != 0 ? bonds_section_.line : bonds_.line,
@@ -523,7 +539,13 @@ LammpsDataFile DataReader::read() {
   check_count(atoms_section_, "Atoms", atoms_, "atoms");
   if (velocities_.line != 0) check_count(velocities_, "Velocities", atoms_, "atoms");
   check_count(bonds_section_, "Bonds", bonds_, "bonds");
+  if (!style_has_dihedrals(style) && (dihedrals_.value > 0 || dihedrals_section_.line != 0)) {
+    fail(dihedrals_section_.line != 0 ? dihedrals_section_.line : dihedrals_.line,
+         "atom style '" + style +
+             "' has no dihedrals; use molecular or full for a file with dihedrals");
+  }
   check_count(angles_section_, "Angles", angles_, "angles");
+  check_count(dihedrals_section_, "Dihedrals", dihedrals_, "dihedrals");
 
   std::vector<std::string_view> tokens;
 
@@ -697,6 +719,29 @@ LammpsDataFile DataReader::read() {
     }
     topology.angles.push_back(angle);
   }
+  topology.dihedral_types = static_cast<int>(dihedral_types_.value);
+  topology.dihedrals.reserve(dihedrals_section_.lines.size());
+  for (const auto& [line, content] : dihedrals_section_.lines) {
+    split(content, tokens);
+    check_columns(line, tokens.size(), 6, "id type atom1 atom2 atom3 atom4");
+    positive(tokens[0], line, "the dihedral id");
+    Dihedral dihedral;
+    dihedral.type = type(tokens[1], line, "dihedral type", dihedral_types_);
+    dihedral.i = atom_index(tokens[2], line, "Dihedrals");
+    dihedral.j = atom_index(tokens[3], line, "Dihedrals");
+    dihedral.k = atom_index(tokens[4], line, "Dihedrals");
+    dihedral.l = atom_index(tokens[5], line, "Dihedrals");
+    const std::array<std::int32_t, 4> atoms{dihedral.i, dihedral.j, dihedral.k, dihedral.l};
+    for (int a = 0; a < 4; ++a) {
+      for (int b = a + 1; b < 4; ++b) {
+        if (atoms[a] != atoms[b]) continue;
+        fail(line, "dihedral " + std::string(tokens[0]) + " names atoms " + std::string(tokens[2]) +
+                       " " + std::string(tokens[3]) + " " + std::string(tokens[4]) + " " +
+                       std::string(tokens[5]) + "; expected four different atoms");
+      }
+    }
+    topology.dihedrals.push_back(dihedral);
+  }
   return result;
 }
 
@@ -743,6 +788,10 @@ void write_lammps_data(const System& system, const std::string& path, const std:
     fail("the system has angles, which atom style '" + atom_style +
          "' cannot hold; use angle, molecular or full");
   }
+  if (!style_has_dihedrals(atom_style) && !topology.dihedrals.empty()) {
+    fail("the system has dihedrals, which atom style '" + atom_style +
+         "' cannot hold; use molecular or full");
+  }
 
   // Types beyond those declared still need a Masses line, or read_data rejects the file.
   std::size_t atom_types = system.atom_types.size();
@@ -751,6 +800,9 @@ void write_lammps_data(const System& system, const std::string& path, const std:
   for (const Bond& b : topology.bonds) bond_types = std::max(bond_types, b.type + 1);
   int angle_types = topology.angle_types;
   for (const Angle& a : topology.angles) angle_types = std::max(angle_types, a.type + 1);
+  int dihedral_types = topology.dihedral_types;
+  for (const Dihedral& d : topology.dihedrals)
+    dihedral_types = std::max(dihedral_types, d.type + 1);
 
   std::string out;
   std::string first_line = title;
@@ -759,12 +811,16 @@ void write_lammps_data(const System& system, const std::string& path, const std:
   out += first_line + "\n\n";
 
   const bool bonds = style_has_bonds(atom_style), angles = style_has_angles(atom_style);
+  // Written only when there are some, so that files without dihedrals stay as they were.
+  const bool dihedrals = !topology.dihedrals.empty() || dihedral_types > 0;
   append(out, "%zu atoms\n", p.size());
   if (bonds) append(out, "%zu bonds\n", topology.bonds.size());
   if (angles) append(out, "%zu angles\n", topology.angles.size());
+  if (dihedrals) append(out, "%zu dihedrals\n", topology.dihedrals.size());
   append(out, "\n%zu atom types\n", atom_types);
   if (bonds) append(out, "%d bond types\n", bond_types);
   if (angles) append(out, "%d angle types\n", angle_types);
+  if (dihedrals) append(out, "%d dihedral types\n", dihedral_types);
   out += '\n';
   const Box& box = system.box;
   static constexpr std::array<const char*, 3> kBounds = {"xlo xhi", "ylo yhi", "zlo zhi"};
@@ -832,6 +888,15 @@ void write_lammps_data(const System& system, const std::string& path, const std:
       append(out, "%zu %d %lld %lld %lld\n", a + 1, angle.type + 1,
              static_cast<long long>(p.id[angle.i]), static_cast<long long>(p.id[angle.j]),
              static_cast<long long>(p.id[angle.k]));
+    }
+  }
+  if (!topology.dihedrals.empty()) {
+    out += "\nDihedrals\n\n";
+    for (std::size_t d = 0; d < topology.dihedrals.size(); ++d) {
+      const Dihedral& dihedral = topology.dihedrals[d];
+      append(out, "%zu %d %lld %lld %lld %lld\n", d + 1, dihedral.type + 1,
+             static_cast<long long>(p.id[dihedral.i]), static_cast<long long>(p.id[dihedral.j]),
+             static_cast<long long>(p.id[dihedral.k]), static_cast<long long>(p.id[dihedral.l]));
     }
   }
 

@@ -15,10 +15,13 @@ struct LammpsDataOptions {
 
 // A coefficient section as LAMMPS write_data writes it: "Pair Coeffs # lj/cut" then one
 // line per type ("type epsilon sigma"), or "PairIJ Coeffs" per type pair ("i j epsilon
-// sigma cutoff"), "Bond Coeffs # fene" and "Angle Coeffs # harmonic" per type. The
-// numbers are kept as written; the force-field reader gives them their meaning.
+// sigma cutoff"), "Bond Coeffs # fene", "Angle Coeffs # harmonic" and "Dihedral Coeffs #
+// harmonic" per type; a hybrid style's section ("Bond Coeffs # hybrid") names each row's
+// style after its type ("1 fene 30 1.5 1 1"). The numbers are kept as written; the
+// force-field reader gives them their meaning.
 struct CoefficientRow {
   std::vector<int> types;  // 0-based: one type, or two for PairIJ
+  std::string style;       // a hybrid section's row names its style ("1 fene 30 1.5 1 1")
   std::vector<double> values;
   long line = 0;
 };
@@ -34,13 +37,13 @@ struct LammpsDataFile {
   std::string atom_style;  // atomic | bond | angle | molecular | full
   bool has_velocities = false;
   std::string path;
-  CoefficientSection pair, pair_ij, bond, angle;
+  CoefficientSection pair, pair_ij, bond, angle, dihedral;
 };
 
 // Reads a LAMMPS data file (as LAMMPS write_data writes it) restricted to what deli models:
-// orthorhombic box, atoms, masses, velocities, bonds, angles and their coefficient
-// sections. Anything else (dihedrals, charges, triclinic boxes) is an InputError naming
-// file:line.
+// orthorhombic box, atoms, masses, velocities, bonds, angles, dihedrals and their
+// coefficient sections. Anything else (impropers, charges, triclinic boxes) is an InputError
+// naming file:line.
 LammpsDataFile read_lammps_data(const std::string& path, const LammpsDataOptions& options);
 
 // Writes a file LAMMPS read_data accepts; doubles carry 17 significant digits so that

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "forces/special_bonds.hpp"
 #include "input/constraints_input.hpp"
 #include "input/forcefield_input.hpp"
 #include "input/integrator_input.hpp"
@@ -38,11 +39,9 @@ void add_excluded_contacts(RunInput& input) {
   if (!input.constraints.hard_spheres) return;
   const SpecialPairs special =
       find_special_pairs(input.system.topology, input.system.particles.size());
-  for (int s = 1; s < 3; ++s) {
-    if (input.force_field_spec.special_lj[s] == 1.0) continue;
-    for (const auto& pair : special.by_separation[s]) {
-      input.constraints.always_checked_pairs.push_back(pair);
-    }
+  for (const ExcludedSpecialPair& p :
+       excluded_special_pairs(special, input.force_field_spec.special_lj)) {
+    if (p.separation > 1) input.constraints.always_checked_pairs.push_back({p.i, p.j});
   }
 }
 

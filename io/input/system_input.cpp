@@ -54,8 +54,12 @@ System read_system(TomlTable& t, const fs::path& input_dir, DataCoefficients& co
         t.choice("atom_style", {"", "atomic", "bond", "angle", "molecular", "full"}, "");
     if (!fs::exists(data)) t.fail("file " + data.string() + " does not exist", "data");
     LammpsDataFile file = read_lammps_data(data.string(), options);
-    coefficients = {file.path, std::move(file.pair), std::move(file.pair_ij), std::move(file.bond),
-                    std::move(file.angle)};
+    coefficients = {file.path,
+                    std::move(file.pair),
+                    std::move(file.pair_ij),
+                    std::move(file.bond),
+                    std::move(file.angle),
+                    std::move(file.dihedral)};
     system = std::move(file.system);
   } else if (lattice) {
     FccLattice f;
@@ -113,6 +117,7 @@ System read_system(TomlTable& t, const fs::path& input_dir, DataCoefficients& co
     }
     c.mass = positive(*chains, "mass", 1.0);
     c.angles = chains->boolean("angles", false);
+    c.dihedrals = chains->boolean("dihedrals", false);
     c.seed = static_cast<std::uint64_t>(chains->integer("seed", 1));
     c.periodic = periodic;
     c.wall_clearance = chains->number("wall_clearance", 0.0);

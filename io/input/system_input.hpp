@@ -13,7 +13,7 @@ namespace deli {
 // The force-field coefficients a data file carries (LAMMPS write_data writes them).
 struct DataCoefficients {
   std::string file;
-  CoefficientSection pair, pair_ij, bond, angle;
+  CoefficientSection pair, pair_ij, bond, angle, dihedral;
 };
 
 // Reads [system]: one of a LAMMPS data file (its coefficient sections go to

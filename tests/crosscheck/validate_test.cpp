@@ -70,6 +70,7 @@ INSTANTIATE_TEST_SUITE_P(
               "tests/crosscheck/inputs/chains_harmonic_angles.toml", 100},
         Model{"semiflexible_chains_cosine_angles",
               "tests/crosscheck/inputs/chains_cosine_angles.toml", 100},
+        Model{"chains_harmonic_dihedrals", "tests/crosscheck/inputs/chains_dihedrals.toml", 100},
         Model{"two_bond_styles_fene_and_harmonic", "tests/crosscheck/inputs/mixed_bonds.toml"},
         Model{"mixture_explicit_pairs", "tests/crosscheck/inputs/mixture_explicit.toml"},
         Model{"mixture_lorentz_berthelot", "tests/crosscheck/inputs/mixture_mixed.toml"},

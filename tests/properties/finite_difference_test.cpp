@@ -24,12 +24,13 @@ void PrintTo(const Case& c, std::ostream* os) {
 }
 
 std::string chains_input(const std::string& boundary, const std::string& forcefield,
-                         bool angles = true) {
+                         bool angles = true, bool dihedrals = false) {
   return "[system]\nboundary = \"" + boundary +
          "\"\n[system.chains]\ncount = 12\nlength = 8\ndensity = 0.55\nbond_length = 0.97\n"
          "min_distance = 0.85\nangles = " +
-         std::string(angles ? "true" : "false") + "\nseed = 7\n" + forcefield +
-         "[integrator]\ntimestep = 0.005\n[run]\nsteps = 0\n";
+         std::string(angles ? "true" : "false") +
+         "\ndihedrals = " + std::string(dihedrals ? "true" : "false") + "\nseed = 7\n" +
+         forcefield + "[integrator]\ntimestep = 0.005\n[run]\nsteps = 0\n";
 }
 
 const std::string kPairLj =
@@ -42,6 +43,12 @@ const std::string kBondedTail =
 const std::string kCosineAngleTail =
     "[forcefield.bond]\nstyle = \"harmonic\"\ncoeffs = [{type = 1, k = 100.0, r0 = 1.0}]\n"
     "[forcefield.angle]\nstyle = \"cosine\"\ncoeffs = [{type = 1, k = 1.5}]\n";
+// LAMMPS' dihedral_style harmonic, E = K [1 + d cos(n phi)].
+std::string dihedral_tail(double d, int n) {
+  return kBondedTail +
+         "[forcefield.dihedral]\nstyle = \"harmonic\"\ncoeffs = [{type = 1, k = 1.2, d = " +
+         std::to_string(static_cast<int>(d)) + ", n = " + std::to_string(n) + "}]\n";
+}
 const std::string kFeneTail =
     "[forcefield.bond]\nstyle = \"fene\"\ncoeffs = [{type = 1, k = 30.0, r0 = 1.5, epsilon = "
     "1.0, sigma = 1.0}]\n";
@@ -60,6 +67,10 @@ std::vector<Case> cases() {
        chains_input("ppf", "[forcefield]\n" + lj_shifted + kBondedTail)},
       {"lj_cosine_angle_mixed_boundary",
        chains_input("ppf", "[forcefield]\n" + kPairLj + kCosineAngleTail)},
+      {"lj_harmonic_dihedral_minus_3_periodic",
+       chains_input("ppp", "[forcefield]\n" + kPairLj + dihedral_tail(-1, 3), true, true)},
+      {"lj_harmonic_dihedral_plus_1_mixed_boundary",
+       chains_input("ppf", "[forcefield]\n" + kPairLj + dihedral_tail(1, 1), true, true)},
       {"wca_fene_kremer_grest", chains_input("ppp", "[forcefield]\n" + wca + kFeneTail, false)},
       {"lj_special_scaled",
        chains_input("ppp", "[forcefield]\n[forcefield.special_bonds]\nlj = [0.0, 0.5, 0.8]\n" +

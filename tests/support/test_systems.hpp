@@ -3,6 +3,7 @@
 #include <random>
 #include <string>
 
+#include "forces/special_bonds.hpp"
 #include "input/run_input.hpp"
 #include "neighbor/neighbor_list.hpp"
 
@@ -26,10 +27,9 @@ inline Evaluated evaluate(const RunInput& input, double skin = 0.5) {
   const SpecialPairs special =
       find_special_pairs(input.system.topology, input.system.particles.size());
   std::vector<std::array<std::int32_t, 2>> excluded;
-  for (int s = 0; s < 3; ++s) {
-    if (input.force_field->special_lj[s] == 1.0) continue;
-    excluded.insert(excluded.end(), special.by_separation[s].begin(),
-                    special.by_separation[s].end());
+  for (const ExcludedSpecialPair& p :
+       excluded_special_pairs(special, input.force_field->special_lj)) {
+    excluded.push_back({p.i, p.j});
   }
   list.set_exclusions(excluded);
   list.build(input.system.particles.position, input.system.box);

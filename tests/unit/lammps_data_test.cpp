@@ -408,7 +408,7 @@ Masses
 )";
 
 // Coefficient sections as LAMMPS write_data writes them are read as written (the force
-// field reader gives them meaning); dihedral coefficients have no model here.
+// field reader gives them meaning); improper coefficients have no model here.
 TEST_F(LammpsDataTest, PairCoefficientsAreRead) {
   const std::string path = write_file(std::string(kPreamble) + R"(
 Pair Coeffs # lj/cut
@@ -438,13 +438,13 @@ Pair Coeffs # lj/cut
   expect_error_at(read_error(path), path, 14, {"atom type 2", "outside"});
 }
 
-TEST_F(LammpsDataTest, DihedralCoefficientSectionIsAnError) {
+TEST_F(LammpsDataTest, ImproperCoefficientSectionIsAnError) {
   const std::string path = write_file(std::string(kPreamble) + R"(
-Dihedral Coeffs # harmonic
+Improper Coeffs # harmonic
 
-1 1.0 1 2
+1 1.0 2.0
 )");
-  expect_error_at(read_error(path), path, 12, {"Dihedral Coeffs", "remove this section"});
+  expect_error_at(read_error(path), path, 12, {"Improper Coeffs", "remove this section"});
 }
 
 TEST_F(LammpsDataTest, BondNamingUnknownAtomIsAnError) {
@@ -552,8 +552,8 @@ Atoms # full
 }
 
 TEST_F(LammpsDataTest, UnsupportedHeaderCountIsAnError) {
-  const std::string path = write_file("title\n1 atoms\n2 dihedrals\n");
-  expect_error_at(read_error(path), path, 3, {"2 dihedrals", "does not support"});
+  const std::string path = write_file("title\n1 atoms\n2 impropers\n");
+  expect_error_at(read_error(path), path, 3, {"2 impropers", "does not support"});
 }
 
 TEST_F(LammpsDataTest, MalformedNumberIsAnError) {
