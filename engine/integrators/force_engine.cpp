@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
+#include "forces/special_bonds.hpp"
 #include "system/finite_state.hpp"
 
 namespace deli {
@@ -77,10 +78,8 @@ std::optional<double> ForceEngine::verlet_shadow_energy(const System& system, do
 std::vector<std::array<std::int32_t, 2>> special_exclusions(const SpecialPairs& special,
                                                             const std::array<double, 3>& factors) {
   std::vector<std::array<std::int32_t, 2>> excluded;
-  for (int s = 0; s < 3; ++s) {
-    if (factors[s] == 1.0) continue;
-    excluded.insert(excluded.end(), special.by_separation[s].begin(),
-                    special.by_separation[s].end());
+  for (const ExcludedSpecialPair& p : excluded_special_pairs(special, factors)) {
+    excluded.push_back({p.i, p.j});
   }
   return excluded;
 }
