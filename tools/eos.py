@@ -2,7 +2,8 @@
 """Hard-sphere equation of state from deli at several time steps, extrapolated to h -> 0.
 
 tools/eos.py INPUT [--timesteps 0.005,0.0025,0.00125] [--time 20] [--equilibrate 2]
-                   [--block 1] [--seeds 1,2] [--contact paper|impact_time] [--plot FILE]
+                   [--block 1] [--seeds 1,2] [--contact paper|impact_time] [--order 1]
+                   [--plot FILE]
 
 For each time step and seed the input is run with that step (and velocity seed, and
 [integrator] contact), thermo rows every `--block` time units. Each row after
@@ -10,8 +11,8 @@ For each time step and seed the input is run with that step (and velocity seed, 
 (W the constraint virial averaged over the block, K the kinetic energy, kT = 2K / 3N) and
 its collision rate per particle 2 * (contacts in the block) / (N * block). Error bars are
 standard errors of the block means. Z(h) and the rate are then fitted by weighted least
-squares to c0 + c1 h (two or three steps) or c0 + c1 h + c2 h^2 (four or more), c0 the
-h -> 0 value, and compared with Carnahan-Starling, Z = (1 + e + e^2 - e^3) / (1 - e)^3,
+squares to a polynomial in h (`--order`, 1 by default: c0 + c1 h; a quadratic term fitted
+to noise-limited points moves c0 by more than it corrects), c0 the h -> 0 value, and compared with Carnahan-Starling, Z = (1 + e + e^2 - e^3) / (1 - e)^3,
 and the rate Enskog's theory gives from that Z: 6 (Z - 1) sqrt(kT / (pi m)) / sigma.
 The input must build an fcc lattice ([system.lattice]) of equal hard spheres
 (hard_spheres = { diameter = ... }) with no pair force; packing fraction from its density.
@@ -63,10 +64,11 @@ def carnahan_starling(eta):
     return (1 + eta + eta**2 - eta**3) / (1 - eta) ** 3
 
 
-def fit(hs, values, errors):
+def fit(hs, values, errors, order):
     """Weighted least squares in powers of h; returns (coefficients, their covariance)."""
     hs, values, errors = map(np.asarray, (hs, values, errors))
-    order = 2 if len(hs) >= 4 else 1
+    if len(hs) < order + 1:
+        sys.exit(f"eos.py: a fit of order {order} needs at least {order + 1} time steps")
     a = np.vander(hs, order + 1, increasing=True) / errors[:, None]
     b = values / errors
     cov = np.linalg.inv(a.T @ a)
@@ -111,6 +113,7 @@ def main():
     parser.add_argument("--equilibrate", type=float, default=2.0, help="time left out first")
     parser.add_argument("--block", type=float, default=1.0, help="block length (time)")
     parser.add_argument("--seeds", default="1")
+    parser.add_argument("--order", type=int, default=1, help="polynomial order of the fit in h")
     parser.add_argument("--contact", choices=["paper", "impact_time"], default=None)
     parser.add_argument("--deli", default=os.path.join(os.path.dirname(__file__), "..", "build", "deli"))
     parser.add_argument("--workdir", default=None, help="where inputs and thermo files go")
@@ -160,9 +163,9 @@ def main():
         })
 
     zc, zcov = fit([r["h"] for r in results], [r["z"] for r in results],
-                   [r["z_err"] for r in results])
+                   [r["z_err"] for r in results], args.order)
     rc, rcov = fit([r["h"] for r in results], [r["rate"] for r in results],
-                   [r["rate_err"] for r in results])
+                   [r["rate_err"] for r in results], args.order)
     z0, z0_err = zc[0], math.sqrt(zcov[0, 0])
     cs = carnahan_starling(eta)
     kt = np.mean([r["kT"] for r in results])
