@@ -3,7 +3,7 @@
 
 tools/eos.py INPUT [--timesteps 0.005,0.0025,0.00125] [--time 20] [--equilibrate 2]
                    [--block 1] [--seeds 1,2] [--contact paper|impact_time] [--order 1]
-                   [--plot FILE]
+                   [--plot FILE] [--check PERCENT]
 
 For each time step and seed the input is run with that step (and velocity seed, and
 [integrator] contact), thermo rows every `--block` time units. Each row after
@@ -11,7 +11,8 @@ For each time step and seed the input is run with that step (and velocity seed, 
 (W the constraint virial averaged over the block, K the kinetic energy, kT = 2K / 3N) and
 its collision rate per particle 2 * (contacts in the block) / (N * block). Error bars are
 standard errors of the block means. Z(h) and the rate are then fitted by weighted least
-squares to a polynomial in h (`--order`, 1 by default: c0 + c1 h; a quadratic term fitted
+squares to a polynomial in h (`--order`, 1 by default: c0 + c1 h; 0 the weighted mean, for
+contact = impact_time on hard spheres alone, which has no step error; a quadratic term fitted
 to noise-limited points moves c0 by more than it corrects), c0 the h -> 0 value, and compared with Carnahan-Starling, Z = (1 + e + e^2 - e^3) / (1 - e)^3,
 and the rate Enskog's theory gives from that Z: 6 (Z - 1) sqrt(kT / (pi m)) / sigma.
 The input must build an fcc lattice ([system.lattice]) of equal hard spheres
@@ -118,6 +119,9 @@ def main():
     parser.add_argument("--deli", default=os.path.join(os.path.dirname(__file__), "..", "build", "deli"))
     parser.add_argument("--workdir", default=None, help="where inputs and thermo files go")
     parser.add_argument("--plot", default=None, help="PNG of Z(h) and the rate")
+    parser.add_argument("--check", type=float, default=None,
+                        help="exit 1 unless Z(h -> 0) is within this many percent of "
+                             "Carnahan-Starling")
     args = parser.parse_args()
 
     with open(args.input) as f:
@@ -186,6 +190,10 @@ def main():
           f"difference {100 * (z0 / cs - 1):+.3f} % +- {100 * z0_err / cs:.3f} %")
     print(f"collision rate (h -> 0) = {rc[0]:.5f} +- {math.sqrt(rcov[0, 0]):.5f} per particle "
           f"per time; Enskog with Carnahan-Starling {enskog:.5f}")
+
+    if args.check is not None and abs(z0 / cs - 1) * 100 > args.check:
+        sys.exit(f"eos.py: Z(h -> 0) = {z0:.5f} is {100 * (z0 / cs - 1):+.3f} % from "
+                 f"Carnahan-Starling's {cs:.5f}, beyond --check {args.check:g} %")
 
     if args.plot:
         import matplotlib
