@@ -17,9 +17,13 @@ Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOpti
       feasibility_(options.feasibility),
       lagrangian_(options.lagrangian),
       reflections_(options.reflections),
-      constrained_predictor_(options.constrained_predictor) {}
+      constrained_predictor_(options.constrained_predictor),
+      contact_(options.contact) {
+  if (contact_ == ContactTreatment::impact_time) refuse_impact_times_unless_supported();
+}
 
 void Gvi::step(System& system, bool tally) {
+  if (contact_ == ContactTreatment::impact_time) return step_with_impact_times(system, tally);
   PhaseTimer& timer = phase_timer();
   const Phase outer = timer.enter(Phase::prediction);
   step_virial_ = 0.0;

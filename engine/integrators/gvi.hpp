@@ -3,6 +3,7 @@
 #include "constraints/nearby_rows.hpp"
 #include "integrators/constrained_integrator.hpp"
 #include "integrators/gvi_workspace.hpp"
+#include "integrators/impact_time_drift.hpp"
 
 namespace deli {
 
@@ -27,6 +28,12 @@ namespace deli {
 // the normal velocity is zeroed and the event counted as a deficit.
 enum class Feasibility { restore, reflect, inelastic, none };
 enum class Lagrangian { verlet, midpoint };
+// How a hard-sphere or wall contact is resolved. `paper`: Algorithm 1 (reflection at the
+// start of the step whose prediction overlaps, then the position update). `impact_time`:
+// half kick, the exact hard-sphere and wall flow over h (straight flight, elastic
+// reflection at the instant of contact; impact_time_drift.hpp), half kick; Verlet only, no
+// rods or strings (README, "Contact treatment").
+enum class ContactTreatment { paper, impact_time };
 
 struct GviOptions {
   Lagrangian lagrangian = Lagrangian::verlet;
@@ -40,6 +47,7 @@ struct GviOptions {
   ReflectionOperator reflection = ReflectionOperator::generalized;
   ReflectionEnergy energy = ReflectionEnergy::hamiltonian;
   Feasibility feasibility = Feasibility::restore;
+  ContactTreatment contact = ContactTreatment::paper;
 };
 
 class Gvi final : public ConstrainedIntegrator {
@@ -71,6 +79,9 @@ class Gvi final : public ConstrainedIntegrator {
   void update_momenta(System& system, bool tally);
   // Overlap and rod checks for the statistics.
   void check_constraints(const System& system, bool tally);
+  // The whole step with contact = impact_time (gvi_impact_time.cpp), and its input checks.
+  void refuse_impact_times_unless_supported() const;
+  void step_with_impact_times(System& system, bool tally);
 
   // The unconstrained step's displacement from the current positions for momenta `momenta`.
   void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d);
@@ -100,6 +111,8 @@ class Gvi final : public ConstrainedIntegrator {
   Lagrangian lagrangian_;
   bool reflections_;
   bool constrained_predictor_;
+  ContactTreatment contact_;
+  ImpactTimeDrift drift_;
 };
 
 }  // namespace deli

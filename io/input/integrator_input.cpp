@@ -62,6 +62,21 @@ void read_integrator(TomlTable& root, RunInput& input) {
     }
   } else if (constrained) {
     input.gvi.reflections = input.integrator == "gvi";
+    if (input.gvi.reflections) {
+      input.gvi.contact =
+          integrator->choice("contact", {"paper", "impact_time"}, "paper") == "impact_time"
+              ? ContactTreatment::impact_time
+              : ContactTreatment::paper;
+      // The impact-time step reflects at contact itself: the paper's options have no say.
+      for (const char* key : {"predictor", "feasibility", "reflection"}) {
+        if (input.gvi.contact == ContactTreatment::impact_time && integrator->has(key)) {
+          integrator->fail(
+              "has no meaning with contact = \"impact_time\" (every contact is reflected "
+              "elastically at the instant it closes): remove it or use contact = \"paper\"",
+              key);
+        }
+      }
+    }
     input.gvi.lagrangian =
         integrator->choice("lagrangian", {"verlet", "midpoint"}, "verlet") == "midpoint"
             ? Lagrangian::midpoint

@@ -1,0 +1,129 @@
+// GVI's step with contact = "impact_time": Verlet's half kick, the exact hard-sphere and
+// wall flow over the whole step (ImpactTimeDrift), Verlet's second half kick; on a step with
+// a contact under a force, the energy of the step's start given back along the normals of
+// the rows that touched. Why and what it keeps: README, "Contact treatment".
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/phase_timer.hpp"
+#include "integrators/gvi.hpp"
+
+namespace deli {
+
+void Gvi::refuse_impact_times_unless_supported() const {
+  if (!constraints_.equalities.empty()) {
+    throw InputError(
+        "[integrator] contact = \"impact_time\" resolves hard spheres and walls only: with rods "
+        "or strings use contact = \"paper\"");
+  }
+  if (constraints_.linearized) {
+    throw InputError(
+        "[integrator] contact = \"impact_time\" finds exact contact times: linearized = true has "
+        "no meaning for it");
+  }
+  if (lagrangian_ != Lagrangian::verlet || !reflections_) {
+    throw InputError(
+        "[integrator] contact = \"impact_time\" is a Verlet splitting of GVI: use type = "
+        "\"gvi\", lagrangian = \"verlet\"");
+  }
+}
+
+void Gvi::step_with_impact_times(System& system, bool tally) {
+  PhaseTimer& timer = phase_timer();
+  const Phase outer = timer.enter(Phase::prediction);
+  Particles& P = system.particles;
+  const std::size_t n = P.size();
+  const double h = dt_;
+  const double gap_tolerance = constraints_.tolerances.gap;
+  step_virial_ = 0.0;
+  start_step(system);  // momenta, the free prediction, a neighbour list covering it, q
+
+  timer.enter(Phase::reflections);
+  // Every pair that can meet during the drift was within the sum of its two paths at q; the
+  // candidates reach four times the largest free displacement, enough unless a contact
+  // speeds a particle up past twice its free path: then they are collected again.
+  const std::vector<Vec3>& f = engine_.force();
+  ws_.half.resize(n);
+  ws_.mid.resize(n);  // here: the accelerations F(q)/m the contacts are corrected with
+  for (std::size_t i = 0; i < n; ++i) {
+    ws_.half[i] = ws_.p[i] + f[i] * (0.5 * h);
+    ws_.mid[i] = f[i] * (1.0 / P.mass[i]);
+  }
+  candidates_for(system, ws_.predicted);
+  const std::int64_t max_events = std::max<std::int64_t>(1000, 100 * static_cast<std::int64_t>(n));
+  DriftOutcome drift;
+  for (int attempt = 0;; ++attempt) {
+    ws_.p = ws_.half;
+    drift = drift_.run(ws_.nearby, P, system.box, h, ws_.q, ws_.p, ws_.x, max_events,
+                       system.step + 1, &ws_.mid);
+    const double longest = *std::max_element(drift.path.begin(), drift.path.end());
+    bool covered = engine_.neighbors_cover(ws_.x);
+    for (const std::vector<Vec3>& at : drift.vertices)
+      covered = covered && engine_.neighbors_cover(at);
+    const bool reached = 2.0 * longest + gap_tolerance <= ws_.reach;
+    if (covered && reached) break;
+    if (attempt == 2) {
+      throw SimulationError("step " + std::to_string(system.step + 1) +
+                            ": a particle would move more than half the neighbour skin in one "
+                            "step; increase [neighbor] skin or reduce the timestep");
+    }
+    if (!covered) {
+      // Rebuilding wraps the positions: the step starts again from them.
+      engine_.ensure_neighbors(system, true);
+      ws_.q = P.position;
+    }
+    ws_.reach = 4.0 * longest + 2.0 * gap_tolerance;
+    nearby_rows_.collect(constraints_, P, ws_.q.data(), engine_.neighbors(), system.box, ws_.reach,
+                         gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+  }
+  step_virial_ += drift.virial;
+  stats_.active += drift.events;
+  stats_.reflected += drift.events;
+  stats_.fallbacks += drift.plain;
+
+  timer.enter(Phase::momentum_update);
+  // With a force, a contact inside the step meets it only at the step's ends (the kicks), so
+  // each contact leaves an energy error; the step's energy is given back along the normals
+  // of the rows that touched (found at their contact positions, where their gap is 0).
+  bool forced = false;
+  for (std::size_t i = 0; i < n && !forced; ++i) forced = f[i].x != 0 || f[i].y != 0 || f[i].z != 0;
+  std::vector<Constraint>& touched = ws_.landed;
+  touched.clear();
+  double target = 0.0;
+  if (forced && drift.events > 0) {
+    target = start_energy(system);
+    const double tolerance = 1e-9;
+    for (const Constraint& c : ws_.nearby) {
+      bool met = false;
+      for (const std::vector<Vec3>& at_i : drift.vertices) {
+        if (c.j < 0) {
+          met = std::abs(evaluate(c, at_i.data(), system.box).gap) < tolerance;
+        } else {
+          for (const std::vector<Vec3>& at_j : drift.vertices) {
+            const double gap = norm(system.box.minimum_image(at_i[c.i] - at_j[c.j])) - c.length;
+            if (std::abs(gap) < tolerance) met = true;
+          }
+        }
+        if (met) break;
+      }
+      if (met) touched.push_back(c);
+    }
+  }
+  P.position = ws_.x;
+  system.step += 1;
+  system.time += h;
+  engine_.compute(system, tally || !touched.empty());
+  const std::vector<Vec3>& f_end = engine_.force();
+  for (std::size_t i = 0; i < n; ++i) ws_.p[i] += f_end[i] * (0.5 * h);
+  if (!touched.empty()) restore_energy(system, touched, target, ws_.p);
+  for (std::size_t i = 0; i < n; ++i) P.velocity[i] = ws_.p[i] * (1.0 / P.mass[i]);
+  ++stats_.steps;
+  previous_positions_ = ws_.q;
+  timer.enter(Phase::constraint_checks);
+  check_constraints(system, tally);
+  finish_step();
+  timer.enter(outer);
+}
+
+}  // namespace deli
