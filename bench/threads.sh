@@ -4,7 +4,7 @@
 # the rigid-rod chain melt (GVI) and the hard-sphere fluid (GVI). Prints atom-steps/s per
 # run and the ratios of the medians.
 #   bench/threads.sh                       3 rounds, each input's own step count capped
-#   ROUNDS=5 DELI_OLD=/tmp/deli-old bench/threads.sh
+#   ROUNDS=5 DELI_OLD=/tmp/deli-old bench/threads.sh [input.toml:steps ...]
 # The peers (LAMMPS serial and 2 MPI ranks, OpenMM CPU on 1 and 2 threads) run in process
 # from bench/peers (issue 10's driver).
 set -euo pipefail
@@ -12,13 +12,17 @@ top=$(cd "$(dirname "$0")/.." && pwd)
 deli=${DELI:-$top/build/deli}
 old=${DELI_OLD:-}
 rounds=${ROUNDS:-3}
+# Threads waiting at a barrier sleep: on a shared machine a spinning thread takes the core
+# its partner needs (a 4000-atom LJ run 30x slower, measured). OMP_WAIT_POLICY=active
+# (libgomp spins a while first) suits a machine of one's own.
+wait=${OMP_WAIT_POLICY:-passive}
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000)
 [[ $# -gt 0 ]] && cases=("$@")
 work=$(mktemp -d /tmp/deli-bench-threads.XXXXXX)
 trap 'rm -rf "$work"' EXIT
-echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores"
+echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=$wait"
 for spec in "${cases[@]}"; do
   input=${spec%%:*} steps=${spec#*:}
   name=$(basename "$input" .toml)
@@ -41,7 +45,7 @@ for spec in "${cases[@]}"; do
       [[ $which == old ]] && bin=$old
       args=(--threads "$threads")
       [[ $which == old ]] && args=()
-      line=$(cd "$dir" && OMP_NUM_THREADS=$threads "$bin" run input.toml "${args[@]}" | grep "^loop time")
+      line=$(cd "$dir" && OMP_WAIT_POLICY=$wait OMP_NUM_THREADS=$threads "$bin" run input.toml "${args[@]}" | grep "^loop time")
       value=$(echo "$line" | sed -E 's/.*: ([0-9.e+]+) atom-steps\/s.*/\1/')
       rate[$v]+="$value "
     done
