@@ -20,6 +20,22 @@ wait=${OMP_WAIT_POLICY:-passive}
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000)
 [[ $# -gt 0 ]] && cases=("$@")
+# Reads lines "old|new THREADS RATE...": medians and their ratios.
+summarise=$(cat <<'PY'
+import statistics, sys
+median = {}
+for line in sys.stdin:
+    which, threads, *rates = line.split()
+    key = f"{which} {threads}"
+    median[key] = statistics.median(float(x) for x in rates)
+    print(f"  {which} deli, {threads} thread(s): median {median[key]:.4g} atom-steps/s"
+          f" (runs: {' '.join(rates)})")
+ratio = f"  2 threads / 1 thread: {median['new 2'] / median['new 1']:.2f}x"
+if "old 1" in median:
+    ratio += f"; new / old on 1 thread: {median['new 1'] / median['old 1']:.3f}x"
+print(ratio)
+PY
+)
 work=$(mktemp -d /tmp/deli-bench-threads.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=$wait"
@@ -50,18 +66,8 @@ for spec in "${cases[@]}"; do
       rate[$v]+="$value "
     done
   done
-  summary=$(for v in "${variants[@]}"; do echo "$v ${rate[$v]}"; done | /usr/bin/python3 -c '
-import sys, statistics
-med = {}
-for line in sys.stdin:
-    f = line.split()
-    key = f[0] + " " + f[1]
-    med[key] = statistics.median(float(x) for x in f[2:])
-    print(f"  {key} thread(s): median {med[key]:.4g} atom-steps/s  (runs: {' '.join(f[2:])})")
-print(f"  2 threads / 1 thread: {med['new 2'] / med['new 1']:.2f}x", end="")
-if "old 1" in med:
-    print(f"; new / old on 1 thread: {med['new 1'] / med['old 1']:.3f}x", end="")
-print()')
+  summary=$(for v in "${variants[@]}"; do echo "$v ${rate[$v]}"; done |
+    /usr/bin/python3 -c "$summarise")
   echo "$name ($steps steps):"
   echo "$summary"
   unset rate
