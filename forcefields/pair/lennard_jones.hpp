@@ -14,7 +14,6 @@ struct LennardJones {
     double lj3 = 0, lj4 = 0;  // 4 eps sig^12, 4 eps sig^6: energy
     double cutoff2 = 0;
     double energy_shift = 0;  // the pair loop's
-    bool operator==(const Params&) const = default;
   };
 
   static Params make(double epsilon, double sigma, double cutoff) {

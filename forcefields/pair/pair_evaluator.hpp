@@ -5,7 +5,7 @@
 namespace deli {
 
 // What PairForce needs of a pair style (HOOMD's evaluator contract): per type pair Params
-// (comparable) holding the squared cutoff and the energy shift the loop fills in; for
+// holding the squared cutoff and the energy shift the loop fills in; for
 // r2 < cutoff2, evaluate() sets f_over_r = -phi'(r)/r (so F_i = d_ij f_over_r) and the
 // unshifted energy phi(r), second_derivative() gives phi''(r) for the pair Hessian (shadow
 // energies, reflections), and cutoff_energy() phi at the cutoff. Neighbour list, images,
@@ -13,7 +13,6 @@ namespace deli {
 // loop's.
 template <class E>
 concept PairEvaluator = std::default_initializable<typename E::Params> &&
-    std::equality_comparable<typename E::Params> &&
     requires(typename E::Params& p, double r2, double& f_over_r, double& energy) {
   { p.cutoff2 } -> std::convertible_to<double>;
   {p.energy_shift = 0.0};

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -23,19 +22,6 @@ struct ScaledPair {
   double factor;
 };
 
-// One thread's arrays of the pairs of one particle inside their cutoff (the pair loop's
-// passes), by component.
-struct PairScratch {
-  std::vector<std::int32_t> j;
-  std::vector<double> dx, dy, dz, r2, f_over_r, energy;
-  void reserve(std::size_t n) {
-    if (j.size() >= n) return;
-    n *= 2;
-    j.resize(n);
-    for (auto* v : {&dx, &dy, &dz, &r2, &f_over_r, &energy}) v->resize(n);
-  }
-};
-
 // The one pair loop: any PairEvaluator (HOOMD-style) becomes a force term. Parameters are a
 // dense type x type table.
 template <PairEvaluator Evaluator>
@@ -52,8 +38,6 @@ class PairForce final : public ForceTerm {
         max_cutoff_(max_cutoff),
         scaled_pairs_(std::move(scaled_pairs)) {
     for (Params& p : table_) p.energy_shift = shift ? Evaluator::cutoff_energy(p) : 0.0;
-    uniform_ = std::all_of(table_.begin(), table_.end(),
-                           [&](const Params& p) { return p == table_.front(); });
   }
 
   std::string name() const override { return name_; }
@@ -146,14 +130,6 @@ class PairForce final : public ForceTerm {
   // Particles first..last-1 with their listed partners: forces added to f, the virial to
   // `virial`; returns the energy. kTally: accumulate energy and virial. kCoded: periodic
   // shifts from the list's image codes instead of minimum-image rounding.
-  //
-  // Three passes per particle. (1) The separations of all listed partners, compacted
-  // without a branch to those inside their cutoff (a branch the predictor loses for about
-  // half the pairs), into one array per component. (2) The potential of those pairs: a
-  // loop of independent pairs that the compiler vectorises (four pairs per AVX2
-  // instruction) when every type pair has the same parameters. (3) The forces, energy and
-  // virial added in list order, as a one-pass loop adds them: vector lanes round as scalar
-  // operations do, so the results are those of the scalar loop bit for bit.
   template <bool kTally, bool kCoded>
   double loop(const System& system, const NeighborList& neighbors, std::int32_t first,
               std::int32_t last, Vec3* f, SymTensor& virial) const {
@@ -168,18 +144,19 @@ class PairForce final : public ForceTerm {
 
     double energy = 0.0;
     SymTensor w;
-    thread_local PairScratch inside;
+    // Two passes per particle: separations of all listed partners, compacted without a
+    // branch to those inside their cutoff (a branch the predictor loses for about half the
+    // pairs), then the potential on those alone.
+    struct Inside {
+      std::int32_t j;
+      double dx, dy, dz, r2;
+    };
+    thread_local std::vector<Inside> inside;
     for (std::int32_t i = first; i < last; ++i) {
       const Vec3 xi = x[i];
       const Params* row = &table_[static_cast<std::size_t>(type[i] * type_count_)];
-      inside.reserve(offsets[i + 1] - offsets[i] + 1);
-      std::int32_t* __restrict js = inside.j.data();
-      double* __restrict dxs = inside.dx.data();
-      double* __restrict dys = inside.dy.data();
-      double* __restrict dzs = inside.dz.data();
-      double* __restrict r2s = inside.r2.data();
-      double* __restrict frs = inside.f_over_r.data();
-      double* __restrict es = inside.energy.data();
+      const std::size_t count = offsets[i + 1] - offsets[i];
+      if (inside.size() < count + 1) inside.resize(2 * count + 1);
       std::size_t kept = 0;
       for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
         const std::int32_t j = list[k];
@@ -193,37 +170,22 @@ class PairForce final : public ForceTerm {
           dz -= period.z * Box::round_to_integer(dz * inverse.z);
         }
         const double r2 = dx * dx + dy * dy + dz * dz;
-        js[kept] = j, dxs[kept] = dx, dys[kept] = dy, dzs[kept] = dz, r2s[kept] = r2;
+        inside[kept] = {j, dx, dy, dz, r2};
         kept += r2 < row[type[j]].cutoff2;
-      }
-      if (uniform_) {
-        const Params p = table_[0];
-        for (std::size_t k = 0; k < kept; ++k) {
-          double f_over_r, e;
-          Evaluator::evaluate(p, r2s[k], f_over_r, e);
-          frs[k] = f_over_r;
-          if constexpr (kTally) es[k] = e - p.energy_shift;
-        }
-      } else {
-        for (std::size_t k = 0; k < kept; ++k) {
-          const Params& p = row[type[js[k]]];
-          double f_over_r, e;
-          Evaluator::evaluate(p, r2s[k], f_over_r, e);
-          frs[k] = f_over_r;
-          if constexpr (kTally) es[k] = e - p.energy_shift;
-        }
       }
       Vec3 fi;
       for (std::size_t k = 0; k < kept; ++k) {
-        const double dx = dxs[k], dy = dys[k], dz = dzs[k];
-        const double fx = dx * frs[k], fy = dy * frs[k], fz = dz * frs[k];
+        const Inside& q = inside[k];
+        const Params& p = row[type[q.j]];
+        double f_over_r, e;
+        Evaluator::evaluate(p, q.r2, f_over_r, e);
+        const double fx = q.dx * f_over_r, fy = q.dy * f_over_r, fz = q.dz * f_over_r;
         fi.x += fx, fi.y += fy, fi.z += fz;
-        Vec3& fj = f[js[k]];
-        fj.x -= fx, fj.y -= fy, fj.z -= fz;
+        f[q.j].x -= fx, f[q.j].y -= fy, f[q.j].z -= fz;
         if constexpr (kTally) {
-          energy += es[k];
-          w.xx += dx * fx, w.yy += dy * fy, w.zz += dz * fz;
-          w.xy += dx * fy, w.xz += dx * fz, w.yz += dy * fz;
+          energy += e - p.energy_shift;
+          w.xx += q.dx * fx, w.yy += q.dy * fy, w.zz += q.dz * fz;
+          w.xy += q.dx * fy, w.xz += q.dx * fz, w.yz += q.dy * fz;
         }
       }
       f[i] += fi;
@@ -257,7 +219,6 @@ class PairForce final : public ForceTerm {
   std::vector<Params> table_;
   double max_cutoff_;
   std::vector<ScaledPair> scaled_pairs_;
-  bool uniform_ = false;              // every type pair has the same parameters
   mutable ChunkForces chunk_forces_;  // scratch of compute()
 };
 
