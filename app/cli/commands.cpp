@@ -6,10 +6,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 
 #include "cli/exit_status.hpp"
 #include "cli/integrator_factory.hpp"
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "h5md/checkpoint.hpp"
 #include "h5md/fingerprint.hpp"
 #include "h5md/h5md_info.hpp"
@@ -55,18 +57,39 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
 
 int command_run(const std::vector<std::string>& args) {
   std::string path, restart;
+  int threads = 0;
   for (std::size_t k = 0; k < args.size(); ++k) {
     if (args[k] == "--restart") {
       if (k + 1 >= args.size()) throw InputError("deli run: --restart needs a CHECKPOINT file");
       restart = args[++k];
+    } else if (args[k] == "--threads") {
+      if (k + 1 >= args.size()) throw InputError("deli run: --threads needs a number");
+      const std::string& value = args[++k];
+      char* end = nullptr;
+      const long n = std::strtol(value.c_str(), &end, 10);
+      if (value.empty() || *end != '\0' || n < 1 || n > 4096) {
+        throw InputError("deli run --threads " + value + ": expected an integer from 1 to 4096");
+      }
+      threads = static_cast<int>(n);
     } else if (path.empty()) {
       path = args[k];
     } else {
-      throw InputError("deli run takes one INPUT file (and --restart CHECKPOINT); see deli --help");
+      throw InputError(
+          "deli run takes one INPUT file (and --restart CHECKPOINT, --threads N); see deli "
+          "--help");
     }
   }
   if (path.empty()) path = DELI_DEFAULT_INPUT;
   RunInput input = load_run_input(path);
+  // The command line's count over the input's; neither: OpenMP's default.
+  if (threads == 0) threads = input.threads;
+  if (threads > 0) {
+    try {
+      set_thread_count(threads);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("deli run: ") + e.what());
+    }
+  }
   const std::uint64_t fingerprint = system_fingerprint(input.system, input.model_text);
   Checkpoint checkpoint;
   if (!restart.empty()) {
@@ -112,6 +135,7 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
             input.timestep, static_cast<long long>(input.steps));
   for (const std::string& note : input.notes) out.print("%s\n", note.c_str());
   out.print("%s\n", input.degrees_of_freedom.describe().c_str());
+  out.print("%d thread%s\n", thread_count(), thread_count() == 1 ? "" : "s");
   if (input.thermostat) {
     const ThermostatSettings& t = *input.thermostat;
     out.print("thermostat %s: T %g, damping %g, seed %llu%s\n",

@@ -15,7 +15,7 @@ constexpr const char* kUsage =
     "usage: deli <command> [arguments]\n"
     "\n"
     "commands:\n"
-    "  run [INPUT] [--restart CHECKPOINT]\n"
+    "  run [INPUT] [--restart CHECKPOINT] [--threads N]\n"
     "                            run a simulation (no INPUT: the default input,\n"
     "                            " DELI_DEFAULT_INPUT
     ")\n"
@@ -34,7 +34,7 @@ constexpr const char* kUsage =
 
 // `deli COMMAND --help`.
 constexpr const char* kRunUsage =
-    "usage: deli run [INPUT] [--restart CHECKPOINT]\n"
+    "usage: deli run [INPUT] [--restart CHECKPOINT] [--threads N]\n"
     "\n"
     "Runs the simulation INPUT (a TOML file; none: the default input,\n" DELI_DEFAULT_INPUT
     ").\n"
@@ -42,7 +42,11 @@ constexpr const char* kRunUsage =
     "stop after the current step with a checkpoint (exit status 130).\n"
     "\n"
     "  --restart CHECKPOINT      continue from a checkpoint written by a run of this INPUT,\n"
-    "                            to its [run] steps, appending to its outputs\n";
+    "                            to its [run] steps, appending to its outputs\n"
+    "  --threads N               run on N threads (over [run] threads; neither: the\n"
+    "                            OMP_NUM_THREADS environment variable, else all cores).\n"
+    "                            The same input on as many threads gives the same\n"
+    "                            results bit for bit\n";
 constexpr const char* kValidateUsage =
     "usage: deli validate INPUT [--engine openmm|lammps|all] [--platform reference|cpu]\n"
     "                     [--steps N]\n"

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
 #include "forces/special_bonds.hpp"
 #include "system/finite_state.hpp"
@@ -37,7 +38,7 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
     const SpecialPairs special = find_special_pairs(system.topology, p.size());
     neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
   }
-  for (std::size_t i = 0; i < p.size(); ++i) system.box.wrap(p.position[i], p.image[i]);
+  parallel_for(p.size(), [&](std::size_t i) { system.box.wrap(p.position[i], p.image[i]); });
   neighbors_.build(p.position, system.box);
   return true;
 }

@@ -1,5 +1,7 @@
 #include "integrators/velocity_verlet.hpp"
 
+#include "core/parallel.hpp"
+
 namespace deli {
 
 VelocityVerlet::VelocityVerlet(const ForceField& force_field, double skin, double timestep)
@@ -11,13 +13,13 @@ void VelocityVerlet::setup(System& system) {
 
 void VelocityVerlet::half_kick(Particles& p) const {
   const std::vector<Vec3>& f = engine_.force();
-  for (std::size_t i = 0; i < p.size(); ++i) p.velocity[i] += f[i] * (0.5 * dt_ / p.mass[i]);
+  parallel_for(p.size(), [&](std::size_t i) { p.velocity[i] += f[i] * (0.5 * dt_ / p.mass[i]); });
 }
 
 void VelocityVerlet::step(System& system, bool tally) {
   Particles& p = system.particles;
   half_kick(p);
-  for (std::size_t i = 0; i < p.size(); ++i) p.position[i] += p.velocity[i] * dt_;
+  parallel_for(p.size(), [&](std::size_t i) { p.position[i] += p.velocity[i] * dt_; });
   system.step += 1;
   system.time += dt_;
   engine_.compute(system, tally);

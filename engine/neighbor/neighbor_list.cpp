@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/parallel.hpp"
+
 namespace deli {
 
 namespace {
@@ -191,8 +193,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   // A pair found through stencil shift s (periods) between wrapped positions has, in the
   // caller's positions, the shift s + moved_j - moved_i; codes hold -1..1 periods per
   // axis, and anything else (positions far outside the box) drops the codes.
-  bool coded = grid.shifted;
-  auto pair_code = [&](int stencil_code, std::int32_t i, std::int32_t j) -> std::uint8_t {
+  auto pair_code = [&](int stencil_code, std::int32_t i, std::int32_t j,
+                       bool& coded) -> std::uint8_t {
     int k[3] = {stencil_code % 3 - 1, (stencil_code / 3) % 3 - 1, stencil_code / 9 - 1};
     for (int a = 0; a < 3; ++a) {
       k[a] += moved[j][a] - moved[i][a];
@@ -204,50 +206,85 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     return static_cast<std::uint8_t>(code_of(k[0], k[1], k[2]));
   };
 
-  neighbors_.clear();
-  image_codes_.clear();
   offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
-  // Candidates within reach, as member slots and shift codes. The scan appends every
-  // candidate and advances only for hits: no branch on the distance test, which the
-  // predictor would lose about a third of the time.
-  std::vector<std::int32_t> hit_slot(static_cast<std::size_t>(n) + 1);
-  std::vector<std::uint8_t> hit_code(static_cast<std::size_t>(n) + 1);
   const Vec3* at = member_position.data();
   const bool any_exclusions = !excluded_.empty();
-  for (std::int32_t i = 0; i < n; ++i) {
-    const Vec3 xi = inside[i];
-    std::size_t hits = 0;
-    auto scan = [&](std::size_t first, std::size_t last, int code) {
-      const Vec3 origin = xi - image_shifts_[code];
-      std::int32_t* slot_out = hit_slot.data();
-      std::uint8_t* code_out = hit_code.data();
-      for (std::size_t m = first; m < last; ++m) {
-        Vec3 d = at[m] - origin;
-        if (!grid.shifted) d = box.minimum_image(d);
-        slot_out[hits] = static_cast<std::int32_t>(m);
-        code_out[hits] = static_cast<std::uint8_t>(code);
-        hits += d.x * d.x + d.y * d.y + d.z * d.z < reach2;
-      }
-    };
-    const int c = cell_of[i];
-    if (grid.shifted) scan(slot_of[i] + 1, cell_start[c + 1], kNoShift);
-    for (std::size_t s = stencil_offsets_[c]; s < stencil_offsets_[c + 1]; ++s) {
-      const std::int32_t cell = stencil_cells_[s];
-      scan(cell_start[cell], cell_start[cell + 1], stencil_codes_[s]);
-    }
-    // i's excluded partners (a chain bead's one or two bonded neighbours): a linear scan.
-    const std::int32_t* partners = partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
-    const std::int32_t* partners_end =
-        partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
-    for (std::size_t h = 0; h < hits; ++h) {
-      const std::int32_t j = member[hit_slot[h]];
-      if (!grid.shifted && j <= i) continue;
-      if (std::find(partners, partners_end, j) != partners_end) continue;
-      neighbors_.push_back(j);
-      if (grid.shifted) image_codes_.push_back(pair_code(hit_code[h], i, j));
-    }
-    offsets_[i + 1] = neighbors_.size();
+  // Chunks of consecutive particles, each listing its particles' partners in order; the
+  // lists are then joined in chunk order: the same list on any number of threads.
+  const int chunks = chunks_for(static_cast<std::size_t>(n));
+  chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
+  chunk_codes_.resize(static_cast<std::size_t>(chunks));
+  std::vector<char> chunk_coded(static_cast<std::size_t>(chunks), 1);
+  for_each_chunk(
+      static_cast<std::size_t>(n), chunks, [&](int chunk, std::size_t begin, std::size_t end) {
+        std::vector<std::int32_t>& out = chunk_neighbors_[static_cast<std::size_t>(chunk)];
+        std::vector<std::uint8_t>& out_codes = chunk_codes_[static_cast<std::size_t>(chunk)];
+        out.clear();
+        out_codes.clear();
+        bool coded = grid.shifted;
+        // Candidates within reach, as member slots and shift codes. The scan appends every
+        // candidate and advances only for hits: no branch on the distance test, which the
+        // predictor would lose about a third of the time.
+        std::vector<std::int32_t> hit_slot(static_cast<std::size_t>(n) + 1);
+        std::vector<std::uint8_t> hit_code(static_cast<std::size_t>(n) + 1);
+        for (auto i = static_cast<std::int32_t>(begin); i < static_cast<std::int32_t>(end); ++i) {
+          const Vec3 xi = inside[i];
+          std::size_t hits = 0;
+          auto scan = [&](std::size_t first, std::size_t last, int code) {
+            const Vec3 origin = xi - image_shifts_[code];
+            std::int32_t* slot_out = hit_slot.data();
+            std::uint8_t* code_out = hit_code.data();
+            for (std::size_t m = first; m < last; ++m) {
+              Vec3 d = at[m] - origin;
+              if (!grid.shifted) d = box.minimum_image(d);
+              slot_out[hits] = static_cast<std::int32_t>(m);
+              code_out[hits] = static_cast<std::uint8_t>(code);
+              hits += d.x * d.x + d.y * d.y + d.z * d.z < reach2;
+            }
+          };
+          const int c = cell_of[i];
+          if (grid.shifted) scan(slot_of[i] + 1, cell_start[c + 1], kNoShift);
+          for (std::size_t s = stencil_offsets_[c]; s < stencil_offsets_[c + 1]; ++s) {
+            const std::int32_t cell = stencil_cells_[s];
+            scan(cell_start[cell], cell_start[cell + 1], stencil_codes_[s]);
+          }
+          // i's excluded partners (a chain bead's one or two bonded neighbours): a linear scan.
+          const std::int32_t* partners =
+              partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
+          const std::int32_t* partners_end =
+              partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
+          for (std::size_t h = 0; h < hits; ++h) {
+            const std::int32_t j = member[hit_slot[h]];
+            if (!grid.shifted && j <= i) continue;
+            if (std::find(partners, partners_end, j) != partners_end) continue;
+            out.push_back(j);
+            if (grid.shifted) out_codes.push_back(pair_code(hit_code[h], i, j, coded));
+          }
+          // Counts within the chunk for now; made global offsets below.
+          offsets_[i + 1] = out.size();
+        }
+        chunk_coded[static_cast<std::size_t>(chunk)] = coded;
+      });
+  std::vector<std::size_t> chunk_start(static_cast<std::size_t>(chunks) + 1, 0);
+  for (int c = 0; c < chunks; ++c) {
+    chunk_start[c + 1] = chunk_start[c] + chunk_neighbors_[static_cast<std::size_t>(c)].size();
   }
+  bool coded = grid.shifted;
+  for (char c : chunk_coded) coded = coded && c;
+  neighbors_.resize(chunk_start.back());
+  image_codes_.resize(grid.shifted ? chunk_start.back() : 0);
+  for_each_chunk(
+      static_cast<std::size_t>(n), chunks, [&](int chunk, std::size_t begin, std::size_t end) {
+        const std::size_t base = chunk_start[static_cast<std::size_t>(chunk)];
+        const std::vector<std::int32_t>& in = chunk_neighbors_[static_cast<std::size_t>(chunk)];
+        std::copy(in.begin(), in.end(), neighbors_.begin() + static_cast<std::ptrdiff_t>(base));
+        if (grid.shifted) {
+          const std::vector<std::uint8_t>& codes = chunk_codes_[static_cast<std::size_t>(chunk)];
+          std::copy(codes.begin(), codes.end(),
+                    image_codes_.begin() + static_cast<std::ptrdiff_t>(base));
+        }
+        for (std::size_t i = begin; i < end; ++i) offsets_[i + 1] += base;
+      });
   if (!coded) image_codes_.clear();
   position_at_build_ = position;
   ++builds_;
@@ -258,10 +295,17 @@ bool NeighborList::needs_rebuild(const std::vector<Vec3>& position) const {
   const double limit2 = 0.25 * skin_ * skin_;
   // Written so that a NaN displacement asks for a rebuild too: the caller then finds the
   // non-finite position (a blown-up run) at no cost to the every-step check.
-  for (std::size_t i = 0; i < position.size(); ++i) {
-    if (!(norm2(position[i] - position_at_build_[i]) <= limit2)) return true;
-  }
-  return false;
+  const int chunks = chunks_for(position.size());
+  std::vector<char> moved(static_cast<std::size_t>(chunks), 0);
+  for_each_chunk(position.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      if (!(norm2(position[i] - position_at_build_[i]) <= limit2)) {
+        moved[static_cast<std::size_t>(c)] = 1;
+        return;
+      }
+    }
+  });
+  return std::find(moved.begin(), moved.end(), 1) != moved.end();
 }
 
 }  // namespace deli

@@ -70,6 +70,10 @@ class NeighborList {
   std::vector<std::int32_t> stencil_cells_;
   std::vector<std::uint8_t> stencil_codes_;
 
+  // Each chunk's part of the list during a build (kept: their capacity is reused).
+  std::vector<std::vector<std::int32_t>> chunk_neighbors_;
+  std::vector<std::vector<std::uint8_t>> chunk_codes_;
+
   std::vector<std::int32_t> neighbors_;
   std::vector<std::size_t> offsets_;
   std::vector<std::uint8_t> image_codes_;

@@ -2,18 +2,18 @@
 
 #include <stdexcept>
 
+#include "core/parallel.hpp"
+
 namespace deli {
 
 double kinetic_energy(const Particles& p) {
-  double twice = 0.0;
-  for (std::size_t i = 0; i < p.size(); ++i) twice += p.mass[i] * norm2(p.velocity[i]);
+  const double twice = ordered_sum<double>(
+      p.size(), [&](std::size_t i) { return p.mass[i] * norm2(p.velocity[i]); });
   return 0.5 * twice;
 }
 
 Vec3 total_momentum(const Particles& p) {
-  Vec3 m;
-  for (std::size_t i = 0; i < p.size(); ++i) m += p.velocity[i] * p.mass[i];
-  return m;
+  return ordered_sum<Vec3>(p.size(), [&](std::size_t i) { return p.velocity[i] * p.mass[i]; });
 }
 
 ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluation,
@@ -32,10 +32,9 @@ ThermoSample measure_thermo(const System& system, const ForceEvaluation& evaluat
   s.momentum = total_momentum(system.particles);
   const Box& box = system.box;
   if (!box.periodic(0) && !box.periodic(1) && !box.periodic(2)) {
-    Vec3 l;
     const Particles& p = system.particles;
-    for (std::size_t i = 0; i < p.size(); ++i) l += cross(p.position[i], p.velocity[i] * p.mass[i]);
-    s.angular_momentum = l;
+    s.angular_momentum = ordered_sum<Vec3>(
+        p.size(), [&](std::size_t i) { return cross(p.position[i], p.velocity[i] * p.mass[i]); });
   }
   s.term_names = evaluation.names;
   s.term_energies = evaluation.energies;

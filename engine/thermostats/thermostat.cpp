@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/parallel.hpp"
 #include "thermostats/random_stream.hpp"
 
 namespace deli {
@@ -24,19 +25,20 @@ PhiloxCounter draw_counter(std::uint64_t id, std::int64_t step, Stream stream, i
 void LangevinThermostat::apply(Particles& p, std::int64_t step, int half, double duration) {
   const double c = std::exp(-duration / settings_.damping);
   const double noise = std::sqrt((1.0 - c * c) * settings_.temperature);
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  // Each atom's draws depend on its id and the step alone: any number of threads.
+  parallel_for(p.size(), [&](std::size_t i) {
     RandomStream random(settings_.seed, draw_counter(static_cast<std::uint64_t>(p.id[i]), step,
                                                      Stream::langevin, half));
     const double sd = noise / std::sqrt(p.mass[i]);
     Vec3& v = p.velocity[i];
     const double x = random.normal(), y = random.normal(), z = random.normal();
     v = {c * v.x + sd * x, c * v.y + sd * y, c * v.z + sd * z};
-  }
+  });
 }
 
 void CsvrThermostat::apply(Particles& p, std::int64_t step, int half, double duration) {
-  double twice_kinetic = 0.0;
-  for (std::size_t i = 0; i < p.size(); ++i) twice_kinetic += p.mass[i] * norm2(p.velocity[i]);
+  const double twice_kinetic = ordered_sum<double>(
+      p.size(), [&](std::size_t i) { return p.mass[i] * norm2(p.velocity[i]); });
   const double kinetic = 0.5 * twice_kinetic;
   if (!(kinetic > 0.0) || dof_ <= 0) return;
   RandomStream random(settings_.seed, draw_counter(~std::uint64_t{0}, step, Stream::csvr, half));
@@ -48,7 +50,7 @@ void CsvrThermostat::apply(Particles& p, std::int64_t step, int half, double dur
   const double next = kinetic + (1.0 - c) * (target * (r1 * r1 + others) / dof_ - kinetic) +
                       2.0 * r1 * std::sqrt(c * (1.0 - c) * kinetic * target / dof_);
   const double scale = std::sqrt(std::max(next, 0.0) / kinetic);
-  for (Vec3& v : p.velocity) v *= scale;
+  parallel_for(p.size(), [&](std::size_t i) { p.velocity[i] *= scale; });
 }
 
 std::unique_ptr<Thermostat> make_thermostat(const ThermostatSettings& settings,

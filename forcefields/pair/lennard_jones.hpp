@@ -6,17 +6,17 @@
 
 namespace deli {
 
-// 12-6 Lennard-Jones, truncated at a cutoff, optionally shifted to zero energy there.
-// WCA is this with cutoff 2^(1/6) sigma and the shift.
+// 12-6 Lennard-Jones, truncated at a cutoff (the pair loop shifts it to zero energy there
+// when asked). WCA is this with cutoff 2^(1/6) sigma, shifted.
 struct LennardJones {
   struct Params {
     double lj1 = 0, lj2 = 0;  // 48 eps sig^12, 24 eps sig^6: force
     double lj3 = 0, lj4 = 0;  // 4 eps sig^12, 4 eps sig^6: energy
     double cutoff2 = 0;
-    double energy_shift = 0;
+    double energy_shift = 0;  // the pair loop's
   };
 
-  static Params make(double epsilon, double sigma, double cutoff, bool shift) {
+  static Params make(double epsilon, double sigma, double cutoff) {
     Params p;
     const double s6 = std::pow(sigma, 6);
     p.lj1 = 48.0 * epsilon * s6 * s6;
@@ -24,11 +24,12 @@ struct LennardJones {
     p.lj3 = 4.0 * epsilon * s6 * s6;
     p.lj4 = 4.0 * epsilon * s6;
     p.cutoff2 = cutoff * cutoff;
-    if (shift) {
-      const double r6inv = 1.0 / (p.cutoff2 * p.cutoff2 * p.cutoff2);
-      p.energy_shift = r6inv * (p.lj3 * r6inv - p.lj4);
-    }
     return p;
+  }
+
+  static double cutoff_energy(const Params& p) {
+    const double r6inv = 1.0 / (p.cutoff2 * p.cutoff2 * p.cutoff2);
+    return r6inv * (p.lj3 * r6inv - p.lj4);
   }
 
   // phi''(r) for r2 < cutoff2.
@@ -38,12 +39,13 @@ struct LennardJones {
     return r6inv * (13.0 * p.lj1 * r6inv - 7.0 * p.lj2) * r2inv;
   }
 
-  // For r2 < cutoff2: force divided by r (so F_i = d_ij * f_over_r) and energy.
+  // For r2 < cutoff2: force divided by r (so F_i = d_ij * f_over_r) and the unshifted
+  // energy.
   static void evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
     const double r2inv = 1.0 / r2;
     const double r6inv = r2inv * r2inv * r2inv;
     f_over_r = r6inv * (p.lj1 * r6inv - p.lj2) * r2inv;
-    energy = r6inv * (p.lj3 * r6inv - p.lj4) - p.energy_shift;
+    energy = r6inv * (p.lj3 * r6inv - p.lj4);
   }
 };
 static_assert(PairEvaluator<LennardJones>);

@@ -22,10 +22,10 @@ std::unique_ptr<ForceTerm> lj_term(const PairCoefficients& c, bool shift, double
   for (int a = 0; a < c.type_count(); ++a) {
     for (int b = 0; b < c.type_count(); ++b) {
       const PairCoefficient& p = c.at(a, b);
-      table.push_back(LennardJones::make(p.values[0], p.values[1], p.cutoff, shift));
+      table.push_back(LennardJones::make(p.values[0], p.values[1], p.cutoff));
     }
   }
-  return std::make_unique<PairForce<LennardJones>>("pair", c.type_count(), std::move(table),
+  return std::make_unique<PairForce<LennardJones>>("pair", c.type_count(), std::move(table), shift,
                                                    max_cutoff, std::move(scaled));
 }
 

@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/parallel.hpp"
+#include "forces/chunk_forces.hpp"
 #include "forces/force_term.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "pair/pair_evaluator.hpp"
@@ -27,13 +29,16 @@ class PairForce final : public ForceTerm {
  public:
   using Params = typename Evaluator::Params;
 
-  PairForce(std::string name, int type_count, std::vector<Params> table, double max_cutoff,
-            std::vector<ScaledPair> scaled_pairs)
+  // shift: every type pair's energy shifted to zero at its cutoff.
+  PairForce(std::string name, int type_count, std::vector<Params> table, bool shift,
+            double max_cutoff, std::vector<ScaledPair> scaled_pairs)
       : name_(std::move(name)),
         type_count_(type_count),
         table_(std::move(table)),
         max_cutoff_(max_cutoff),
-        scaled_pairs_(std::move(scaled_pairs)) {}
+        scaled_pairs_(std::move(scaled_pairs)) {
+    for (Params& p : table_) p.energy_shift = shift ? Evaluator::cutoff_energy(p) : 0.0;
+  }
 
   std::string name() const override { return name_; }
   double neighbor_cutoff() const override { return max_cutoff_; }
@@ -59,13 +64,31 @@ class PairForce final : public ForceTerm {
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
                  SymTensor& virial, bool tally) const override {
     const bool coded = !neighbors.image_codes().empty();
-    double energy = 0.0;
+    const std::size_t n = system.particles.size();
+    // Chunks of consecutive particles, each with its listed pairs; energies and virials
+    // added in chunk order.
+    const int chunks = chunks_for(n);
+    chunk_forces_.prepare(chunks, n);
+    std::vector<double> energies(static_cast<std::size_t>(chunks), 0.0);
+    std::vector<SymTensor> virials(static_cast<std::size_t>(chunks));
+    for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      Vec3* f = chunk_forces_.chunk(c, force);
+      double& e = energies[static_cast<std::size_t>(c)];
+      SymTensor& w = virials[static_cast<std::size_t>(c)];
+      const auto first = static_cast<std::int32_t>(begin), last = static_cast<std::int32_t>(end);
+      if (tally) {
+        e = coded ? loop<true, true>(system, neighbors, first, last, f, w)
+                  : loop<true, false>(system, neighbors, first, last, f, w);
+      } else {
+        coded ? loop<false, true>(system, neighbors, first, last, f, w)
+              : loop<false, false>(system, neighbors, first, last, f, w);
+      }
+    });
+    chunk_forces_.add_buffers(force);
+    double energy = energies[0];
+    for (std::size_t c = 1; c < energies.size(); ++c) energy += energies[c];
     if (tally) {
-      energy = coded ? loop<true, true>(system, neighbors, force, virial)
-                     : loop<true, false>(system, neighbors, force, virial);
-    } else {
-      coded ? loop<false, true>(system, neighbors, force, virial)
-            : loop<false, false>(system, neighbors, force, virial);
+      for (const SymTensor& w : virials) virial += w;
     }
     return energy + scaled_pairs(system, force, virial);
   }
@@ -104,14 +127,14 @@ class PairForce final : public ForceTerm {
     }
   }
 
-  // kTally: accumulate energy and virial. kCoded: periodic shifts from the list's image
-  // codes instead of minimum-image rounding.
+  // Particles first..last-1 with their listed partners: forces added to f, the virial to
+  // `virial`; returns the energy. kTally: accumulate energy and virial. kCoded: periodic
+  // shifts from the list's image codes instead of minimum-image rounding.
   template <bool kTally, bool kCoded>
-  double loop(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
-              SymTensor& virial) const {
+  double loop(const System& system, const NeighborList& neighbors, std::int32_t first,
+              std::int32_t last, Vec3* f, SymTensor& virial) const {
     const Vec3* x = system.particles.position.data();
     const int* type = system.particles.type.data();
-    Vec3* f = force.data();
     const Box& box = system.box;
     const Vec3 period = box.period(), inverse = box.inverse_period();
     const std::int32_t* list = neighbors.neighbors().data();
@@ -121,7 +144,6 @@ class PairForce final : public ForceTerm {
 
     double energy = 0.0;
     SymTensor w;
-    const auto n = static_cast<std::int32_t>(system.particles.size());
     // Two passes per particle: separations of all listed partners, compacted without a
     // branch to those inside their cutoff (a branch the predictor loses for about half the
     // pairs), then the potential on those alone.
@@ -130,7 +152,7 @@ class PairForce final : public ForceTerm {
       double dx, dy, dz, r2;
     };
     thread_local std::vector<Inside> inside;
-    for (std::int32_t i = 0; i < n; ++i) {
+    for (std::int32_t i = first; i < last; ++i) {
       const Vec3 xi = x[i];
       const Params* row = &table_[static_cast<std::size_t>(type[i] * type_count_)];
       const std::size_t count = offsets[i + 1] - offsets[i];
@@ -154,13 +176,14 @@ class PairForce final : public ForceTerm {
       Vec3 fi;
       for (std::size_t k = 0; k < kept; ++k) {
         const Inside& q = inside[k];
+        const Params& p = row[type[q.j]];
         double f_over_r, e;
-        Evaluator::evaluate(row[type[q.j]], q.r2, f_over_r, e);
+        Evaluator::evaluate(p, q.r2, f_over_r, e);
         const double fx = q.dx * f_over_r, fy = q.dy * f_over_r, fz = q.dz * f_over_r;
         fi.x += fx, fi.y += fy, fi.z += fz;
         f[q.j].x -= fx, f[q.j].y -= fy, f[q.j].z -= fz;
         if constexpr (kTally) {
-          energy += e;
+          energy += e - p.energy_shift;
           w.xx += q.dx * fx, w.yy += q.dy * fy, w.zz += q.dz * fz;
           w.xy += q.dx * fy, w.xz += q.dx * fz, w.yz += q.dy * fz;
         }
@@ -185,7 +208,7 @@ class PairForce final : public ForceTerm {
       const Vec3 fs = d * (s.factor * f_over_r);
       force[s.i] += fs;
       force[s.j] -= fs;
-      energy += s.factor * e;
+      energy += s.factor * (e - p.energy_shift);
       virial.add_outer(d, fs);
     }
     return energy;
@@ -196,6 +219,7 @@ class PairForce final : public ForceTerm {
   std::vector<Params> table_;
   double max_cutoff_;
   std::vector<ScaledPair> scaled_pairs_;
+  mutable ChunkForces chunk_forces_;  // scratch of compute()
 };
 
 }  // namespace deli

@@ -105,6 +105,11 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (!run) root.fail("missing the [run] table (steps = ...)");
   input.steps = run->integer("steps");
   if (input.steps < 0) run->fail("must not be negative", "steps");
+  if (run->has("threads")) {
+    const std::int64_t threads = run->integer("threads");
+    if (threads < 1 || threads > 4096) run->fail("must be from 1 to 4096", "threads");
+    input.threads = static_cast<int>(threads);
+  }
   run->finish();
 
   const std::vector<OutputFile> output_files = read_output(root, input);

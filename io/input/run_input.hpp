@@ -40,6 +40,7 @@ struct RunInput {
   double timestep = 0.005;
   double skin = 0.3;
   std::int64_t steps = 0;
+  int threads = 0;  // [run] threads; 0: OpenMP's default (OMP_NUM_THREADS, else all cores)
   ThermoOutputSpec thermo;
   TrajectorySpec trajectory;
   DumpOutputSpec dump;

@@ -146,7 +146,7 @@ TEST(PairMixing, LorentzBerthelotMatchesAnalyticEnergy) {
     const PairCoefficient& mixed = coeffs.at(0, 1);
     EXPECT_DOUBLE_EQ(mixed.values[0], std::sqrt(0.5));
     EXPECT_DOUBLE_EQ(mixed.values[1], 1.2);
-    const auto params = LennardJones::make(mixed.values[0], mixed.values[1], mixed.cutoff, false);
+    const auto params = LennardJones::make(mixed.values[0], mixed.values[1], mixed.cutoff);
     double f_over_r, e;
     LennardJones::evaluate(params, r * r, f_over_r, e);
     const double sr6 = std::pow(1.2 / r, 6);

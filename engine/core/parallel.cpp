@@ -1,0 +1,27 @@
+#include "core/parallel.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace deli {
+
+int thread_count() {
+#ifdef _OPENMP
+  return std::max(1, omp_get_max_threads());
+#else
+  return 1;
+#endif
+}
+
+void set_thread_count(int n) {
+  if (n < 1) throw std::invalid_argument("thread count " + std::to_string(n) + " is below 1");
+#ifdef _OPENMP
+  omp_set_num_threads(n);
+#else
+  if (n > 1) {
+    throw std::invalid_argument("this deli was built without OpenMP: it runs on one thread only");
+  }
+#endif
+}
+
+}  // namespace deli

@@ -1,0 +1,97 @@
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <exception>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace deli {
+
+// Threads the loops below use: OpenMP's (OMP_NUM_THREADS, else all cores; `deli run
+// --threads` and [run] threads set it); 1 in a build without OpenMP.
+int thread_count();
+// n >= 1. Throws std::invalid_argument in a build without OpenMP when n > 1.
+void set_thread_count(int n);
+
+// Below this many items a loop runs on the calling thread alone: starting a parallel region
+// costs microseconds, more than a thousand cheap items.
+inline constexpr std::size_t kParallelMinimum = 1024;
+
+// How many chunks a loop over n items is cut into: the thread count, or 1 for short loops.
+inline int chunks_for(std::size_t n) {
+  return n < kParallelMinimum ? 1 : thread_count();
+}
+
+struct IndexRange {
+  std::size_t begin, end;
+};
+// Chunk c of `chunks` contiguous, near-equal chunks of [0, n).
+inline IndexRange chunk_range(std::size_t n, int c, int chunks) {
+  const auto k = static_cast<std::size_t>(chunks);
+  return {n * static_cast<std::size_t>(c) / k, n * static_cast<std::size_t>(c + 1) / k};
+}
+
+// Runs body(c, begin, end) for the chunks c = 0..chunks-1 of [0, n), in parallel. The
+// partition depends on n and `chunks` alone (never on which thread runs a chunk), so a
+// result combined chunk by chunk in chunk order is the same on every run. An exception from
+// a chunk is rethrown once all have finished: the lowest chunk's, the one a serial loop
+// would have met first.
+template <class Body>
+void for_each_chunk(std::size_t n, int chunks, Body&& body) {
+  if (chunks <= 1) {
+    body(0, std::size_t{0}, n);
+    return;
+  }
+  std::vector<std::exception_ptr> failed(static_cast<std::size_t>(chunks));
+#pragma omp parallel num_threads(chunks)
+  {
+#ifdef _OPENMP
+    const int first = omp_get_thread_num(), stride = omp_get_num_threads();
+#else
+    const int first = 0, stride = 1;
+#endif
+    for (int c = first; c < chunks; c += stride) {
+      try {
+        const IndexRange r = chunk_range(n, c, chunks);
+        body(c, r.begin, r.end);
+      } catch (...) {
+        failed[static_cast<std::size_t>(c)] = std::current_exception();
+      }
+    }
+  }
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+// body(i) for every i in [0, n), items independent of each other: the same result on any
+// number of threads.
+template <class Body>
+void parallel_for(std::size_t n, Body&& body) {
+  for_each_chunk(n, chunks_for(n), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) body(i);
+  });
+}
+
+// The sum over i in [0, n) of term(i) (T: double, Vec3, SymTensor): each chunk sums its
+// items in order, the chunk sums are added in chunk order. One chunk is the serial loop's
+// sum bit for bit; more chunks regroup the additions (round-off, fixed per thread count).
+template <class T, class Term>
+T ordered_sum(std::size_t n, Term&& term) {
+  const int chunks = chunks_for(n);
+  std::vector<T> partial(static_cast<std::size_t>(chunks));
+  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    T sum{};
+    for (std::size_t i = begin; i < end; ++i) sum += term(i);
+    partial[static_cast<std::size_t>(c)] = sum;
+  });
+  T total = partial[0];
+  for (std::size_t c = 1; c < partial.size(); ++c) total += partial[c];
+  return total;
+}
+
+}  // namespace deli

@@ -1,0 +1,128 @@
+// Threads (OpenMP): the same input on as many threads gives the same numbers bit for bit;
+// across thread counts only the order of additions changes (forces, energies and virial
+// agree to round-off), and the neighbour list is the same list. The expected values are
+// the one-thread evaluation of the same code (the serial loop, bit for bit: same_results.sh
+// against main).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/parallel.hpp"
+#include "input/run_input.hpp"
+#include "neighbor/neighbor_list.hpp"
+#include "support/test_systems.hpp"
+
+namespace deli {
+namespace {
+
+// Sets the thread count for a scope (the tests run with OMP_NUM_THREADS=1).
+class ThreadCount {
+ public:
+  explicit ThreadCount(int n) : before_(thread_count()) { set_thread_count(n); }
+  ~ThreadCount() { set_thread_count(before_); }
+  ThreadCount(const ThreadCount&) = delete;
+  ThreadCount& operator=(const ThreadCount&) = delete;
+
+ private:
+  int before_;
+};
+
+#ifdef _OPENMP
+constexpr bool kThreaded = true;
+#else
+constexpr bool kThreaded = false;
+#endif
+
+// 100 harmonic chains of 40 beads: 4000 particles and 3900 bonds, both past the length
+// from which loops are cut into chunks, with shifted LJ and bonded exclusions.
+RunInput chain_melt() {
+  RunInput input = load_run_input(DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000_harmonic.toml");
+  testing::jiggle(input.system.particles, 0.05, 11);
+  return input;
+}
+
+bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].x != b[i].x || a[i].y != b[i].y || a[i].z != b[i].z) return false;
+  }
+  return true;
+}
+
+TEST(Threads, TwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const RunInput input = chain_melt();
+  testing::Evaluated one, two, again;
+  {
+    const ThreadCount threads(1);
+    one = testing::evaluate(input);
+  }
+  {
+    const ThreadCount threads(2);
+    two = testing::evaluate(input);
+    again = testing::evaluate(input);
+  }
+  EXPECT_TRUE(same_bits(two.force, again.force));
+  EXPECT_EQ(two.evaluation.potential, again.evaluation.potential);
+  EXPECT_EQ(two.evaluation.virial.trace(), again.evaluation.virial.trace());
+
+  // Across thread counts: each force a sum of some 40 terms of size up to ~100 (bonds), so
+  // a regrouping moves it by a few ulps of that size.
+  double largest = 0.0, worst = 0.0;
+  for (std::size_t i = 0; i < one.force.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      largest = std::max(largest, std::abs(one.force[i][a]));
+      worst = std::max(worst, std::abs(one.force[i][a] - two.force[i][a]));
+    }
+  }
+  EXPECT_LT(worst, 1e-12 * largest);
+  EXPECT_NEAR(two.evaluation.potential, one.evaluation.potential,
+              1e-13 * std::abs(one.evaluation.potential));
+  EXPECT_NEAR(two.evaluation.virial.trace(), one.evaluation.virial.trace(),
+              1e-13 * std::abs(one.evaluation.virial.trace()));
+}
+
+TEST(Threads, NeighbourListIsTheSameListOnAnyThreadCount) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  // Positions inside the box, as a run wraps them: the list then has image codes too.
+  const RunInput input =
+      load_run_input(DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000_harmonic.toml");
+  NeighborList serial(2.5, 0.3), threaded(2.5, 0.3);
+  {
+    const ThreadCount threads(1);
+    serial.build(input.system.particles.position, input.system.box);
+  }
+  {
+    const ThreadCount threads(2);
+    threaded.build(input.system.particles.position, input.system.box);
+  }
+  EXPECT_EQ(serial.neighbors(), threaded.neighbors());
+  EXPECT_EQ(serial.offsets(), threaded.offsets());
+  EXPECT_EQ(serial.image_codes(), threaded.image_codes());
+  EXPECT_FALSE(serial.image_codes().empty());
+}
+
+TEST(Threads, OrderedSumOnOneChunkIsTheSerialSum) {
+  std::vector<double> terms(5000);
+  for (std::size_t i = 0; i < terms.size(); ++i) terms[i] = 1.0 / static_cast<double>(i + 1);
+  double serial = 0.0;
+  for (double t : terms) serial += t;
+  const ThreadCount threads(1);
+  EXPECT_EQ(ordered_sum<double>(terms.size(), [&](std::size_t i) { return terms[i]; }), serial);
+}
+
+TEST(Threads, AChunksExceptionIsTheOneASerialLoopMeetsFirst) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const ThreadCount threads(2);
+  try {
+    for_each_chunk(100, 2, [](int c, std::size_t, std::size_t) {
+      throw std::runtime_error("chunk " + std::to_string(c));
+    });
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "chunk 0");
+  }
+}
+
+}  // namespace
+}  // namespace deli
