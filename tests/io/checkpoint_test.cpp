@@ -219,7 +219,7 @@ namespace {
 // sleep sent the signal too early when start-up was slow (a sanitizer build under load), and
 // before the handlers a background job ignores SIGINT and dies of SIGTERM.
 std::string wait_for_first_row(const std::string& log) {
-  return "i=0; until grep -q \"^ *0 \" " + log +
+  return "i=0; until grep -qs \"^ *0 \" " + log +
          " || [ $i -ge 1200 ]; do sleep 0.1; i=$((i+1)); done; ";
 }
 
