@@ -14,8 +14,8 @@ jobs=${DELI_JOBS:-$(nproc)}
 
 # -O1: the reports keep useful stacks; -g1: line numbers without full debug info (the link
 # stays small). float-cast-overflow: a double out of range cast to an integer (a hostile
-# count); GCC does not include it in "undefined". -O2 was measured and is not worth it: the
-# build took 1.6x the CPU time (982 s against 602 s) and the slowest tests ran no faster
+# count); GCC does not include it in "undefined". -O2 was measured and is not worth it: it
+# compiles 12-28 % slower (heavy files, back to back) and the slowest tests ran no faster
 # (ShadowEnergy 217 s against 228 s, VelocityVerlet.LjLiquid 193 against 191, loaded machine):
 # the sanitizers' checks, not the optimiser, set their pace.
 flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all"
