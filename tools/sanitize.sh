@@ -14,7 +14,10 @@ jobs=${DELI_JOBS:-$(nproc)}
 
 # -O1: the reports keep useful stacks; -g1: line numbers without full debug info (the link
 # stays small). float-cast-overflow: a double out of range cast to an integer (a hostile
-# count); GCC does not include it in "undefined".
+# count); GCC does not include it in "undefined". -O2 was measured and is not worth it: it
+# compiles 12-28 % slower (heavy files, back to back) and the slowest tests ran no faster
+# (ShadowEnergy 217 s against 228 s, VelocityVerlet.LjLiquid 193 against 191, loaded machine):
+# the sanitizers' checks, not the optimiser, set their pace.
 flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all"
 if [ ! -f build-asan/Makefile ]; then
   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Sanitize \
@@ -23,21 +26,29 @@ if [ ! -f build-asan/Makefile ]; then
 fi
 cmake --build build-asan -j "$jobs"
 
-# Left out, for CI time only (each costs minutes under ASan, and runs code the other tests
-# run, for longer): the statistical and long-run tests, which average over 1e4-1e6 steps of
-# a 4000-atom or 32000-atom system, and validation of the two 32000-atom and the
-# chain-benchmark inputs. They run in the plain pass (./setup.sh test); run them here with
+# Not run here: the tests that run no deli code, the layer probes (Layers.*: one #include
+# compiled each, and a Python check of the sources) and the configure step of a fresh machine
+# (Setup.*), which the plain pass (./setup.sh test) runs on the same sources.
+skip="^(Layers|Setup)\\."
+# Left out for CI time only (the CI budget is 20 minutes on 2 cores, and the plain pass runs
+# them): the long statistical tests, which average over 1e4-1e6 steps of 864 to 32000 atoms
+# and cost 10 to 15 times their plain time under the sanitizers (measured, loaded machine:
+# ShadowEnergy 217 s, VelocityVerlet.LjLiquid 193 s, each Both/Thermostat 60-110 s,
+# LangevinCrosscheck about 156 s, the 32000-atom and chain-benchmark validations 50-84 s each;
+# together more than the whole CI budget's margin). They run here with
 #   DELI_SANITIZE_ALL=1 tools/sanitize.sh
-long="ShadowEnergy\.FluctuatesFarLessThanTheEnergy|VelocityVerlet\.LjLiquidEnergyBounded"
-long+="|LangevinCrosscheck\.|Both/Thermostat\.|Pressure\.HardSphereFluid"
+long="ShadowEnergy\\.FluctuatesFarLessThanTheEnergy|VelocityVerlet\\.LjLiquidEnergyBounded"
+long+="|LangevinCrosscheck\\.|Both/Thermostat\\.|Pressure\\.HardSphereFluid"
 long+="|ValidatesAgainstOpenMMAndLammps/.*(32000|chain_benchmark)"
-long+="|PaperExamples\.PogoStickBoundedTo1e5|GviFeasibility\.PogoStickShadowReflections"
-long+="|Thermostatted/EveryIntegrator\.|PaperReproduction\."
-# Left out because LeakSanitizer itself fails: after both tests on chains_4000_harmonic pass,
-# its tracer takes a SIGSEGV at the exit leak check ("LeakSanitizer has encountered a fatal
-# error"), only on this input (seen in the full run; not investigated yet).
-long+="|ShippedInput\..*/lj_chains_chains_4000_harmonic_toml"
+long+="|PaperExamples\\.PogoStickBoundedTo1e5|GviFeasibility\\.PogoStickShadowReflections"
+long+="|Thermostatted/EveryIntegrator\\.|PaperReproduction\\."
 [ -n "${DELI_SANITIZE_ALL:-}" ] && long="^$"
+# The two cross-checks of chains_4000_harmonic run again: LeakSanitizer's tracer took a
+# SIGSEGV once at their exit leak check (after both had passed; -O1, loaded machine), and
+# not in 8 runs since (4 of each, an -O2 build, loaded). That is a known intermittent failure
+# of the sanitizer runtime itself (google/sanitizers#1353, "Tracer caught signal 11" after
+# the test body passed), not a report; should it recur, LSAN_OPTIONS=verbosity=1:log_threads=1
+# shows which thread the tracer was scanning.
 
 # allocator_may_return_null: an impossible size gets NULL, as from glibc. A damaged
 # checkpoint (Checkpoint.EverySingleByteFlipIsRefusedOrHarmless) makes HDF5's metadata
@@ -46,19 +57,9 @@ long+="|ShippedInput\..*/lj_chains_chains_4000_harmonic_toml"
 export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=0:check_initialization_order=1:allocator_may_return_null=1:suppressions=$here/asan.supp"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0"
-# The tests that start OpenMM or LAMMPS (the cross-check binary, and `deli validate`
-# through the command line) leak what those libraries keep to the end. LSan's fast
-# unwinder stops at their uninstrumented frames, and OpenMPI's components are dlclosed
-# before the leak check (their frames lose their names), so these tests unwind with the
-# slow, complete unwinder: the suppressions then match the library frames. It costs about
-# 1.7x on allocation-heavy code, so only there.
-crosscheck="$(build-asan/tests/deli_crosscheck_tests --gtest_list_tests |
-  awk '/^[^ ].*\.$/ {sub(/\.$/, ""); print $1}' | sort -u | paste -sd'|')"
-crosscheck="^($crosscheck)\\."
-
+# The cross-check tests, which start OpenMM and LAMMPS, add fast_unwind_on_malloc=0 to
+# ASAN_OPTIONS (their ctest property, tests/CMakeLists.txt): LSan's fast unwinder stops at
+# those libraries' frames, so only complete stacks match lsan.supp. It costs about 1.7x on
+# allocation-heavy code, so only there.
 cd build-asan
-status=0
-ctest --output-on-failure -j "$jobs" -E "$crosscheck|$long" "$@" || status=1
-ASAN_OPTIONS="$ASAN_OPTIONS:fast_unwind_on_malloc=0" \
-  ctest --output-on-failure -j "$jobs" -R "$crosscheck" -E "$long" "$@" || status=1
-exit $status
+ctest --output-on-failure -j "$jobs" -E "$skip|$long" "$@"

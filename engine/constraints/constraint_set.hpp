@@ -47,6 +47,10 @@ struct SolverLimits {
   // Reflection (Algorithm 2), solves per cluster. Fallback: inelastic projection
   // (`stalled_reflections`).
   int reflection_solves = 100;
+  // Each reflection's non-negative QP (Lawson-Hanson), iterations per solve; 0 (not an
+  // input value): 10 n + 10 for n rows (finite termination takes about n; the guard against
+  // cycling at a degenerate vertex a few more). Fallback: see reflect() (`qp_caps`).
+  int qp_iterations = 0;
   // The implicit midpoint's fixed point (midpoint Lagrangian, direct and collision
   // baselines), passes per step. Stop.
   int midpoint_passes = 200;

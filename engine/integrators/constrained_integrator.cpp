@@ -396,10 +396,9 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
     ShadowOperator shadow;
     if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, c, p);
     const std::vector<Vec3> x_local = gather(x, cluster.particles);
-    const ReflectionStats r =
-        reflect(local, equality, x_local, p_local, system.box, reflection_,
-                constraints_.tolerances.velocity, constraints_.limits.reflection_solves,
-                energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
+    const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
+                                      constraints_.tolerances.velocity, constraints_.limits,
+                                      energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
     for (std::size_t k = 0; k < local.rows.size(); ++k) {
       step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
     }

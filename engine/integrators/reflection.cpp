@@ -42,7 +42,7 @@ Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool wit
 
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
-                        ReflectionOperator op, double tolerance, int max_iterations,
+                        ReflectionOperator op, double tolerance, const SolverLimits& limits,
                         const ShadowOperator* shadow) {
   std::vector<int> eq_rows, in_rows;
   for (std::size_t k = 0; k < cluster.rows.size(); ++k) {
@@ -85,7 +85,7 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     if (op == ReflectionOperator::generalized && set.empty()) break;
     if (op == ReflectionOperator::moreau && iteration == 1) break;
     for (int k : set) ever_in_set[k] = true;
-    if (iteration >= max_iterations) {
+    if (iteration >= limits.reflection_solves) {
       stats.capped = true;
       stopped = true;
       break;
@@ -117,7 +117,8 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
           check.vectorD().minCoeff() > 1e-14 * Qs.diagonal().cwiseAbs().maxCoeff();
       if (positive) {
         const SolverStatus qp = solve_nonnegative_qp(
-            Qs, cs, lambda, 1e-14 * std::max(1.0, cs.lpNorm<Eigen::Infinity>()));
+            Qs, cs, lambda, 1e-14 * std::max(1.0, cs.lpNorm<Eigen::Infinity>()),
+            limits.qp_iterations);
         if (!qp.converged) ++stats.qp_caps;
         solved = qp.converged && lambda.lpNorm<Eigen::Infinity>() > 0.0;
       }
@@ -125,8 +126,8 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     }
     bool optimal = true;
     if (!solved) {
-      const SolverStatus qp =
-          solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+      const SolverStatus qp = solve_nonnegative_qp(
+          Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()), limits.qp_iterations);
       if (!qp.converged) ++stats.qp_caps;
       optimal = qp.converged;
     }
@@ -169,8 +170,8 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     const Eigen::MatrixXd Q = NV.transpose() * KN;
     const Eigen::VectorXd c = KN.transpose() * flat;
     Eigen::VectorXd lambda;
-    const SolverStatus qp =
-        solve_nonnegative_qp(Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()));
+    const SolverStatus qp = solve_nonnegative_qp(
+        Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()), limits.qp_iterations);
     if (!qp.converged) ++stats.qp_caps;
     flat += NV * lambda;
     for (std::size_t k = 0; k < rows.size(); ++k) {

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "constraints/clusters.hpp"
+#include "constraints/constraint_set.hpp"
 #include "forces/force_term.hpp"
 
 namespace deli {
@@ -49,21 +50,21 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
 // |L^T (N lambda + 2 p)| over lambda >= 0 (K = L L^T), whose optimality conditions give
 // lambda^T N^T K (N lambda + 2 p) = 0: E conserved exactly whatever the number of rows.
 // Rows with normal velocity below -tolerance count as approaching. Algorithm 2 always ends:
-// at `max_iterations`, when a solve stalls (approaching, no energy-preserving impulse) or
+// at `limits.reflection_solves`, when a solve stalls (approaching, no energy-preserving impulse) or
 // when it cycles (momenta repeat bit for bit), the rows met so far get an inelastic
 // projection instead and the event is flagged in the stats.
 // With `shadow`, E is Verlet's shadow Hamiltonian; a solve where it admits no reflection
 // (an approaching row with grad g^T K p >= 0, or K not positive on the normals) falls back
 // to E = H for that solve and is counted.
-// A QP solve that ends at its iteration cap (not optimal, so not energy-preserving) is
-// counted in qp_caps and handled as the nearest safe case: a shadow solve falls back to H,
-// an H solve stops Algorithm 2 as a stall (inelastic projection), and a capped inelastic
-// projection applies its feasible, non-optimal impulses (the feasibility guard of the
+// A QP solve that ends at its iteration cap (`limits.qp_iterations`; not optimal, so not
+// energy-preserving) is counted in qp_caps and handled as the nearest safe case: a shadow solve
+// falls back to H, an H solve stops Algorithm 2 as a stall (inelastic projection), and a capped
+// inelastic projection applies its feasible, non-optimal impulses (the feasibility guard of the
 // position update keeps the step from ending overlapped).
 [[nodiscard]] ReflectionStats reflect(const LocalCluster& cluster,
                                       const std::vector<bool>& equality, const std::vector<Vec3>& q,
                                       std::vector<Vec3>& p, const Box& box, ReflectionOperator op,
-                                      double tolerance, int max_iterations,
+                                      double tolerance, const SolverLimits& limits,
                                       const ShadowOperator* shadow = nullptr);
 
 }  // namespace deli

@@ -1,5 +1,6 @@
 #include "simulation/interrupt.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -24,8 +25,17 @@ extern "C" void on_signal(int) {
 }  // namespace
 
 void install_interrupt_handlers() {
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  // Each signal blocks both while its handler runs: a SIGTERM arriving inside the SIGINT
+  // handler between its test and its set of `requested` would otherwise also see a first
+  // signal, and neither would end the process.
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  sigaddset(&action.sa_mask, SIGINT);
+  sigaddset(&action.sa_mask, SIGTERM);
+  action.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
 }
 
 bool interrupt_requested() {

@@ -214,6 +214,11 @@ ConstraintSet read_constraints(std::optional<TomlTable> table, System& system, b
       if (read < 1 || read > 1000000) lim->fail("must be an integer from 1 to 1000000", key);
       *value = static_cast<int>(read);
     }
+    // The QP's limit has no fixed default (10 n + 10 for n rows): absent, it stays 0.
+    const std::int64_t qp = lim->integer("qp_iterations", limits.qp_iterations);
+    if (qp < 0 || qp > 1000000 || (qp == 0 && lim->has("qp_iterations")))
+      lim->fail("must be an integer from 1 to 1000000", "qp_iterations");
+    limits.qp_iterations = static_cast<int>(qp);
     lim->finish();
   }
   t.finish();

@@ -214,6 +214,15 @@ TEST(Checkpoint, EverySingleByteFlipIsRefusedOrHarmless) {
 namespace deli {
 namespace {
 
+// Shell text that waits until the run logging to `log` has printed its step-0 thermo row,
+// which comes after its interrupt handlers are installed (two minutes at most): a fixed
+// sleep sent the signal too early when start-up was slow (a sanitizer build under load), and
+// before the handlers a background job ignores SIGINT and dies of SIGTERM.
+std::string wait_for_first_row(const std::string& log) {
+  return "i=0; until grep -qs \"^ *0 \" " + log +
+         " || [ $i -ge 1200 ]; do sleep 0.1; i=$((i+1)); done; ";
+}
+
 // The melt run for a very long time, for the signal tests; `steps` makes its restart input.
 std::string long_melt(const std::string& dir, const std::string& name, long long steps) {
   const std::string input = dir + "/" + name + ".toml";
@@ -239,7 +248,8 @@ TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
     std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
     const std::string input = long_melt(dir, "long", 100000000);
     const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " +
-                                dir + "/stop.log 2>&1 & pid=$!; sleep 1; kill -" + signal +
+                                dir + "/stop.log 2>&1 & pid=$!; " +
+                                wait_for_first_row(dir + "/stop.log") + "kill -" + signal +
                                 " $pid; wait $pid; echo $?'";
     EXPECT_EQ(testing::run_shell(command).output, "130\n") << "SIG" << signal;
     const Checkpoint c = read_checkpoint(dir + "/stop.h5");
@@ -275,7 +285,8 @@ TEST(Checkpoint, SigkillLeavesAReadableTrajectory) {
       << dir << "/run.csv\" }\ntrajectory = { file = \"" << dir
       << "/run.h5\", every = 10, forces = true }\n";
   const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " + dir +
-                              "/run.log 2>&1 & pid=$!; sleep 1.5; kill -KILL $pid; wait $pid; " +
+                              "/run.log 2>&1 & pid=$!; " + wait_for_first_row(dir + "/run.log") +
+                              "sleep 0.5; kill -KILL $pid; wait $pid; " +
                               "/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/killed_run_check.py " +
                               dir + "/run.h5 " + dir +
                               "/run.csv 10 " DELI_SOURCE_DIR "/inputs/lj_chains/melt.data 2>&1'";
@@ -311,23 +322,27 @@ std::string resting_point(const std::string& dir) {
 TEST(Checkpoint, SignalStopsAStepThatDoesNotEnd) {
   const std::string dir = ::testing::TempDir() + "/zeno";
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
-  const std::string command =
-      "sh -c '" + std::string(DELI_BINARY) + " run " + resting_point(dir) + " > " + dir +
-      "/run.log 2>&1 & pid=$!; sleep 1; kill -INT $pid; wait $pid; echo $?'";
+  const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + resting_point(dir) +
+                              " > " + dir + "/run.log 2>&1 & pid=$!; " +
+                              wait_for_first_row(dir + "/run.log") +
+                              "kill -INT $pid; wait $pid; echo $?'";
   EXPECT_EQ(testing::run_shell(command).output, "3\n");  // the simulation stopped
   std::ifstream log(dir + "/run.log");
   const std::string text((std::istreambuf_iterator<char>(log)), {});
   EXPECT_NE(text.find("interrupted during step 1"), std::string::npos) << text;
 }
 
-// A second signal (here SIGTERM right after SIGINT: two different signals are both
-// delivered) ends the process at once, without waiting for the step and the checkpoint.
+// A second signal (here SIGTERM after SIGINT: two different signals are both delivered)
+// ends the process at once, without waiting for the step and the checkpoint. Both are sent
+// while the process is stopped (SIGSTOP), so both are pending when it continues: sent to a
+// running process, the first could be honoured, step and checkpoint, before the second came.
 TEST(Checkpoint, SecondSignalStopsAtOnce) {
   const std::string dir = ::testing::TempDir() + "/second_signal";
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " +
                               long_melt(dir, "long", 100000000) + " > " + dir +
-                              "/run.log 2>&1 & pid=$!; sleep 1; kill -INT $pid; kill -TERM $pid; "
+                              "/run.log 2>&1 & pid=$!; " + wait_for_first_row(dir + "/run.log") +
+                              "kill -STOP $pid; kill -INT $pid; kill -TERM $pid; kill -CONT $pid; "
                               "wait $pid; echo $?'";
   EXPECT_EQ(testing::run_shell(command).output, "130\n");
   std::ifstream log(dir + "/run.log");
@@ -350,8 +365,9 @@ TEST(Checkpoint, InterruptCheckpointGoesToTheWorkingDirectory) {
                           "coeffs = [{ type = 1, k = 30.0, r0 = 1.5, epsilon = 1.0, sigma = 1.0 "
                           "}]\n[integrator]\ntimestep = 0.005\n[run]\nsteps = 100000000\n";
   const std::string command = "sh -c 'cd " + dir + "/work && " + std::string(DELI_BINARY) +
-                              " run " + input + " > run.log 2>&1 & pid=$!; sleep 1; kill -INT " +
-                              "$pid; wait $pid; echo $?'";
+                              " run " + input + " > run.log 2>&1 & pid=$!; " +
+                              wait_for_first_row(dir + "/work/run.log") +
+                              "kill -INT $pid; wait $pid; echo $?'";
   EXPECT_EQ(testing::run_shell(command).output, "130\n");
   EXPECT_GT(read_checkpoint(dir + "/work/plain.toml.interrupted.h5").step, 0);
   EXPECT_FALSE(std::ifstream(dir + "/input/plain.toml.interrupted.h5").good());

@@ -155,6 +155,45 @@ TEST(SolverLimits, ActiveSetLimitHitIsCountedAndTheStepStaysFeasible) {
   EXPECT_LE(z, 0.03 + 1e-10);
 }
 
+// The reflection QP's limit: a point particle driven into a corner (floor and side wall,
+// both 0.01 away, velocity (-5, 0, -5), h = 0.01) needs a two-row QP. Lawson-Hanson enters one
+// row per iteration and confirms in one more, so qp_iterations = 1 stops every such solve
+// unfinished: each is counted in qp_caps, the reflection is handled as a stall (inelastic
+// projection) and the feasibility guard keeps the step clear of both walls. With the default limit
+// (10 n + 10) nothing is counted and the bounce is elastic: orthogonal normals reverse each normal
+// component, v = (5, 0, 5) (analytic).
+TEST(SolverLimits, QpLimitHitIsCountedAsAStall) {
+  auto corner_step = [](const std::string& limits) {
+    RunInput input = testing::input_with_atoms(
+        "QpLimit" + std::to_string(::getpid()), {{{0.01, 0, 0.01}, {-5.0, 0, -5.0}}}, "fff",
+        {-10, -10, -10}, {10, 10, 10},
+        "[forcefield.pair]\nstyle = \"none\"\n[constraints]\nwalls = [{ type = \"plane\", "
+        "point = [0, 0, 0], normal = [0, 0, 1] }, { type = \"plane\", point = [0, 0, 0], "
+        "normal = [1, 0, 0] }]\n" +
+            limits + "[integrator]\ntype = \"gvi\"\ntimestep = 0.01\n[run]\nsteps = 0\n");
+    Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+    gvi.setup(input.system);
+    gvi.step(input.system, true);
+    return std::pair{gvi.take_statistics(), input.system.particles.velocity[0]};
+  };
+  const auto [capped, v_capped] = corner_step("limits = { qp_iterations = 1 }\n");
+  EXPECT_GE(statistic(capped, "qp_caps"), 1);
+  EXPECT_GE(statistic(capped, "stalled_reflections"), 1);
+  EXPECT_GT(statistic(capped, "min_gap"), -1e-10);
+  // Not the elastic corner bounce: the stall's inelastic projection stops the row it
+  // entered, then the default feasibility guard (restore) gives the start's energy back along
+  // the normals (measured here: v = (7.07, 0, 0)).
+  EXPECT_GT(norm(v_capped - Vec3{5.0, 0, 5.0}), 1.0);
+  EXPECT_NEAR(dot(v_capped, v_capped), 50.0, 1e-9);
+  const auto [full, v_full] = corner_step("");
+  EXPECT_EQ(statistic(full, "qp_caps"), 0);
+  EXPECT_EQ(statistic(full, "stalled_reflections"), 0);
+  EXPECT_GT(statistic(full, "min_gap"), -1e-10);
+  EXPECT_NEAR(v_full.x, 5.0, 1e-12);
+  EXPECT_NEAR(v_full.y, 0.0, 1e-12);
+  EXPECT_NEAR(v_full.z, 5.0, 1e-12);
+}
+
 // [constraints.limits]: each limit an integer from 1 to 1e6; a misspelt key is refused
 // with the known ones suggested, as every table of the input.
 TEST(SolverLimits, InputRefusesBadLimits) {
@@ -170,7 +209,10 @@ TEST(SolverLimits, InputRefusesBadLimits) {
   EXPECT_EQ(good.constraints.limits.newton, 7);
   EXPECT_EQ(good.constraints.limits.feasibility_rounds, 3);
   EXPECT_EQ(good.constraints.limits.active_set_rounds, SolverLimits{}.active_set_rounds);
+  EXPECT_EQ(good.constraints.limits.qp_iterations, 0);  // absent: 10 n + 10 per solve
+  EXPECT_EQ(read("limits = { qp_iterations = 5 }\n").constraints.limits.qp_iterations, 5);
   for (const char* bad : {"limits = { newton = 0 }\n", "limits = { line_search = 2000000 }\n",
+                          "limits = { qp_iterations = 0 }\n", "limits = { qp_iterations = -1 }\n",
                           "limits = { midpoint_passes = 1.5 }\n"}) {
     try {
       (void)read(bad);

@@ -50,9 +50,8 @@ Outcome generic(const Constraint& row, const std::vector<Vec3>& x, std::vector<V
   const LocalCluster local = lone_cluster(row, mass);
   std::vector<Vec3> x_local, p_local;
   for (std::int32_t g : local.particles) x_local.push_back(x[g]), p_local.push_back(p[g]);
-  const ReflectionStats stats =
-      reflect(local, {false}, x_local, p_local, box, ReflectionOperator::generalized, tolerance,
-              SolverLimits{}.reflection_solves);
+  const ReflectionStats stats = reflect(local, {false}, x_local, p_local, box,
+                                        ReflectionOperator::generalized, tolerance, SolverLimits{});
   for (std::size_t k = 0; k < local.particles.size(); ++k) p[local.particles[k]] = p_local[k];
   return {p, stats.row_impulse[0], stats.reflected};
 }

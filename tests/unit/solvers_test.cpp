@@ -135,9 +135,8 @@ TEST(NonnegativeQp, CapHitIsReported) {
 TEST(Reflection, DependentPairOfNormalsBouncesOnce) {
   const LocalCluster cluster = cluster_of({2.0}, {floor_at(0, 0.0), floor_at(0, 0.0)});
   std::vector<Vec3> p{{0.6, -0.2, -2.0}};
-  const ReflectionStats stats =
-      reflect(cluster, {false, false}, {{0.3, 0.1, 0.0}}, p, kOpenBox,
-              ReflectionOperator::generalized, 1e-10, kLimits.reflection_solves);
+  const ReflectionStats stats = reflect(cluster, {false, false}, {{0.3, 0.1, 0.0}}, p, kOpenBox,
+                                        ReflectionOperator::generalized, 1e-10, kLimits);
   EXPECT_FALSE(stats.capped);
   EXPECT_FALSE(stats.cycled);
   expect_vec_near(p[0], {0.6, -0.2, 2.0}, 1e-14);
