@@ -42,6 +42,10 @@ long+="|LangevinCrosscheck\\.|Both/Thermostat\\.|Pressure\\.HardSphereFluid"
 long+="|ValidatesAgainstOpenMMAndLammps/.*(32000|chain_benchmark)"
 long+="|PaperExamples\\.PogoStickBoundedTo1e5|GviFeasibility\\.PogoStickShadowReflections"
 long+="|Thermostatted/EveryIntegrator\\.|PaperReproduction\\."
+# Runs of the deli binary that the plain pass covers and whose engine code other tests run
+# here: the equation-of-state tool (tools/eos.py, several runs) and the two-thread runs
+# (their threaded loops run here in Threads.*; ASan does not look for races anyway).
+long+="|EquationOfState\\.|ThreadsRun\\."
 [ -n "${DELI_SANITIZE_ALL:-}" ] && long="^$"
 # The two cross-checks of chains_4000_harmonic run again: LeakSanitizer's tracer took a
 # SIGSEGV once at their exit leak check (after both had passed; -O1, loaded machine), and
