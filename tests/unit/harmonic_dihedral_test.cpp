@@ -61,7 +61,7 @@ TEST(HarmonicDihedral, EnergyIsTheFormulaAtKnownAngles) {
       // Turning l alone about z (the j-k axis) by a turns the construction's angle by a;
       // E is even in phi, so the torque on l is -dE/dphi = K d n sin(n phi) whichever sign
       // the torsion convention gives phi.
-      const Vec3& x = four_atoms(phi).particles.position[3];
+      const Vec3 x = four_atoms(phi).particles.position[3];
       const double torque = x.x * t.force[3].y - x.y * t.force[3].x;
       EXPECT_NEAR(torque, k * d * n * std::sin(n * phi), 1e-13)
           << "phi " << phi_degrees << " d " << d << " n " << n;
