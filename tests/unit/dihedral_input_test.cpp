@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "input/lammps_data.hpp"
+#include "support/scratch_files.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
@@ -71,19 +72,7 @@ const std::string kTable = "[forcefield.dihedral]\nstyle = \"harmonic\"\n";
 
 class DihedralInput : public ::testing::Test {
  protected:
-  void TearDown() override {
-    for (const std::string& path : paths_) std::filesystem::remove(path);
-  }
-  // One file per test and process: ctest runs tests in parallel.
-  std::string write_file(const std::string& contents) {
-    const std::string name = std::string("deli_DihedralInput_") +
-                             ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
-                             std::to_string(::getpid()) + "_" + std::to_string(paths_.size()) +
-                             ".data";
-    paths_.push_back((std::filesystem::temp_directory_path() / name).string());
-    std::ofstream(paths_.back(), std::ios::binary) << contents;
-    return paths_.back();
-  }
+  std::string write_file(const std::string& contents) { return files_.write(contents); }
   static std::string error_of(const std::string& toml) {
     try {
       testing::input_from(toml);
@@ -100,7 +89,7 @@ class DihedralInput : public ::testing::Test {
     }
     return "(no error)";
   }
-  std::vector<std::string> paths_;
+  testing::ScratchFiles files_{"deli_DihedralInput_", ".data"};
 };
 
 TEST_F(DihedralInput, DataFileSectionsAreRead) {
