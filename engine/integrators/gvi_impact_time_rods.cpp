@@ -91,6 +91,7 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
     };
     for (;;) {
       const double rest = h - now;
+      if (!(rest > 0.0)) return;  // the last contact closed the step
       const double rod_virial = drift(x, p, rest, end, &p_end);
       // Candidates: the rows whose gap closes along the chord from x to the drift's end (the
       // constrained path's secant), earliest first.
