@@ -41,6 +41,42 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   ws_.half.resize(n);
   for (std::size_t i = 0; i < n; ++i) ws_.half[i] = ws_.p[i] + f[i] * (0.5 * h);
   ws_.all_equality.assign(rods.size(), true);
+  bool forced = false;
+  for (std::size_t i = 0; i < n && !forced; ++i) forced = f[i].x != 0 || f[i].y != 0 || f[i].z != 0;
+
+  // The force correction of the straight drift (impact_time_drift.hpp) with rods: the drift's
+  // momenta p hold (h/2 - t) F too much for a contact at time t, so the reflection's impulse
+  // is the one the momenta at contact, p + (t - h/2) F projected onto the rods, would get;
+  // it is added to p (for one row without rods: the normal velocity after is
+  // -w + (h - 2t) a_n, as there). Refused (false: reflect p itself) where the momenta at
+  // contact do not approach the row or p with that impulse would not leave it.
+  std::vector<Vec3> at_contact(n), reflected(n);
+  auto reflect_velocity_at_contact = [&](System& sys, const std::vector<Constraint>& rows_here,
+                                         const std::vector<Vec3>& x_here, double t,
+                                         std::vector<Vec3>& p_here) {
+    for (std::size_t i = 0; i < n; ++i) at_contact[i] = p_here[i] + f[i] * (t - 0.5 * h);
+    project_momenta(sys, rods, x_here, at_contact);
+    reflected = at_contact;
+    const ConstraintStatistics counted = stats_;
+    const double virial_before = step_virial_;
+    reflect_clusters(sys, rows_here, rods.size(), x_here, reflected);
+    const Constraint& c = rows_here.back();
+    const ConstraintValue value = evaluate(c, x_here.data(), sys.box);
+    bool changed = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 impulse_i = reflected[i] - at_contact[i];
+      changed = changed || impulse_i.x != 0 || impulse_i.y != 0 || impulse_i.z != 0;
+      reflected[i] = p_here[i] + impulse_i;
+    }
+    if (!changed || normal_velocity(c, value.u, reflected, P) <= 0.0) {
+      stats_ = counted;
+      step_virial_ = virial_before;
+      ++stats_.fallbacks;
+      return false;
+    }
+    p_here = reflected;
+    return true;
+  };
 
   // RATTLE's position stage over time tau from positions x with momenta p: the end positions
   // into `to` and the momenta there (rod impulses included, before the velocity projection)
@@ -182,7 +218,9 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
       reflecting = rods;
       reflecting.push_back(ws_.nearby[*row]);
       const double before = step_virial_;
-      reflect_clusters(system, reflecting, rods.size(), x, p);
+      if (!forced || !reflect_velocity_at_contact(system, reflecting, x, now, p)) {
+        reflect_clusters(system, reflecting, rods.size(), x, p);
+      }
       virial += step_virial_ - before;
       step_virial_ = before;
       touched.push_back(ws_.nearby[*row]);
@@ -221,8 +259,6 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   stats_.active += events;
 
   timer.enter(Phase::momentum_update);
-  bool forced = false;
-  for (std::size_t i = 0; i < n && !forced; ++i) forced = f[i].x != 0 || f[i].y != 0 || f[i].z != 0;
   const double target = forced && events > 0 ? start_energy(system) : 0.0;
   if (!forced) touched.clear();
   ws_.x = x;
