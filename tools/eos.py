@@ -3,7 +3,7 @@
 
 tools/eos.py INPUT [--timesteps 0.005,0.0025,0.00125] [--time 20] [--equilibrate 2]
                    [--block 1] [--seeds 1,2] [--contact paper|impact_time] [--order 1]
-                   [--plot FILE] [--check PERCENT]
+                   [--packing-fraction ETA] [--plot FILE] [--check PERCENT]
 
 For each time step and seed the input is run with that step (and velocity seed, and
 [integrator] contact), thermo rows every `--block` time units. Each row after
@@ -16,7 +16,8 @@ contact = impact_time on hard spheres alone, which has no step error; a quadrati
 to noise-limited points moves c0 by more than it corrects), c0 the h -> 0 value, and compared with Carnahan-Starling, Z = (1 + e + e^2 - e^3) / (1 - e)^3,
 and the rate Enskog's theory gives from that Z: 6 (Z - 1) sqrt(kT / (pi m)) / sigma.
 The input must build an fcc lattice ([system.lattice]) of equal hard spheres
-(hard_spheres = { diameter = ... }) with no pair force; packing fraction from its density.
+(hard_spheres = { diameter = ... }) with no pair force; packing fraction from its density,
+or `--packing-fraction ETA` sets the lattice density to 6 ETA / (pi sigma^3).
 """
 import argparse
 import csv
@@ -45,6 +46,18 @@ def toml_value(v):
 
 
 def write_toml(table, path):
+    with open(path, "w") as f:
+        f.write(toml_dumps(table))
+
+
+def base_with_density(base, density):
+    """The input rewritten with its [system.lattice] density replaced (comments dropped)."""
+    table = tomllib.loads(base)
+    table["system"]["lattice"]["density"] = density
+    return toml_dumps(table)
+
+
+def toml_dumps(table):
     lines = []
 
     def section(name, t):
@@ -57,8 +70,7 @@ def write_toml(table, path):
                 section(f"{name}.{k}" if name else k, v)
 
     section("", table)
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
 
 
 def carnahan_starling(eta):
@@ -118,6 +130,8 @@ def main():
     parser.add_argument("--contact", choices=["paper", "impact_time"], default=None)
     parser.add_argument("--deli", default=os.path.join(os.path.dirname(__file__), "..", "build", "deli"))
     parser.add_argument("--workdir", default=None, help="where inputs and thermo files go")
+    parser.add_argument("--packing-fraction", type=float, default=None,
+                        help="run at this packing fraction (sets the lattice density)")
     parser.add_argument("--plot", default=None, help="PNG of Z(h) and the rate")
     parser.add_argument("--check", type=float, default=None,
                         help="exit 1 unless Z(h -> 0) is within this many percent of "
@@ -135,6 +149,13 @@ def main():
     except KeyError as e:
         sys.exit(f"eos.py: {args.input} needs an fcc [system.lattice] and "
                  f"[constraints] hard_spheres = {{ diameter = ... }} (missing {e})")
+    if args.packing_fraction is not None:
+        if not 0 < args.packing_fraction < 0.74:
+            sys.exit(f"eos.py: --packing-fraction {args.packing_fraction:g} is outside "
+                     f"(0, 0.74), the fcc close packing")
+        density = 6 * args.packing_fraction / (math.pi * sigma**3)
+        lattice["density"] = density
+        base = base_with_density(base, density)
     if lattice.get("type", "fcc") != "fcc":
         sys.exit(f"eos.py: {args.input}: only an fcc lattice is read (4 atoms per cell)")
     volume = atoms / density

@@ -31,8 +31,8 @@ enum class Lagrangian { verlet, midpoint };
 // How a hard-sphere or wall contact is resolved. `paper`: Algorithm 1 (reflection at the
 // start of the step whose prediction overlaps, then the position update). `impact_time`:
 // half kick, the exact hard-sphere and wall flow over h (straight flight, elastic
-// reflection at the instant of contact; impact_time_drift.hpp), half kick; Verlet only, no
-// rods or strings (README, "Contact treatment").
+// reflection at the instant of contact; impact_time_drift.hpp), half kick; Verlet only; with
+// rods or strings the RATTLE drift split at each contact (README, "Contact treatment").
 enum class ContactTreatment { paper, impact_time };
 
 struct GviOptions {
@@ -82,6 +82,7 @@ class Gvi final : public ConstrainedIntegrator {
   // The whole step with contact = impact_time (gvi_impact_time.cpp), and its input checks.
   void refuse_impact_times_unless_supported() const;
   void step_with_impact_times(System& system, bool tally);
+  void step_with_impact_times_and_rods(System& system, bool tally);  // gvi_impact_time_rods.cpp
 
   // The unconstrained step's displacement from the current positions for momenta `momenta`.
   void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d);

@@ -12,11 +12,6 @@
 namespace deli {
 
 void Gvi::refuse_impact_times_unless_supported() const {
-  if (!constraints_.equalities.empty()) {
-    throw InputError(
-        "[integrator] contact = \"impact_time\" resolves hard spheres and walls only: with rods "
-        "or strings use contact = \"paper\"");
-  }
   if (constraints_.linearized) {
     throw InputError(
         "[integrator] contact = \"impact_time\" finds exact contact times: linearized = true has "
@@ -30,6 +25,7 @@ void Gvi::refuse_impact_times_unless_supported() const {
 }
 
 void Gvi::step_with_impact_times(System& system, bool tally) {
+  if (!constraints_.equalities.empty()) return step_with_impact_times_and_rods(system, tally);
   PhaseTimer& timer = phase_timer();
   const Phase outer = timer.enter(Phase::prediction);
   Particles& P = system.particles;
