@@ -66,12 +66,14 @@ void RodChain::directions(const std::vector<Vec3>& x, const Box& box, std::vecto
   const std::size_t m = rows();
   u.resize(m);
   r.resize(m);
+  // Three passes, so that the square roots and the divisions of successive rods overlap
+  // (within one rod each waits for the last); the same operations as norm() and d / |d|.
   for (std::size_t k = 0; k < m; ++k) {
-    const Vec3 d = box.minimum_image(x[i_[k]] - x[j_[k]]);
-    const double length = norm(d);
-    r[k] = length;
-    u[k] = length > 0 ? d * (1.0 / length) : Vec3{};
+    u[k] = box.minimum_image(x[i_[k]] - x[j_[k]]);
+    r[k] = norm2(u[k]);
   }
+  for (std::size_t k = 0; k < m; ++k) r[k] = std::sqrt(r[k]);
+  for (std::size_t k = 0; k < m; ++k) u[k] = r[k] > 0 ? u[k] * (1.0 / r[k]) : Vec3{};
 }
 
 // The Thomas algorithm of solve_tridiagonal with each band entry made as
