@@ -57,7 +57,7 @@ Eigen::MatrixXd dense(const Tridiagonal& t) {
 TEST(Tridiagonal, SolvesChainSystemsAsDenseLU) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal;
-  for (Eigen::Index n : {1, 2, 3, 39, 200}) {
+  for (Eigen::Index n : {1, 2, 3, 39, 80}) {
     for (double tilt : {0.0, 0.05}) {
       const Tridiagonal t = chain_matrix(n, tilt, static_cast<std::uint64_t>(n) + 11);
       Eigen::VectorXd rhs(n);
