@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace deli {
 
@@ -65,36 +66,95 @@ void RodChain::directions(const std::vector<Vec3>& x, const Box& box, std::vecto
   const std::size_t m = rows();
   u.resize(m);
   r.resize(m);
+  // Three passes, so that the square roots and the divisions of successive rods overlap
+  // (within one rod each waits for the last); the same operations as norm() and d / |d|.
   for (std::size_t k = 0; k < m; ++k) {
-    const Vec3 d = box.minimum_image(x[i_[k]] - x[j_[k]]);
-    const double length = norm(d);
-    r[k] = length;
-    u[k] = length > 0 ? d * (1.0 / length) : Vec3{};
+    u[k] = box.minimum_image(x[i_[k]] - x[j_[k]]);
+    r[k] = norm2(u[k]);
   }
+  for (std::size_t k = 0; k < m; ++k) r[k] = std::sqrt(r[k]);
+  for (std::size_t k = 0; k < m; ++k) u[k] = r[k] > 0 ? u[k] * (1.0 / r[k]) : Vec3{};
 }
 
-// Entry by entry as ClusterRows::coupling_bands: each band entry starts at zero and takes its
-// particles' terms (k.sign * l.sign * w) * a_k . b_l in particle order.
-void RodChain::coupling_bands(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
-                              Tridiagonal& out) const {
+// The Thomas algorithm of solve_tridiagonal with each band entry made as
+// ClusterRows::coupling_bands makes it (starting at zero, its particles' terms
+// (k.sign * l.sign * w) * a_k . b_l in particle order), then scaled, as it is needed: the
+// same operations in the same order, without storing the bands.
+bool RodChain::solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>& b, double scale,
+                             const Eigen::VectorXd& minus_rhs, Eigen::VectorXd& x,
+                             Eigen::VectorXd& c) const {
   const auto m = static_cast<Eigen::Index>(rows());
-  out.resize_zero(m);
+  x.resize(m);
+  c.resize(m);
   const double* w = inverse_mass_.data();
-  for (Eigen::Index k = 0; k < m; ++k) {
+  auto diagonal = [&](Eigen::Index k) {
     const double d = dot(a[k], b[k]);
-    double diagonal = 0.0;
-    diagonal += 1.0 * w[low_[k]] * d;
-    diagonal += 1.0 * w[high_[k]] * d;
-    out.diagonal(k) = diagonal;
-    if (k + 1 < m) {
-      const double s = shared_sign_[k] * w[shared_[k]];
-      double upper = 0.0, lower = 0.0;
-      upper += s * dot(a[k], b[k + 1]);
-      lower += s * dot(a[k + 1], b[k]);
-      out.upper(k) = upper;
-      out.lower(k + 1) = lower;
-    }
+    double entry = 0.0;
+    entry += 1.0 * w[low_[k]] * d;
+    entry += 1.0 * w[high_[k]] * d;
+    return entry * scale;
+  };
+  // A(k, k+1) and A(k+1, k).
+  auto upper = [&](Eigen::Index k) {
+    double entry = 0.0;
+    entry += shared_sign_[k] * w[shared_[k]] * dot(a[k], b[k + 1]);
+    return entry * scale;
+  };
+  auto lower = [&](Eigen::Index k) {
+    double entry = 0.0;
+    entry += shared_sign_[k - 1] * w[shared_[k - 1]] * dot(a[k], b[k - 1]);
+    return entry * scale;
+  };
+  auto vanishes = [](double pivot, double diagonal_entry) {
+    return !(std::abs(pivot) > 1e-12 * std::abs(diagonal_entry));
+  };
+  double d = diagonal(0);
+  double pivot = d;
+  if (vanishes(pivot, d)) return false;
+  c(0) = m > 1 ? upper(0) / pivot : 0.0;
+  x(0) = -minus_rhs(0) / pivot;
+  for (Eigen::Index k = 1; k < m; ++k) {
+    const double l = lower(k);
+    d = diagonal(k);
+    pivot = d - l * c(k - 1);
+    if (vanishes(pivot, d)) return false;
+    c(k) = k + 1 < m ? upper(k) / pivot : 0.0;
+    x(k) = (-minus_rhs(k) - l * x(k - 1)) / pivot;
   }
+  bool finite = std::isfinite(x(m - 1));
+  for (Eigen::Index k = m - 2; k >= 0; --k) {
+    x(k) -= c(k) * x(k + 1);
+    finite = finite && std::isfinite(x(k));
+  }
+  return finite;
+}
+
+void RodChain::start_directions(const std::vector<Vec3>& q, const Box& box, std::vector<Vec3>& u,
+                                std::vector<double>& r) const {
+  DirectionsMemo& memo = memo_;
+  const bool same = memo.valid && memo.period.x == box.period().x &&
+                    memo.period.y == box.period().y && memo.period.z == box.period().z &&
+                    memo.inverse_period.x == box.inverse_period().x &&
+                    memo.inverse_period.y == box.inverse_period().y &&
+                    memo.inverse_period.z == box.inverse_period().z &&
+                    std::memcmp(memo.x.data(), q.data(), q.size() * sizeof(Vec3)) == 0;
+  if (same) {
+    u = memo.u;
+    r = memo.r;
+    return;
+  }
+  directions(q, box, u, r);
+  remember(q, box, u, r);
+}
+
+void RodChain::remember(const std::vector<Vec3>& x, const Box& box, const std::vector<Vec3>& u,
+                        const std::vector<double>& r) const {
+  memo_.x = x;
+  memo_.u = u;
+  memo_.r = r;
+  memo_.period = box.period();
+  memo_.inverse_period = box.inverse_period();
+  memo_.valid = true;
 }
 
 bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const Box& box,
@@ -114,7 +174,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     ws.x0[p] = delta[g] + q[g];
   }
   // Directions of the impulses: the rods at the start of the step, fixed.
-  directions(ws.q, box, ws.uq, ws.rq);
+  start_directions(ws.q, box, ws.uq, ws.rq);
   auto positions = [&](const Eigen::VectorXd& z, std::vector<Vec3>& x) {
     for (std::size_t p = 0; p < n; ++p) {
       x[p] = ws.x0[p] + impulse_on(p, ws.uq, z) * (h * inverse_mass_[p]);
@@ -142,12 +202,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     if (status.iterations >= max_iterations) return false;
     ++status.iterations;
     // d gap_k / d z_l = h grad g_k(x)^T M^-1 C_l(q).
-    coupling_bands(ws.ux, ws.uq, ws.bands);
-    ws.bands.lower *= h;
-    ws.bands.diagonal *= h;
-    ws.bands.upper *= h;
-    ws.rhs = -ws.phi;
-    if (!solve_tridiagonal(ws.bands, ws.rhs, ws.step, ws.pivots)) return false;
+    if (!solve_coupled(ws.ux, ws.uq, h, ws.phi, ws.step, ws.pivots)) return false;
     const double merit = ws.phi.squaredNorm();
     double t = 1.0;
     for (int halvings = 0;; ++halvings) {
@@ -183,6 +238,8 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
     ws.v[k] = p[g] * inverse_mass_[k];
   }
   directions(ws.x, box, ws.ux, ws.rx);
+  // These positions start the next step unless the neighbour list wraps them meanwhile.
+  remember(ws.x, box, ws.ux, ws.rx);
   // (C^T M^-1 C) mu = -C^T M^-1 p, C^T v summed over each rod's particles in their order.
   ws.pt.resize(static_cast<Eigen::Index>(m));
   for (std::size_t k = 0; k < m; ++k) {
@@ -191,9 +248,8 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
     projected += high_sign_[k] * dot(ws.ux[k], ws.v[high_[k]]);
     ws.pt(static_cast<Eigen::Index>(k)) = projected;
   }
-  ws.rhs = -ws.pt;
-  coupling_bands(ws.ux, ws.ux, ws.bands);
-  if (!solve_tridiagonal(ws.bands, ws.rhs, ws.z, ws.pivots)) return false;
+  // Scale 1: multiplying by 1 leaves every entry as it is.
+  if (!solve_coupled(ws.ux, ws.ux, 1.0, ws.pt, ws.z, ws.pivots)) return false;
   for (std::size_t k = 0; k < n; ++k) p[particles_[k]] += impulse_on(k, ws.ux, ws.z);
   for (std::size_t k = 0; k < m; ++k) virial += ws.z(static_cast<Eigen::Index>(k)) * ws.rx[k];
   return true;

@@ -6,7 +6,6 @@
 
 #include "constraints/clusters.hpp"
 #include "solvers/solver_status.hpp"
-#include "solvers/tridiagonal.hpp"
 
 namespace deli {
 
@@ -17,8 +16,7 @@ namespace deli {
 struct RodChainWorkspace {
   std::vector<Vec3> q, x0, uq, x, ux, xt, uxt, v;
   std::vector<double> rq, rx, rxt;
-  Eigen::VectorXd z, step, trial, phi, pt, rhs, pivots;
-  Tridiagonal bands;
+  Eigen::VectorXd z, step, trial, phi, pt, pivots;
 };
 
 // A cluster of rods only, numbered along a linear chain (consecutive rows share exactly
@@ -67,9 +65,30 @@ class RodChain {
     if (second_row_[p] >= 0) out += u[second_row_[p]] * (second_sign_[p] * z(second_row_[p]));
     return out;
   }
-  // The Newton (and RATTLE) matrix sum_p w_p s_k s_l a_k . b_l in band form.
-  void coupling_bands(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
-                      Tridiagonal& out) const;
+  // Solves (scale A) x = -minus_rhs for the Newton (and RATTLE) matrix
+  // A = sum_p w_p s_k s_l a_k . b_l, tridiagonal, its band entries made as the elimination
+  // reaches them. False when a pivot vanishes or x is not finite (the generic path takes over).
+  [[nodiscard]] bool solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
+                                   double scale, const Eigen::VectorXd& minus_rhs,
+                                   Eigen::VectorXd& x, Eigen::VectorXd& c) const;
+  // Directions and lengths at the start of the step's positions q: those of the last
+  // momentum projection (or solve) when q is bit for bit the positions it had, as it is
+  // unless the neighbour list wrapped them in between; computed otherwise.
+  void start_directions(const std::vector<Vec3>& q, const Box& box, std::vector<Vec3>& u,
+                        std::vector<double>& r) const;
+  void remember(const std::vector<Vec3>& x, const Box& box, const std::vector<Vec3>& u,
+                const std::vector<double>& r) const;
+
+  // The last directions computed at a step's end or start positions, with those positions
+  // (local) and the box's periods: directions() is a function of these alone. Mutable: a
+  // cache, invisible in the results (the chains of a system are solved one at a time).
+  struct DirectionsMemo {
+    bool valid = false;
+    std::vector<Vec3> x, u;
+    std::vector<double> r;
+    Vec3 period, inverse_period;
+  };
+  mutable DirectionsMemo memo_;
 
   std::vector<std::int32_t> particles_;  // local -> global
   std::vector<double> inverse_mass_;
