@@ -64,32 +64,19 @@ class PairForce final : public ForceTerm {
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
                  SymTensor& virial, bool tally) const override {
     const bool coded = !neighbors.image_codes().empty();
-    const std::size_t n = system.particles.size();
-    // Chunks of consecutive particles, each with its listed pairs; energies and virials
-    // added in chunk order.
-    const int chunks = chunks_for(n);
-    chunk_forces_.prepare(chunks, n);
-    std::vector<double> energies(static_cast<std::size_t>(chunks), 0.0);
-    std::vector<SymTensor> virials(static_cast<std::size_t>(chunks));
-    for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
-      Vec3* f = chunk_forces_.chunk(c, force);
-      double& e = energies[static_cast<std::size_t>(c)];
-      SymTensor& w = virials[static_cast<std::size_t>(c)];
-      const auto first = static_cast<std::int32_t>(begin), last = static_cast<std::int32_t>(end);
-      if (tally) {
-        e = coded ? loop<true, true>(system, neighbors, first, last, f, w)
-                  : loop<true, false>(system, neighbors, first, last, f, w);
-      } else {
-        coded ? loop<false, true>(system, neighbors, first, last, f, w)
-              : loop<false, false>(system, neighbors, first, last, f, w);
-      }
-    });
-    chunk_forces_.add_buffers(force);
-    double energy = energies[0];
-    for (std::size_t c = 1; c < energies.size(); ++c) energy += energies[c];
-    if (tally) {
-      for (const SymTensor& w : virials) virial += w;
-    }
+    // Chunks of consecutive particles, each with its listed pairs.
+    const double energy =
+        chunked_.run(system.particles.size(), force, virial,
+                     [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
+                       const auto first = static_cast<std::int32_t>(begin);
+                       const auto last = static_cast<std::int32_t>(end);
+                       if (tally) {
+                         return coded ? loop<true, true>(system, neighbors, first, last, f, w)
+                                      : loop<true, false>(system, neighbors, first, last, f, w);
+                       }
+                       return coded ? loop<false, true>(system, neighbors, first, last, f, w)
+                                    : loop<false, false>(system, neighbors, first, last, f, w);
+                     });
     return energy + scaled_pairs(system, force, virial);
   }
 
@@ -219,7 +206,7 @@ class PairForce final : public ForceTerm {
   std::vector<Params> table_;
   double max_cutoff_;
   std::vector<ScaledPair> scaled_pairs_;
-  mutable ChunkForces chunk_forces_;  // scratch of compute()
+  mutable ChunkedForceLoop chunked_;  // scratch of compute()
 };
 
 }  // namespace deli
