@@ -8,37 +8,54 @@
 
 namespace deli {
 
-// Force accumulators for a term whose items (a particle's listed pairs, bonds, angles) also
-// push particles outside their own chunk. Chunk 0 adds to the force array itself, chunk
-// c > 0 to a buffer of its own; add_buffers() then adds the buffers in chunk order,
-// particle by particle. One chunk writes straight into the force array: the serial loop.
-// Not thread-safe across calls: one term's compute() at a time, as the force field does.
-class ChunkForces {
+// The chunked loop of a force term whose items (a particle's listed pairs, bonds, angles,
+// dihedrals) also push particles outside their own chunk. Chunk 0 adds to the caller's
+// force array and virial, chunk c > 0 to a force buffer and a virial of its own; after the
+// chunks the buffers are added in chunk order, particle by particle, then the chunks'
+// virials and energies, in chunk order too. One chunk is the serial loop, bit for bit; a
+// given number of chunks adds in one fixed order: the same result on every run.
+// The buffers are kept between calls (their memory reused). Not thread-safe across calls:
+// one term's compute() at a time, as the force field does.
+class ChunkedForceLoop {
  public:
-  // Before the chunks run: room for `chunks` of n particles.
-  void prepare(int chunks, std::size_t n) {
-    buffers_.resize(static_cast<std::size_t>(chunks > 1 ? chunks - 1 : 0));
-    size_ = n;
-  }
-  // Inside chunk c: where it adds its forces (a zeroed buffer for c > 0, zeroed by the
-  // thread that uses it).
-  Vec3* chunk(int c, std::vector<Vec3>& force) {
-    if (c == 0) return force.data();
-    std::vector<Vec3>& b = buffers_[static_cast<std::size_t>(c - 1)];
-    b.assign(size_, Vec3{});
-    return b.data();
-  }
-  // After the chunks: force[i] += buffer_1[i], then buffer_2[i], ...
-  void add_buffers(std::vector<Vec3>& force) const {
-    if (buffers_.empty()) return;
-    parallel_for(size_, [&](std::size_t i) {
+  // Runs body(begin, end, f, w) -> energy over the chunks of [0, items): the chunk's
+  // items add their forces to f[particle] and their virial to w, and it returns their
+  // energy. Returns the sum of the energies; forces added to `force`, virial to `virial`.
+  template <class Body>
+  double run(std::size_t items, std::vector<Vec3>& force, SymTensor& virial, Body&& body) {
+    const int chunks = chunks_for(items);
+    const auto extra = static_cast<std::size_t>(chunks - 1);
+    buffers_.resize(extra);
+    virials_.resize(extra);
+    energies_.resize(static_cast<std::size_t>(chunks));
+    for_each_chunk(items, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      const auto k = static_cast<std::size_t>(c);
+      if (c == 0) {
+        energies_[0] = body(begin, end, force.data(), virial);
+        return;
+      }
+      // Zeroed by the thread that fills it (its first touch, on a many-socket machine).
+      std::vector<Vec3>& buffer = buffers_[k - 1];
+      buffer.assign(force.size(), Vec3{});
+      virials_[k - 1] = SymTensor{};
+      energies_[k] = body(begin, end, buffer.data(), virials_[k - 1]);
+    });
+    if (extra == 0) return energies_[0];
+    parallel_for(force.size(), [&](std::size_t i) {
       for (const std::vector<Vec3>& b : buffers_) force[i] += b[i];
     });
+    double energy = energies_[0];
+    for (std::size_t c = 1; c < energies_.size(); ++c) {
+      energy += energies_[c];
+      virial += virials_[c - 1];
+    }
+    return energy;
   }
 
  private:
-  std::vector<std::vector<Vec3>> buffers_;
-  std::size_t size_ = 0;
+  std::vector<std::vector<Vec3>> buffers_;  // chunks 1.. : their forces
+  std::vector<SymTensor> virials_;          // chunks 1.. : their virials
+  std::vector<double> energies_;            // every chunk's energy
 };
 
 }  // namespace deli

@@ -12,7 +12,9 @@ namespace deli {
 
 ForceEngine::ForceEngine(const ForceField& force_field, double skin, double minimum_cutoff)
     : force_field_(force_field),
-      neighbors_(std::max(force_field.neighbor_cutoff(), minimum_cutoff), skin) {}
+      neighbors_(std::max(force_field.neighbor_cutoff(), minimum_cutoff), skin) {
+  neighbors_.set_cell_order(force_field.cell_order);
+}
 
 bool ForceEngine::ensure_neighbors(System& system, bool force) {
   const TimedPhase timed(Phase::neighbor);

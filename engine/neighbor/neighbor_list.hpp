@@ -44,6 +44,21 @@ class NeighborList {
   const std::vector<std::uint8_t>& image_codes() const { return image_codes_; }
   const std::array<Vec3, 27>& image_shifts() const { return image_shifts_; }
 
+  // Cache order: with it on, each build also keeps the list in the particles' cell order
+  // (cells along x, then y, then z; ascending index within a cell). A pair loop that
+  // gathers positions into that order finds a particle's partners near it in memory,
+  // whatever order the particles' indices are in (a liquid scrambles a lattice's within a
+  // few thousand steps). The pairs are the same, listed under the same particle.
+  void set_cell_order(bool on);
+  struct CellOrdered {
+    std::vector<std::int32_t> particle;     // by slot: the particle in that slot
+    std::vector<std::size_t> offsets;       // by slot, as offsets()
+    std::vector<std::int32_t> neighbors;    // slots
+    std::vector<std::uint8_t> image_codes;  // as image_codes(), pair by pair
+  };
+  // Empty (no particles) unless set_cell_order(true) preceded the last build.
+  const CellOrdered& cell_ordered() const { return cell_ordered_; }
+
  private:
   struct Grid {
     std::array<int, 3> count{};
@@ -73,6 +88,10 @@ class NeighborList {
   // Each chunk's part of the list during a build (kept: their capacity is reused).
   std::vector<std::vector<std::int32_t>> chunk_neighbors_;
   std::vector<std::vector<std::uint8_t>> chunk_codes_;
+  // The joined list by slot (cell order), before it is rearranged by particle.
+  std::vector<std::size_t> slot_offsets_;
+  std::vector<std::int32_t> slot_neighbors_;
+  std::vector<std::uint8_t> slot_codes_;
 
   std::vector<std::int32_t> neighbors_;
   std::vector<std::size_t> offsets_;
@@ -80,6 +99,8 @@ class NeighborList {
   std::array<Vec3, 27> image_shifts_{};
   std::vector<Vec3> position_at_build_;
   std::int64_t builds_ = 0;
+  bool cell_order_ = false;
+  CellOrdered cell_ordered_;
 };
 
 }  // namespace deli

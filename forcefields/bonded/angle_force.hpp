@@ -34,52 +34,42 @@ class AngleForce final : public ForceTerm {
 
   std::string name() const override { return "angle"; }
 
-  // Chunks of consecutive angles, their energies and virials added in chunk order.
+  // Chunks of consecutive angles.
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
                  SymTensor& virial, bool /*tally*/) const override {
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<Angle>& angles = system.topology.angles;
-    const int chunks = chunks_for(angles.size());
-    chunk_forces_.prepare(chunks, x.size());
-    std::vector<double> energies(static_cast<std::size_t>(chunks), 0.0);
-    std::vector<SymTensor> virials(static_cast<std::size_t>(chunks));
-    for_each_chunk(angles.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
-      Vec3* f = chunk_forces_.chunk(c, force);
-      double energy = 0.0;
-      // Chunk 0 adds to the caller's virial, as the serial loop did (same rounding).
-      SymTensor& w = c == 0 ? virial : virials[static_cast<std::size_t>(c)];
-      for (std::size_t k = begin; k < end; ++k) {
-        const Angle& a = angles[k];
-        if (!own_types_.empty() && !own_types_[a.type]) continue;
-        const Vec3 d1 = system.box.minimum_image(x[a.i] - x[a.j]);
-        const Vec3 d2 = system.box.minimum_image(x[a.k] - x[a.j]);
-        const double r1sq = norm2(d1), r2sq = norm2(d2);
-        const double r1 = std::sqrt(r1sq), r2 = std::sqrt(r2sq);
-        const double cos_theta = std::clamp(dot(d1, d2) / (r1 * r2), -1.0, 1.0);
-        double g;  // dE/d(cos theta)
-        energy += Evaluator::evaluate(by_type_[a.type], cos_theta, g);
-        const double a11 = g * cos_theta / r1sq, a12 = -g / (r1 * r2), a22 = g * cos_theta / r2sq;
-        const Vec3 f1 = d1 * a11 + d2 * a12;
-        const Vec3 f3 = d2 * a22 + d1 * a12;
-        f[a.i] += f1;
-        f[a.j] -= f1 + f3;
-        f[a.k] += f3;
-        w.add_outer(d1, f1);
-        w.add_outer(d2, f3);
-      }
-      energies[static_cast<std::size_t>(c)] = energy;
-    });
-    chunk_forces_.add_buffers(force);
-    double energy = energies[0];
-    for (std::size_t c = 1; c < energies.size(); ++c) energy += energies[c];
-    for (std::size_t c = 1; c < virials.size(); ++c) virial += virials[c];
-    return energy;
+    return chunked_.run(angles.size(), force, virial,
+                        [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
+                          double energy = 0.0;
+                          for (std::size_t k = begin; k < end; ++k) {
+                            const Angle& a = angles[k];
+                            if (!own_types_.empty() && !own_types_[a.type]) continue;
+                            const Vec3 d1 = system.box.minimum_image(x[a.i] - x[a.j]);
+                            const Vec3 d2 = system.box.minimum_image(x[a.k] - x[a.j]);
+                            const double r1sq = norm2(d1), r2sq = norm2(d2);
+                            const double r1 = std::sqrt(r1sq), r2 = std::sqrt(r2sq);
+                            const double cos_theta = std::clamp(dot(d1, d2) / (r1 * r2), -1.0, 1.0);
+                            double g;  // dE/d(cos theta)
+                            energy += Evaluator::evaluate(by_type_[a.type], cos_theta, g);
+                            const double a11 = g * cos_theta / r1sq, a12 = -g / (r1 * r2);
+                            const double a22 = g * cos_theta / r2sq;
+                            const Vec3 f1 = d1 * a11 + d2 * a12;
+                            const Vec3 f3 = d2 * a22 + d1 * a12;
+                            f[a.i] += f1;
+                            f[a.j] -= f1 + f3;
+                            f[a.k] += f3;
+                            w.add_outer(d1, f1);
+                            w.add_outer(d2, f3);
+                          }
+                          return energy;
+                        });
   }
 
  private:
   std::vector<Params> by_type_;
   std::vector<char> own_types_;       // empty: every type
-  mutable ChunkForces chunk_forces_;  // scratch of compute()
+  mutable ChunkedForceLoop chunked_;  // scratch of compute()
 };
 
 }  // namespace deli

@@ -43,39 +43,30 @@ class BondForce final : public ForceTerm {
   }
 
   // Energy and virial are always tallied (bonds cost little next to pairs). Chunks of
-  // consecutive bonds, their energies and virials added in chunk order.
+  // consecutive bonds.
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
                  SymTensor& virial, bool /*tally*/) const override {
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<Bond>& bonds = system.topology.bonds;
-    const int chunks = chunks_for(bonds.size());
-    chunk_forces_.prepare(chunks, x.size());
-    std::vector<double> energies(static_cast<std::size_t>(chunks), 0.0);
-    std::vector<SymTensor> virials(static_cast<std::size_t>(chunks));
-    for_each_chunk(bonds.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
-      Vec3* f = chunk_forces_.chunk(c, force);
-      double energy = 0.0;
-      // Chunk 0 adds to the caller's virial, as the serial loop did (same rounding).
-      SymTensor& w = c == 0 ? virial : virials[static_cast<std::size_t>(c)];
-      for (std::size_t k = begin; k < end; ++k) {
-        const Bond& b = bonds[k];
-        if (!own_types_.empty() && !own_types_[b.type]) continue;
-        const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
-        double f_over_r = 0.0, e = 0.0;
-        if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) stretched(system, b, d);
-        const Vec3 fb = d * f_over_r;
-        f[b.i] += fb;
-        f[b.j] -= fb;
-        energy += e;
-        w.add_outer(d, fb);
-      }
-      energies[static_cast<std::size_t>(c)] = energy;
-    });
-    chunk_forces_.add_buffers(force);
-    double energy = energies[0];
-    for (std::size_t c = 1; c < energies.size(); ++c) energy += energies[c];
-    for (std::size_t c = 1; c < virials.size(); ++c) virial += virials[c];
-    return energy;
+    return chunked_.run(bonds.size(), force, virial,
+                        [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
+                          double energy = 0.0;
+                          for (std::size_t k = begin; k < end; ++k) {
+                            const Bond& b = bonds[k];
+                            if (!own_types_.empty() && !own_types_[b.type]) continue;
+                            const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
+                            double f_over_r = 0.0, e = 0.0;
+                            if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) {
+                              stretched(system, b, d);
+                            }
+                            const Vec3 fb = d * f_over_r;
+                            f[b.i] += fb;
+                            f[b.j] -= fb;
+                            energy += e;
+                            w.add_outer(d, fb);
+                          }
+                          return energy;
+                        });
   }
 
  private:
@@ -97,7 +88,7 @@ class BondForce final : public ForceTerm {
   std::string name_;
   std::vector<Params> by_type_;
   std::vector<char> own_types_;       // empty: every type
-  mutable ChunkForces chunk_forces_;  // scratch of compute()
+  mutable ChunkedForceLoop chunked_;  // scratch of compute()
 };
 
 }  // namespace deli

@@ -63,32 +63,30 @@ class PairForce final : public ForceTerm {
 
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
                  SymTensor& virial, bool tally) const override {
-    const bool coded = !neighbors.image_codes().empty();
     const std::size_t n = system.particles.size();
-    // Chunks of consecutive particles, each with its listed pairs; energies and virials
-    // added in chunk order.
-    const int chunks = chunks_for(n);
-    chunk_forces_.prepare(chunks, n);
-    std::vector<double> energies(static_cast<std::size_t>(chunks), 0.0);
-    std::vector<SymTensor> virials(static_cast<std::size_t>(chunks));
-    for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
-      Vec3* f = chunk_forces_.chunk(c, force);
-      double& e = energies[static_cast<std::size_t>(c)];
-      SymTensor& w = virials[static_cast<std::size_t>(c)];
-      const auto first = static_cast<std::int32_t>(begin), last = static_cast<std::int32_t>(end);
-      if (tally) {
-        e = coded ? loop<true, true>(system, neighbors, first, last, f, w)
-                  : loop<true, false>(system, neighbors, first, last, f, w);
-      } else {
-        coded ? loop<false, true>(system, neighbors, first, last, f, w)
-              : loop<false, false>(system, neighbors, first, last, f, w);
-      }
-    });
-    chunk_forces_.add_buffers(force);
-    double energy = energies[0];
-    for (std::size_t c = 1; c < energies.size(); ++c) energy += energies[c];
-    if (tally) {
-      for (const SymTensor& w : virials) virial += w;
+    const NeighborList::CellOrdered& ordered = neighbors.cell_ordered();
+    Listed listed{system.particles.position.data(), system.particles.type.data(),
+                  neighbors.neighbors().data(),     neighbors.image_codes().data(),
+                  neighbors.offsets().data(),       !neighbors.image_codes().empty()};
+    double energy = 0.0;
+    if (ordered.particle.size() != n || n == 0) {
+      energy = loops(system.box, neighbors, listed, n, force, virial, tally);
+    } else {
+      // Cache order: positions and types gathered into the list's cell order, the forces
+      // found there added back by particle.
+      const std::int32_t* particle = ordered.particle.data();
+      ordered_position_.resize(n);
+      ordered_type_.resize(n);
+      ordered_force_.resize(n);
+      parallel_for(n, [&](std::size_t s) {
+        ordered_position_[s] = listed.x[particle[s]];
+        ordered_type_[s] = listed.type[particle[s]];
+        ordered_force_[s] = Vec3{};
+      });
+      listed = {ordered_position_.data(),   ordered_type_.data(),   ordered.neighbors.data(),
+                ordered.image_codes.data(), ordered.offsets.data(), listed.coded};
+      energy = loops(system.box, neighbors, listed, n, ordered_force_, virial, tally);
+      parallel_for(n, [&](std::size_t s) { force[particle[s]] += ordered_force_[s]; });
     }
     return energy + scaled_pairs(system, force, virial);
   }
@@ -127,20 +125,46 @@ class PairForce final : public ForceTerm {
     }
   }
 
+  // The particles' positions and types and their listed partners, in the list's order:
+  // by particle, or by slot in cell order.
+  struct Listed {
+    const Vec3* x;
+    const int* type;
+    const std::int32_t* list;
+    const std::uint8_t* codes;
+    const std::size_t* offsets;
+    bool coded;  // periodic shifts from image codes (else minimum-image rounding)
+  };
+
+  // Chunks of consecutive particles (slots), each with its listed pairs.
+  double loops(const Box& box, const NeighborList& neighbors, const Listed& listed, std::size_t n,
+               std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
+    const Vec3* shifts = neighbors.image_shifts().data();
+    return chunked_.run(
+        n, force, virial, [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
+          const auto first = static_cast<std::int32_t>(begin);
+          const auto last = static_cast<std::int32_t>(end);
+          if (tally) {
+            return listed.coded ? loop<true, true>(box, listed, shifts, first, last, f, w)
+                                : loop<true, false>(box, listed, shifts, first, last, f, w);
+          }
+          return listed.coded ? loop<false, true>(box, listed, shifts, first, last, f, w)
+                              : loop<false, false>(box, listed, shifts, first, last, f, w);
+        });
+  }
+
   // Particles first..last-1 with their listed partners: forces added to f, the virial to
   // `virial`; returns the energy. kTally: accumulate energy and virial. kCoded: periodic
   // shifts from the list's image codes instead of minimum-image rounding.
   template <bool kTally, bool kCoded>
-  double loop(const System& system, const NeighborList& neighbors, std::int32_t first,
+  double loop(const Box& box, const Listed& listed, const Vec3* shifts, std::int32_t first,
               std::int32_t last, Vec3* f, SymTensor& virial) const {
-    const Vec3* x = system.particles.position.data();
-    const int* type = system.particles.type.data();
-    const Box& box = system.box;
+    const Vec3* x = listed.x;
+    const int* type = listed.type;
     const Vec3 period = box.period(), inverse = box.inverse_period();
-    const std::int32_t* list = neighbors.neighbors().data();
-    const std::uint8_t* codes = neighbors.image_codes().data();
-    const Vec3* shifts = neighbors.image_shifts().data();
-    const std::vector<std::size_t>& offsets = neighbors.offsets();
+    const std::int32_t* list = listed.list;
+    const std::uint8_t* codes = listed.codes;
+    const std::size_t* offsets = listed.offsets;
 
     double energy = 0.0;
     SymTensor w;
@@ -219,7 +243,10 @@ class PairForce final : public ForceTerm {
   std::vector<Params> table_;
   double max_cutoff_;
   std::vector<ScaledPair> scaled_pairs_;
-  mutable ChunkForces chunk_forces_;  // scratch of compute()
+  // Scratch of compute():
+  mutable ChunkedForceLoop chunked_;
+  mutable std::vector<Vec3> ordered_position_, ordered_force_;  // cache order, by slot
+  mutable std::vector<int> ordered_type_;
 };
 
 }  // namespace deli

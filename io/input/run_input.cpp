@@ -89,6 +89,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   if (auto n = root.table("neighbor")) {
     input.skin = n->number("skin", 0.3);
     if (input.skin < 0) n->fail("must not be negative", "skin");
+    input.force_field->cell_order = n->boolean("cell_order", false);
     n->finish();
   }
   if (auto m = root.table("minimize")) {

@@ -49,9 +49,47 @@ bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return true;
 }
 
-TEST(Threads, TwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
-  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  const RunInput input = chain_melt();
+// 150 chains of 10 beads with harmonic bonds, angles and dihedrals (the cross-check
+// input tests/crosscheck/inputs/chains_dihedrals.toml, larger): 1050 dihedrals, past the
+// length from which loops are cut into chunks.
+RunInput dihedral_chains() {
+  RunInput input = testing::input_from(R"(
+[system]
+[system.chains]
+count = 150
+length = 10
+density = 0.6
+bond_length = 0.97
+min_distance = 0.85
+angles = true
+dihedrals = true
+seed = 21
+[forcefield.pair]
+style = "lj/cut"
+cutoff = 2.5
+coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
+[forcefield.bond]
+style = "harmonic"
+coeffs = [{ type = 1, k = 100.0, r0 = 0.97 }]
+[forcefield.angle]
+style = "harmonic"
+coeffs = [{ type = 1, k = 5.0, theta0 = 110.0 }]
+[forcefield.dihedral]
+style = "harmonic"
+coeffs = [{ type = 1, k = 3.0, d = -1, n = 3 }]
+[integrator]
+timestep = 0.005
+[run]
+steps = 0
+)");
+  testing::jiggle(input.system.particles, 0.05, 12);
+  return input;
+}
+
+// Evaluates `input` on 1 thread, then twice on 2: the two 2-thread evaluations are the
+// same bits; 1 and 2 threads agree to round-off. Each force is a sum of some 40 terms of
+// size up to ~100 (bonds), so a regrouping moves it by a few ulps of that size.
+void expect_repeat_and_round_off(const RunInput& input) {
   testing::Evaluated one, two, again;
   {
     const ThreadCount threads(1);
@@ -66,8 +104,6 @@ TEST(Threads, TwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
   EXPECT_EQ(two.evaluation.potential, again.evaluation.potential);
   EXPECT_EQ(two.evaluation.virial.trace(), again.evaluation.virial.trace());
 
-  // Across thread counts: each force a sum of some 40 terms of size up to ~100 (bonds), so
-  // a regrouping moves it by a few ulps of that size.
   double largest = 0.0, worst = 0.0;
   for (std::size_t i = 0; i < one.force.size(); ++i) {
     for (int a = 0; a < 3; ++a) {
@@ -80,6 +116,56 @@ TEST(Threads, TwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
               1e-13 * std::abs(one.evaluation.potential));
   EXPECT_NEAR(two.evaluation.virial.trace(), one.evaluation.virial.trace(),
               1e-13 * std::abs(one.evaluation.virial.trace()));
+}
+
+TEST(Threads, TwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  expect_repeat_and_round_off(chain_melt());
+}
+
+TEST(Threads, DihedralsOnTwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const RunInput input = dihedral_chains();
+  ASSERT_GE(input.system.topology.dihedrals.size(), kParallelMinimum);
+  expect_repeat_and_round_off(input);
+  // The dihedral term alone too: its forces are small beside the pairs' and bonds'.
+  const ForceTerm* dihedral = nullptr;
+  for (const auto& term : input.force_field->terms()) {
+    if (term->name() == "dihedral") dihedral = term.get();
+  }
+  ASSERT_NE(dihedral, nullptr);
+  const NeighborList unused(2.5, 0.3);
+  auto dihedral_forces = [&](int threads, double& energy, SymTensor& virial) {
+    const ThreadCount count(threads);
+    std::vector<Vec3> force(input.system.particles.size());
+    energy = dihedral->compute(input.system, unused, force, virial, true);
+    return force;
+  };
+  double e1, e2, e2_again;
+  SymTensor w1, w2, w2_again;
+  const std::vector<Vec3> f1 = dihedral_forces(1, e1, w1), f2 = dihedral_forces(2, e2, w2),
+                          f2_again = dihedral_forces(2, e2_again, w2_again);
+  EXPECT_TRUE(same_bits(f2, f2_again));
+  EXPECT_EQ(e2, e2_again);
+  EXPECT_EQ(w2.trace(), w2_again.trace());
+  double largest = 0.0, worst = 0.0;
+  for (std::size_t i = 0; i < f1.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      largest = std::max(largest, std::abs(f1[i][a]));
+      worst = std::max(worst, std::abs(f1[i][a] - f2[i][a]));
+    }
+  }
+  EXPECT_GT(largest, 0.0);
+  EXPECT_LT(worst, 1e-13 * largest);
+  EXPECT_NEAR(e2, e1, 1e-13 * std::abs(e1));
+  // The virial's trace vanishes (a torsion's energy does not change when its four atoms'
+  // separations scale together): compare the components, to round-off of the largest.
+  const double w1s[6] = {w1.xx, w1.yy, w1.zz, w1.xy, w1.xz, w1.yz};
+  const double w2s[6] = {w2.xx, w2.yy, w2.zz, w2.xy, w2.xz, w2.yz};
+  double w_largest = 0.0;
+  for (double v : w1s) w_largest = std::max(w_largest, std::abs(v));
+  EXPECT_GT(w_largest, 1.0);
+  for (int c = 0; c < 6; ++c) EXPECT_NEAR(w2s[c], w1s[c], 1e-12 * w_largest) << "component " << c;
 }
 
 TEST(Threads, NeighbourListIsTheSameListOnAnyThreadCount) {
