@@ -1,5 +1,8 @@
 #pragma once
 
+#include <functional>
+#include <vector>
+
 #include "constraints/nearby_rows.hpp"
 #include "integrators/constrained_integrator.hpp"
 #include "integrators/gvi_workspace.hpp"
@@ -83,6 +86,18 @@ class Gvi final : public ConstrainedIntegrator {
   void refuse_impact_times_unless_supported() const;
   void step_with_impact_times(System& system, bool tally);
   void step_with_impact_times_and_rods(System& system, bool tally);  // gvi_impact_time_rods.cpp
+  // What an impact-time drift reached: its longest particle path, its end positions and the
+  // contact configurations it passed through.
+  struct DriftSpan {
+    double longest;
+    const std::vector<Vec3>* end;
+    const std::vector<std::vector<Vec3>>* vertices;
+  };
+  // Runs `drift_once` until the candidate rows and the neighbour list cover every position it
+  // passed through: rebuilds the list (the step restarts from the wrapped positions) or
+  // widens the rows' reach and runs it again; three tries, then an error naming the step.
+  void drift_with_covering_rows(System& system, bool pairs_matter,
+                                const std::function<DriftSpan()>& drift_once);
 
   // The unconstrained step's displacement from the current positions for momenta `momenta`.
   void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d);

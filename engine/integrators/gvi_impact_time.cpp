@@ -24,6 +24,32 @@ void Gvi::refuse_impact_times_unless_supported() const {
   }
 }
 
+void Gvi::drift_with_covering_rows(System& system, bool pairs_matter,
+                                   const std::function<DriftSpan()>& drift_once) {
+  const double gap_tolerance = constraints_.tolerances.gap;
+  for (int attempt = 0;; ++attempt) {
+    const DriftSpan span = drift_once();
+    bool covered = !pairs_matter || engine_.neighbors_cover(*span.end);
+    for (const std::vector<Vec3>& at : *span.vertices)
+      covered = covered && (!pairs_matter || engine_.neighbors_cover(at));
+    const bool reached = 2.0 * span.longest + gap_tolerance <= ws_.reach;
+    if (covered && reached) return;
+    if (attempt == 2) {
+      throw SimulationError("step " + std::to_string(system.step + 1) +
+                            ": a particle would move more than half the neighbour skin in one "
+                            "step; increase [neighbor] skin or reduce the timestep");
+    }
+    if (!covered) {
+      // Rebuilding wraps the positions: the step starts again from them.
+      engine_.ensure_neighbors(system, true);
+      ws_.q = system.particles.position;
+    }
+    ws_.reach = 4.0 * span.longest + 2.0 * gap_tolerance;
+    nearby_rows_.collect(constraints_, system.particles, ws_.q.data(), engine_.neighbors(),
+                         system.box, ws_.reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+  }
+}
+
 void Gvi::step_with_impact_times(System& system, bool tally) {
   if (!constraints_.equalities.empty()) return step_with_impact_times_and_rods(system, tally);
   PhaseTimer& timer = phase_timer();
@@ -31,7 +57,6 @@ void Gvi::step_with_impact_times(System& system, bool tally) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
-  const double gap_tolerance = constraints_.tolerances.gap;
   step_virial_ = 0.0;
   start_step(system);  // momenta, the free prediction, a neighbour list covering it, q
 
@@ -49,30 +74,13 @@ void Gvi::step_with_impact_times(System& system, bool tally) {
   candidates_for(system, ws_.predicted);
   const std::int64_t max_events = std::max<std::int64_t>(1000, 100 * static_cast<std::int64_t>(n));
   DriftOutcome drift;
-  for (int attempt = 0;; ++attempt) {
+  drift_with_covering_rows(system, true, [&] {
     ws_.p = ws_.half;
     drift = drift_.run(ws_.nearby, P, system.box, h, ws_.q, ws_.p, ws_.x, max_events,
                        system.step + 1, &ws_.mid);
-    const double longest = *std::max_element(drift.path.begin(), drift.path.end());
-    bool covered = engine_.neighbors_cover(ws_.x);
-    for (const std::vector<Vec3>& at : drift.vertices)
-      covered = covered && engine_.neighbors_cover(at);
-    const bool reached = 2.0 * longest + gap_tolerance <= ws_.reach;
-    if (covered && reached) break;
-    if (attempt == 2) {
-      throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": a particle would move more than half the neighbour skin in one "
-                            "step; increase [neighbor] skin or reduce the timestep");
-    }
-    if (!covered) {
-      // Rebuilding wraps the positions: the step starts again from them.
-      engine_.ensure_neighbors(system, true);
-      ws_.q = P.position;
-    }
-    ws_.reach = 4.0 * longest + 2.0 * gap_tolerance;
-    nearby_rows_.collect(constraints_, P, ws_.q.data(), engine_.neighbors(), system.box, ws_.reach,
-                         gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
-  }
+    return DriftSpan{*std::max_element(drift.path.begin(), drift.path.end()), &ws_.x,
+                     &drift.vertices};
+  });
   step_virial_ += drift.virial;
   stats_.active += drift.events;
   stats_.reflected += drift.events;

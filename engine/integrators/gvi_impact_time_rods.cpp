@@ -33,7 +33,6 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
-  const double gap_tolerance = constraints_.tolerances.gap;
   const std::vector<Constraint>& rods = constraints_.equalities;
   step_virial_ = 0.0;
   start_step(system);
@@ -233,28 +232,10 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   drift(ws_.q, ws_.half, h, end, nullptr);
   candidates_for(system, end);
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
-  for (int attempt = 0;; ++attempt) {
+  drift_with_covering_rows(system, pairs_matter, [&] {
     split_drift();
-    const double longest = *std::max_element(path.begin(), path.end());
-    bool covered = !pairs_matter || engine_.neighbors_cover(x);
-    for (const std::vector<Vec3>& at : vertices)
-      covered = covered && (!pairs_matter || engine_.neighbors_cover(at));
-    const bool reached = 2.0 * longest + gap_tolerance <= ws_.reach;
-    if (covered && reached) break;
-    if (attempt == 2) {
-      throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": a particle would move more than half the neighbour skin in one "
-                            "step; increase [neighbor] skin or reduce the timestep");
-    }
-    if (!covered) {
-      // Rebuilding wraps the positions: the step starts again from them.
-      engine_.ensure_neighbors(system, true);
-      ws_.q = P.position;
-    }
-    ws_.reach = 4.0 * longest + 2.0 * gap_tolerance;
-    nearby_rows_.collect(constraints_, P, ws_.q.data(), engine_.neighbors(), system.box, ws_.reach,
-                         gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
-  }
+    return DriftSpan{*std::max_element(path.begin(), path.end()), &x, &vertices};
+  });
   step_virial_ += virial;
   stats_.active += events;
 
