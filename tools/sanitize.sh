@@ -30,27 +30,26 @@ cmake --build build-asan -j "$jobs"
 # compiled each, and a Python check of the sources) and the configure step of a fresh machine
 # (Setup.*), which the plain pass (./setup.sh test) runs on the same sources.
 skip="^(Layers|Setup)\\."
-# Left out for CI time only (the CI budget is 20 minutes on 2 cores, and the plain pass runs
-# them): the long statistical tests, which average over 1e4-1e6 steps of 864 to 32000 atoms
-# and cost 10 to 15 times their plain time under the sanitizers (measured, loaded machine:
-# ShadowEnergy 217 s, VelocityVerlet.LjLiquid 193 s, each Both/Thermostat 60-110 s,
-# LangevinCrosscheck about 156 s, the 32000-atom and chain-benchmark validations 50-84 s each;
-# together more than the whole CI budget's margin). They run here with
-#   DELI_SANITIZE_ALL=1 tools/sanitize.sh
-long="ShadowEnergy\\.FluctuatesFarLessThanTheEnergy|VelocityVerlet\\.LjLiquidEnergyBounded"
-long+="|LangevinCrosscheck\\.|Both/Thermostat\\.|Pressure\\.HardSphereFluid"
-long+="|ValidatesAgainstOpenMMAndLammps/.*(32000|chain_benchmark)"
-long+="|PaperExamples\\.PogoStickBoundedTo1e5|GviFeasibility\\.PogoStickShadowReflections"
-long+="|Thermostatted/EveryIntegrator\\.|PaperReproduction\\."
-# Runs of the deli binary that the plain pass covers and whose engine code other tests run
-# here: the equation-of-state tool (tools/eos.py, several runs) and the two-thread runs
-# (their threaded loops run here in Threads.*; ASan does not look for races anyway).
-long+="|EquationOfState\\.|ThreadsRun\\."
-# The cross-checks of whole systems against OpenMM and LAMMPS (every shipped input, and the
-# Models table: 500 to 4000 atoms each, 330 s of the pass's 700 CPU seconds, measured on a
-# fresh clone): the bridges' code runs here in the small cross-checks (Validate.*, Rattle.*,
-# Mixing.*, OpenMMCpuPlatform.*, LammpsWrittenData*), and the plain pass runs these.
-long+="|Inputs/ShippedInput\\.|Models/AgreesWithOpenMMAndLammps\\."
+# The long statistical tests (1e4 to 1e6 steps of 864 to 4000 atoms, 8 to 15 times slower
+# under the sanitizers: ShadowEnergy alone took 217 s, VelocityVerlet.LjLiquid 193 s, each
+# Both/Thermostat 60-110 s) run here on a short prefix of their steps: they read
+# DELI_SANITIZER_SHORT_RUNS through tests/support/short_runs.hpp, run the same code, and
+# assert what a short run can (values finite, no overlap, bounds that hold over every prefix
+# of the full run); their statistical assertions are the plain pass's, which runs them in
+# full. The two-thread runs of the binary (ThreadsRun) are shortened the same way; the
+# equation-of-state tool (two short runs) runs as it is.
+export DELI_SANITIZER_SHORT_RUNS=1
+# Left out for CI time only (the budget is 20 minutes on 2 cores; the plain pass runs them):
+# the cross-checks of whole systems against OpenMM and LAMMPS (every shipped input, and the
+# Models table: 500 to 32000 atoms each, most of their time in setting up the three engines,
+# which shorter trajectories do not save: 330 of the pass's 700 CPU seconds, measured on a
+# fresh clone), whose bridges' code runs here in the small cross-checks (Validate.*,
+# Rattle.*, Mixing.*, OpenMMCpuPlatform.*, LammpsWrittenData*, LangevinCrosscheck); and the
+# paper reproduction script (--quick: 40 s plain, mostly Python and plotting; the runs it
+# makes are the paper examples' inputs, which tests/paper runs here).
+# DELI_SANITIZE_ALL=1 runs them too, shortened the same way (trajectories of 2 and 10 steps,
+# the script's runs on a tenth of --quick's steps).
+long="Inputs/ShippedInput\\.|Models/AgreesWithOpenMMAndLammps\\.|PaperReproduction\\."
 [ -n "${DELI_SANITIZE_ALL:-}" ] && long="^$"
 # (The two cross-checks of chains_4000_harmonic, among them, once saw LeakSanitizer's tracer
 # take a SIGSEGV at their exit leak check after both had passed, and not in 8 runs since: a

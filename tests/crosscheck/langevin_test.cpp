@@ -40,6 +40,7 @@
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/block_average.hpp"
+#include "support/short_runs.hpp"
 
 namespace deli {
 namespace {
@@ -53,8 +54,10 @@ LangevinRun the_run() {
   r.temperature = 1.0;
   r.damping = 1.0;
   r.timestep = 0.005;
-  r.equilibration = 1000;
-  r.samples = 2000;
+  // Under the sanitizers (support/short_runs.hpp): 100 and 100, the statistics left to the
+  // plain pass.
+  r.equilibration = testing::steps_or_prefix(1000, 100);
+  r.samples = testing::steps_or_prefix(2000, 100);
   r.every = 20;
   r.seed = 4242;
   return r;
@@ -137,7 +140,8 @@ TEST(LangevinCrosscheck, MeltPotentialEnergyAndTemperatureAgreeAcrossEngines) {
   quickmin(system, *input.force_field, input.skin, input.minimize);
   {
     const std::unique_ptr<Integrator> melt = make_integrator(input);
-    run(system, *melt, 10000, 10000, {}, RunOptions{});
+    const std::int64_t steps = testing::steps_or_prefix(10000, 500);
+    run(system, *melt, steps, steps, {}, RunOptions{});
   }
   const System start = system;
   std::vector<Vec3> x0;
@@ -180,6 +184,15 @@ TEST(LangevinCrosscheck, MeltPotentialEnergyAndTemperatureAgreeAcrossEngines) {
                 e.potential_variance / (r.temperature * r.temperature) / atoms, e.seconds);
   }
 
+  if (testing::short_runs()) {
+    // Sanitizer pass: every engine ran and gave finite averages; no statistics.
+    for (const EngineResult& e : results) {
+      EXPECT_TRUE(std::isfinite(e.potential.value)) << e.engine;
+      EXPECT_TRUE(std::isfinite(e.temperature.value)) << e.engine;
+      EXPECT_GT(e.temperature.value, 0.0) << e.engine;
+    }
+    return;
+  }
   for (const EngineResult& e : results) {
     SCOPED_TRACE(e.engine);
     // The kinetic temperature is the bath's, to error bars that would show a bath 2 % off.

@@ -98,7 +98,8 @@ INSTANTIATE_TEST_SUITE_P(ParticleDrop, BaselineRestart,
 // A thermostat's random numbers are a function of (seed, step, atom): the checkpoint
 // carries the seed and the bath's energy, the step gives the rest.
 std::string thermostatted_input(const std::string& integrator, const std::string& thermostat) {
-  const std::string path = ::testing::TempDir() + "/thermostatted_" + thermostat + ".toml";
+  const std::string path = ::testing::TempDir() + "/thermostatted_" + thermostat + "_" +
+                           std::to_string(getpid()) + ".toml";
   std::ofstream(path)
       << "[system]\n[system.chains]\ncount = 20\nlength = 5\ndensity = 0.6\nbond_length = 1.0\n"
          "min_distance = 0.95\nseed = 4\n[velocities]\ntemperature = 1.0\nseed = 3\n"
@@ -122,7 +123,7 @@ TEST(Checkpoint, CsvrVerletRestartIsBitwiseIdentical) {
 }
 
 TEST(Checkpoint, CheckpointWithoutThermostatIsRefusedByThermostattedInput) {
-  const std::string file = ::testing::TempDir() + "/nve.h5";
+  const std::string file = ::testing::TempDir() + "/nve_" + std::to_string(getpid()) + ".h5";
   RunInput nve = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   auto a = integrator_for(nve);
   run(nve.system, *a, 5, 0, {});
@@ -142,7 +143,8 @@ TEST(Checkpoint, LinearizedConstraintRestartIsBitwiseIdentical) {
 }
 
 TEST(Checkpoint, DamagedCheckpointIsRefused) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = ::testing::TempDir() + "/damaged_" + std::to_string(getpid());
+  std::filesystem::create_directories(dir);
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   write_checkpoint(dir + "/good.h5", input.system, input.system.particles.position);
   // Truncated to half its size.
@@ -244,7 +246,8 @@ std::string long_melt(const std::string& dir, const std::string& name, long long
 // 130, and `deli run --restart` continues from the checkpoint to the end.
 TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
   for (const std::string signal : {"INT", "TERM"}) {
-    const std::string dir = ::testing::TempDir() + "/signal_" + signal;
+    const std::string dir =
+        ::testing::TempDir() + "/signal_" + signal + "_" + std::to_string(getpid());
     std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
     const std::string input = long_melt(dir, "long", 100000000);
     const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " +
@@ -269,7 +272,7 @@ TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
 // open (h5py, MDAnalysis) and hold every frame flushed before the kill: at least every
 // frame whose thermo row reached the CSV (rows are written after their frames).
 TEST(Checkpoint, SigkillLeavesAReadableTrajectory) {
-  const std::string dir = ::testing::TempDir() + "/killed";
+  const std::string dir = ::testing::TempDir() + "/killed_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string input = dir + "/long.toml";
   std::ofstream(input)
@@ -320,7 +323,7 @@ std::string resting_point(const std::string& dir) {
 // The signal is checked inside the step: the run stops (status 3, the step named) instead of
 // ignoring SIGINT until the step ends, which it never does.
 TEST(Checkpoint, SignalStopsAStepThatDoesNotEnd) {
-  const std::string dir = ::testing::TempDir() + "/zeno";
+  const std::string dir = ::testing::TempDir() + "/zeno_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + resting_point(dir) +
                               " > " + dir + "/run.log 2>&1 & pid=$!; " +
@@ -337,7 +340,7 @@ TEST(Checkpoint, SignalStopsAStepThatDoesNotEnd) {
 // while the process is stopped (SIGSTOP), so both are pending when it continues: sent to a
 // running process, the first could be honoured, step and checkpoint, before the second came.
 TEST(Checkpoint, SecondSignalStopsAtOnce) {
-  const std::string dir = ::testing::TempDir() + "/second_signal";
+  const std::string dir = ::testing::TempDir() + "/second_signal_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " +
                               long_melt(dir, "long", 100000000) + " > " + dir +
@@ -353,7 +356,7 @@ TEST(Checkpoint, SecondSignalStopsAtOnce) {
 // Without a configured checkpoint the interrupt's checkpoint goes to the working directory
 // (the input's may be read-only), and the message says where.
 TEST(Checkpoint, InterruptCheckpointGoesToTheWorkingDirectory) {
-  const std::string dir = ::testing::TempDir() + "/interrupt_cwd";
+  const std::string dir = ::testing::TempDir() + "/interrupt_cwd_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir + "/input " + dir + "/work").c_str());
   const std::string input = dir + "/input/plain.toml";
   std::ofstream(input) << "[system]\ndata = \"" DELI_SOURCE_DIR
@@ -373,7 +376,9 @@ TEST(Checkpoint, InterruptCheckpointGoesToTheWorkingDirectory) {
   EXPECT_FALSE(std::ifstream(dir + "/input/plain.toml.interrupted.h5").good());
   std::ifstream log(dir + "/work/run.log");
   const std::string text((std::istreambuf_iterator<char>(log)), {});
-  EXPECT_NE(text.find("interrupt_cwd/work/plain.toml.interrupted.h5"), std::string::npos) << text;
+  EXPECT_NE(text.find(dir.substr(dir.rfind('/')) + "/work/plain.toml.interrupted.h5"),
+            std::string::npos)
+      << text;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "input/run_input.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
+#include "support/file_contents.hpp"
 #include "support/shell.hpp"
 #include "text/dump_writer.hpp"
 
@@ -141,17 +142,10 @@ TEST(H5md, InfoSummarisesTheFile) {
   EXPECT_EQ(output.find("image"), std::string::npos) << "images were not asked for";
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // An input of the repository with its data file made absolute, run for `steps` steps with
 // an H5MD trajectory (forces too) every 10 steps and an XYZ dump every 20.
 std::string short_run(const std::string& source, const std::string& dir, int steps) {
-  std::string text = slurp(std::string(DELI_SOURCE_DIR) + "/" + source);
+  std::string text = testing::file_contents(std::string(DELI_SOURCE_DIR) + "/" + source);
   text = text.substr(0, text.find("[run]"));
   const std::string source_dir =
       std::string(DELI_SOURCE_DIR) + "/" + source.substr(0, source.rfind('/') + 1);

@@ -7,19 +7,12 @@
 
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 
+#include "support/file_contents.hpp"
 #include "support/shell.hpp"
 
 namespace deli {
 namespace {
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 int shell(const std::string& command, std::string& output) {
   const testing::ShellResult r = testing::run_shell(command);
@@ -29,7 +22,7 @@ int shell(const std::string& command, std::string& output) {
 
 // The default input (GVI: rods, hard cores, walls) with its own run length and outputs.
 std::string slit_input(const std::string& dir, const std::string& name, int steps) {
-  std::string text = slurp(DELI_SOURCE_DIR "/inputs/lj_chains/rigid_slit.toml");
+  std::string text = testing::file_contents(DELI_SOURCE_DIR "/inputs/lj_chains/rigid_slit.toml");
   text = text.substr(0, text.find("[run]"));
   text.replace(text.find("\"rigid_slit.data\""), 17,
                "\"" DELI_SOURCE_DIR "/inputs/lj_chains/rigid_slit.data\"");
@@ -60,8 +53,10 @@ TEST(Restart, OutputsContinueBitForBit) {
                   log),
             0)
       << log;
-  EXPECT_EQ(slurp(root + "/straight/out.csv"), slurp(stopped + "/out.csv"));
-  EXPECT_EQ(slurp(root + "/straight/out.dump"), slurp(stopped + "/out.dump"));
+  EXPECT_EQ(testing::file_contents(root + "/straight/out.csv"),
+            testing::file_contents(stopped + "/out.csv"));
+  EXPECT_EQ(testing::file_contents(root + "/straight/out.dump"),
+            testing::file_contents(stopped + "/out.dump"));
   ASSERT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/compare_h5md.py " + root +
                       "/straight/out.h5 " + stopped + "/out.h5 11",
                   log),
@@ -111,7 +106,7 @@ namespace {
 // checkpoint every 37 and at the end (a run of 91 steps ends with one at 91, a multiple of
 // none of them).
 std::string with_outputs(const std::string& source, const std::string& dir, int steps) {
-  std::string text = slurp(std::string(DELI_SOURCE_DIR) + "/" + source);
+  std::string text = testing::file_contents(std::string(DELI_SOURCE_DIR) + "/" + source);
   text = text.substr(0, text.find("[run]"));
   const std::string source_dir =
       std::string(DELI_SOURCE_DIR) + "/" + source.substr(0, source.rfind('/') + 1);
@@ -143,18 +138,19 @@ TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
       << log;
   const std::string stopped = root + "/stopped";
   ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 91), log), 0) << log;
-  EXPECT_NE(slurp(stopped + "/out.csv").find("\n91,"), std::string::npos);
+  EXPECT_NE(testing::file_contents(stopped + "/out.csv").find("\n91,"), std::string::npos);
   ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 150) + " --restart " +
                       stopped + "/out.chk",
                   log),
             0)
       << log;
   EXPECT_NE(log.find("for 59 steps"), std::string::npos) << log;  // from 91 to 150
-  const std::string csv = slurp(root + "/straight/out.csv");
+  const std::string csv = testing::file_contents(root + "/straight/out.csv");
   EXPECT_NE(csv.find("\n140,"), std::string::npos);  // rows at multiples of 20, and 150
   EXPECT_NE(csv.find("\n150,"), std::string::npos);
-  EXPECT_EQ(csv, slurp(stopped + "/out.csv"));
-  EXPECT_EQ(slurp(root + "/straight/out.dump"), slurp(stopped + "/out.dump"));
+  EXPECT_EQ(csv, testing::file_contents(stopped + "/out.csv"));
+  EXPECT_EQ(testing::file_contents(root + "/straight/out.dump"),
+            testing::file_contents(stopped + "/out.dump"));
   EXPECT_EQ(shell("/usr/bin/python3 " DELI_SOURCE_DIR "/tests/io/compare_h5md.py " + root +
                       "/straight/out.h5 " + stopped + "/out.h5 7",
                   log),

@@ -10,6 +10,7 @@
 #include "integrators/gvi.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/energy_trend.hpp"
+#include "support/short_runs.hpp"
 
 namespace deli {
 namespace {
@@ -143,13 +144,16 @@ TEST(PaperExamples, NewtonsCradleSweep) {
 // The pogo stick to the paper's 1e5 time units (1e6 steps): the envelope of the first
 // 1e4 (2.3e-2, the GVI notes' figure measured with deli: a regression pin) is never left,
 // and the error has no trend (the paper's claim).
+// Under the sanitizers (support/short_runs.hpp) the first 1e4 steps: the envelope and no
+// overlap hold over them as over the whole run; the trend is the plain pass's.
 TEST(PaperExamples, PogoStickBoundedTo1e5) {
-  const Trace t = run_example("pogo_stick", -1, 1);
+  const Trace t = run_example("pogo_stick", testing::steps_or_prefix<std::int64_t>(-1, 10000), 1);
   std::printf("pogo: max |dE|/E0 %.3e, trend/fluctuation %.3f\n", t.max_relative_energy_error(),
               t.trend().ratio());
   EXPECT_LT(t.max_relative_energy_error(), 0.025);
-  EXPECT_LT(t.trend().ratio(), kBounded);
   EXPECT_TRUE(no_overlap(t));
+  if (testing::short_runs()) return;
+  EXPECT_LT(t.trend().ratio(), kBounded);
 }
 
 }  // namespace

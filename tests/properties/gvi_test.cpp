@@ -13,6 +13,7 @@
 #include "simulation/thermo.hpp"
 #include "support/atoms_input.hpp"
 #include "support/energy_trend.hpp"
+#include "support/short_runs.hpp"
 #include "support/statistic.hpp"
 
 namespace deli {
@@ -442,7 +443,7 @@ PogoResult pogo(Feasibility guard) {
   const double e0 = kinetic_energy(s.particles) + gvi.forces().last().potential;
   PogoResult r;
   double e = e0;
-  for (int n = 0; n < 100000; ++n) {
+  for (int n = 0; n < testing::steps_or_prefix(100000, 10000); ++n) {
     gvi.step(s, true);
     e = kinetic_energy(s.particles) + gvi.forces().last().potential;
     r.max_relative_energy_error = std::max(r.max_relative_energy_error, std::abs(e - e0) / e0);
@@ -463,10 +464,14 @@ TEST(GviFeasibility, PogoStickShadowReflections) {
               literal.max_relative_energy_error, literal.min_gap,
               inelastic.max_relative_energy_error, inelastic.final_relative_energy_error,
               restore.max_relative_energy_error);
-  EXPECT_LT(literal.min_gap, -0.04);
-  EXPECT_LT(inelastic.final_relative_energy_error, -0.05);
   EXPECT_GT(restore.min_gap, -1e-10);
   EXPECT_LT(restore.max_relative_energy_error, 1.5e-2);
+  // Under the sanitizers (support/short_runs.hpp) the first 1e4 steps, over which the two
+  // bounds above hold as over the whole run; what the literal and inelastic runs reach by
+  // the end is the plain pass's.
+  if (testing::short_runs()) return;
+  EXPECT_LT(literal.min_gap, -0.04);
+  EXPECT_LT(inelastic.final_relative_energy_error, -0.05);
   EXPECT_LT(std::abs(restore.final_relative_energy_error), 1e-2);
 }
 

@@ -11,6 +11,7 @@
 #include "cli/integrator_factory.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/block_average.hpp"
+#include "support/short_runs.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
@@ -68,7 +69,10 @@ class Sampler final : public Observer {
   std::vector<double> kinetic, temperature, potential, conserved, total, centre_of_mass_kinetic;
 };
 
+// Under the sanitizers (support/short_runs.hpp) a tenth of the equilibration and of the
+// samples' steps, and the statistical checks below left to the plain pass.
 Sampler sample(RunInput& input, std::int64_t equilibrate, std::int64_t steps, std::int64_t every) {
+  if (testing::short_runs()) equilibrate /= 10, steps /= 10;
   const std::unique_ptr<Integrator> integrator = make_integrator(input);
   Sampler sampler;
   sampler.skip_until = equilibrate;
@@ -80,8 +84,20 @@ Sampler sample(RunInput& input, std::int64_t equilibrate, std::int64_t steps, st
   return sampler;
 }
 
+// Sanitizer pass: every sample finite and a positive temperature, and nothing more.
+bool short_run_checked(const Sampler& s, const std::string& what) {
+  if (!testing::short_runs()) return false;
+  EXPECT_FALSE(s.temperature.empty()) << what;
+  for (const std::vector<double>* series : {&s.kinetic, &s.temperature, &s.potential, &s.conserved,
+                                            &s.total, &s.centre_of_mass_kinetic})
+    for (double v : *series) EXPECT_TRUE(std::isfinite(v)) << what;
+  for (double t : s.temperature) EXPECT_GT(t, 0.0) << what;
+  return true;
+}
+
 void expect_canonical_kinetic_energy(const Sampler& s, double dof, double temperature,
                                      const std::string& what) {
+  if (short_run_checked(s, what)) return;
   const Estimate t = block_estimate(s.temperature);
   const Estimate k = block_variance(s.kinetic);
   const double variance = 0.5 * dof * temperature * temperature;
@@ -128,6 +144,7 @@ TEST_P(Thermostat, RigidChainsKineticEnergyIsCanonicalAndEquipartitioned) {
   EXPECT_EQ(dof, 3 * 120 - 90 - (langevin ? 0 : 3));
   const Sampler s = sample(input, 1000, 60000, 20);
   expect_canonical_kinetic_energy(s, dof, 1.5, "rigid 4-mers " + GetParam());
+  if (testing::short_runs()) return;
   const Estimate com = block_estimate(s.centre_of_mass_kinetic);
   const double com_dof = 3 * 30 - (langevin ? 0 : 3);
   std::printf("centres of mass: K = %.3f +- %.3f, equipartition %.3f\n", com.value, com.error,
@@ -191,6 +208,7 @@ TEST_P(EveryIntegrator, ReachesTheBathTemperature) {
   // The implicit integrators are slow: fewer, sparser samples.
   const bool implicit = integrator == "midpoint" || integrator == "direct";
   const Sampler s = implicit ? sample(input, 500, 6000, 10) : sample(input, 1000, 20000, 20);
+  if (short_run_checked(s, integrator + " + " + thermostat)) return;
   const Estimate t = block_estimate(s.temperature);
   std::printf("%s + %s: T = %.4f +- %.4f (bath 1.5)\n", integrator.c_str(), thermostat.c_str(),
               t.value, t.error);

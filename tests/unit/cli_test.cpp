@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "support/file_contents.hpp"
 #include "support/shell.hpp"
 
 namespace {
@@ -119,11 +120,6 @@ TEST(Cli, ConstrainedRunStartsAtItsTemperatureWithItsDegreesOfFreedom) {
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-
 // README "Exit status": one status per kind of outcome.
 TEST(Cli, ExitStatusTellsTheKindOfOutcome) {
   EXPECT_EQ(run_deli("").status, 2);                       // usage
@@ -163,7 +159,7 @@ TEST(Cli, RunEndsWithCheckpointFinalDataAndLog) {
   const Result info = run_deli("info " + dir + "/c.h5");
   EXPECT_THAT(info.output, HasSubstr("at step 10")) << info.output;
   // The log is the terminal's output (stdout), line for line.
-  EXPECT_EQ(slurp(dir + "/run.log"), r.output);
+  EXPECT_EQ(deli::testing::file_contents(dir + "/run.log"), r.output);
   // The final state read back: a 0-step run from it starts where the first run ended.
   std::ofstream(dir + "/again.toml") << "[system]\ndata = \"final.data\"\n"
                                      << model << "[run]\nsteps = 0\n";
