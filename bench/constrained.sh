@@ -8,7 +8,8 @@
 # the default input (rigid-rod slit, 1200 beads, rods + contacts + walls, shadow-H) and the
 # hard-sphere fluid (eta 0.30, N 4000, h 0.005), which no peer integrates. Ends with the
 # summary and each engine's ratio to deli. The peers come from build/bench/peers/deli-peers
-# (built with -DDELI_CROSSCHECK=ON, the default); no `lmp` binary is needed.
+# (defined with -DDELI_CROSSCHECK=ON, the default; built here on first use); no `lmp`
+# binary is needed.
 #
 # Usage: bench/constrained.sh [slit|harmonic|rigid|spheres ...] (default: all), with
 # STEPS=n to override every input's step count, DELI=path to pick deli's binary, PEERS=0 to
@@ -19,6 +20,10 @@ top=$(cd "$(dirname "$0")/.." && pwd)
 deli=${DELI:-$top/build/deli}
 peers=${PEERS_BIN:-$top/build/bench/peers/deli-peers}
 [[ ${PEERS:-1} == 0 ]] && peers=
+# Not part of the default build (a benchmark's driver): build it on first use.
+if [[ -n $peers && ! -x $peers && -z ${PEERS_BIN:-} && -f $top/build/CMakeCache.txt ]]; then
+  cmake --build "$top/build" --target deli-peers >&2 || true
+fi
 if [[ -n $peers && ! -x $peers ]]; then
   echo "note: $peers not built (configure with -DDELI_CROSSCHECK=ON): deli alone" >&2
   peers=

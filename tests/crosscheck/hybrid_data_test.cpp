@@ -12,12 +12,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "support/source_tree.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
 namespace {
 
-const std::string kSource = DELI_SOURCE_DIR;
+using testing::kSource;
 const std::string kHybridCoeffs =
     "Bond Coeffs # hybrid\n\n1 fene 30.0 1.5 1.0 1.0\n2 harmonic 100.0 0.97\n\n";
 

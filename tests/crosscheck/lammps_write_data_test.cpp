@@ -9,12 +9,13 @@
 
 #include "input/lammps_data.hpp"
 #include "support/shell.hpp"
+#include "support/source_tree.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
 namespace {
 
-const std::string kSource = DELI_SOURCE_DIR;
+using testing::kSource;
 
 // The Kremer-Grest melt (FENE + WCA, special_bonds fene) handed to LAMMPS, which writes it
 // back with `write_data FILE [pair ij]`; returns LAMMPS' potential energy.

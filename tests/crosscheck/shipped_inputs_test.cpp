@@ -15,12 +15,13 @@
 
 #include "crosscheck/validate.hpp"
 #include "support/short_runs.hpp"
+#include "support/source_tree.hpp"
 
 namespace deli {
 namespace {
 
 namespace fs = std::filesystem;
-const std::string kSource = DELI_SOURCE_DIR;
+using testing::kSource;
 
 std::vector<std::string> shipped_inputs() {
   std::vector<std::string> inputs;

@@ -13,11 +13,12 @@
 
 #include "integrators/velocity_verlet.hpp"
 #include "support/short_runs.hpp"
+#include "support/source_tree.hpp"
 
 namespace deli {
 namespace {
 
-const std::string kSource = DELI_SOURCE_DIR;
+using testing::kSource;
 
 struct Model {
   std::string name;

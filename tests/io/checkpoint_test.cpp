@@ -20,6 +20,7 @@
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/shell.hpp"
+#include "support/short_runs.hpp"
 
 namespace deli {
 namespace {
@@ -192,8 +193,12 @@ TEST(Checkpoint, EverySingleByteFlipIsRefusedOrHarmless) {
   std::ifstream in(dir + "/flip.h5", std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), {});
   ASSERT_GT(bytes.size(), 1000u);
+  // Under the sanitizers (each read about 10 times slower) every fifth byte: 5 is coprime to
+  // 2, 4 and 8, so the flips still fall at every offset within HDF5's integers, addresses
+  // and doubles; the plain pass flips every byte.
+  const std::size_t stride = deli::testing::short_runs() ? 5 : 1;
   std::size_t refused = 0, harmless = 0;
-  for (std::size_t k = 0; k < bytes.size(); ++k) {
+  for (std::size_t k = 0; k < bytes.size(); k += stride) {
     std::string flipped = bytes;
     flipped[k] = static_cast<char>(~flipped[k]);
     std::ofstream(dir + "/flipped.h5", std::ios::binary | std::ios::trunc) << flipped;

@@ -33,9 +33,9 @@ struct Series {
   }
 };
 
-class Record final : public Observer {
+class RecordSeries final : public Observer {
  public:
-  explicit Record(Series& s) : s_(s) {}
+  explicit RecordSeries(Series& s) : s_(s) {}
   void on_thermo(const ThermoSample& t) override {
     s_.time.push_back(t.time);
     s_.energy.push_back(t.total);
@@ -54,7 +54,7 @@ Series run_input(const std::string& name, std::int64_t steps, std::int64_t every
   if (start_z >= 0) input.system.particles.position[0].z = start_z;
   const auto integrator = make_integrator(input);
   Series series;
-  Record record(series);
+  RecordSeries record(series);
   run(input.system, *integrator, steps, every, {&record});
   return series;
 }

@@ -53,9 +53,9 @@ struct Trace {
 // with); a drift as large as the oscillation would give 1 or more.
 constexpr double kBounded = 0.5;
 
-class Record final : public Observer {
+class RecordTrace final : public Observer {
  public:
-  explicit Record(Trace& t) : t_(t) {}
+  explicit RecordTrace(Trace& t) : t_(t) {}
   void on_thermo(const ThermoSample& s) override {
     t_.energy.push_back(s.total);
     if (s.angular_momentum) t_.angular_z.push_back(s.angular_momentum->z);
@@ -76,7 +76,7 @@ Trace run_example(const std::string& name, std::int64_t steps = -1, std::int64_t
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/paper/" + name + ".toml");
   Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
   Trace trace;
-  Record record(trace);
+  RecordTrace record(trace);
   run(input.system, gvi, steps < 0 ? input.steps : steps, every, {&record});
   return trace;
 }

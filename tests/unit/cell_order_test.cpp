@@ -20,7 +20,7 @@ namespace {
 
 // 100 harmonic chains of 40 beads with shifted LJ (bonded exclusions), jiggled and
 // wrapped into the box as a run does before each build (the list then has image codes).
-RunInput chain_melt() {
+RunInput wrapped_chain_melt() {
   RunInput input = load_run_input(DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000_harmonic.toml");
   Particles& p = input.system.particles;
   testing::jiggle(p, 0.05, 13);
@@ -39,7 +39,7 @@ NeighborList list_for(const RunInput& input, bool cell_order) {
 }
 
 TEST(CellOrder, TheListBySlotIsTheListByParticleRenamed) {
-  const RunInput input = chain_melt();
+  const RunInput input = wrapped_chain_melt();
   const NeighborList plain = list_for(input, false), sorted = list_for(input, true);
   // The list by particle does not depend on the option.
   EXPECT_EQ(sorted.neighbors(), plain.neighbors());
@@ -84,7 +84,7 @@ TEST(CellOrder, TheListBySlotIsTheListByParticleRenamed) {
 }
 
 TEST(CellOrder, ForcesAgreeWithTheListByParticleToRoundOffAndRepeatBitForBit) {
-  const RunInput input = chain_melt();
+  const RunInput input = wrapped_chain_melt();
   const NeighborList plain = list_for(input, false), sorted = list_for(input, true);
   std::vector<Vec3> f_plain, f_sorted, f_again;
   const ForceEvaluation e_plain = input.force_field->compute(input.system, plain, f_plain);

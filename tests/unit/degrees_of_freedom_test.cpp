@@ -130,12 +130,12 @@ Constraint rod(std::int32_t i, std::int32_t j, const std::vector<Vec3>& x) {
   return {ConstraintKind::rod, i, j, norm(x[i] - x[j]), {}, {}};
 }
 
-const Box kOpenBox({-10, -10, -10}, {10, 10, 10}, {false, false, false});
+const Box kUnboundedBox({-10, -10, -10}, {10, 10, 10}, {false, false, false});
 
 TEST(EqualityRank, ChainOfRodsIsIndependent) {
   const std::vector<Vec3> x = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {1, 1, 1}};
   const std::vector<Constraint> rows = {rod(0, 1, x), rod(1, 2, x), rod(2, 3, x)};
-  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 3u);
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kUnboundedBox), 3u);
 }
 
 TEST(EqualityRank, FlatSquareWithBothDiagonalsHasRankFive) {
@@ -143,7 +143,7 @@ TEST(EqualityRank, FlatSquareWithBothDiagonalsHasRankFive) {
   std::vector<Constraint> rows;
   for (std::int32_t i = 0; i < 4; ++i)
     for (std::int32_t j = i + 1; j < 4; ++j) rows.push_back(rod(i, j, x));
-  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 5u);  // 2n - 3
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kUnboundedBox), 5u);  // 2n - 3
 }
 
 TEST(EqualityRank, BipyramidWithItsAxisHasOneRedundantRod) {
@@ -157,9 +157,9 @@ TEST(EqualityRank, BipyramidWithItsAxisHasOneRedundantRod) {
   std::vector<Constraint> rows = {rod(0, 1, x), rod(1, 2, x), rod(2, 0, x)};
   for (std::int32_t apex : {3, 4})
     for (std::int32_t i = 0; i < 3; ++i) rows.push_back(rod(apex, i, x));
-  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 9u);
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kUnboundedBox), 9u);
   rows.push_back(rod(3, 4, x));
-  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 9u);
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kUnboundedBox), 9u);
 }
 
 TEST(EqualityRank, AnchorsOnSeparateAtomsAreIndependent) {
@@ -169,7 +169,7 @@ TEST(EqualityRank, AnchorsOnSeparateAtomsAreIndependent) {
     rows.push_back({ConstraintKind::anchor, i, -1, 1.0, x[i] + Vec3{0, 0, 1}, {}});
   }
   rows.push_back(rod(1, 2, x));
-  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kOpenBox), 4u);
+  EXPECT_EQ(independent_equalities(rows, x.data(), x.size(), kUnboundedBox), 4u);
 }
 
 }  // namespace
