@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace deli {
 
@@ -24,6 +25,7 @@ std::unique_ptr<RodChain> RodChain::make(const LocalCluster& cluster) {
     c.i_.push_back(row.i);
     c.j_.push_back(row.j);
     c.length_.push_back(row.length);
+    c.inverse_length_.push_back(1.0 / row.length);
     const bool i_first = row.i < row.j;
     c.low_.push_back(i_first ? row.i : row.j);
     c.high_.push_back(i_first ? row.j : row.i);
@@ -58,22 +60,86 @@ std::unique_ptr<RodChain> RodChain::make(const LocalCluster& cluster) {
   for (std::size_t p = 0; p < n; ++p) {
     if (c.first_row_[p] < 0) return nullptr;  // a particle no rod touches
   }
+  c.image_.assign(m, Vec3{});
   return chain;
 }
 
 void RodChain::directions(const std::vector<Vec3>& x, const Box& box, std::vector<Vec3>& u,
                           std::vector<double>& r) const {
+  differences(x, box, u, r);
+  normalize(u, r);
+}
+
+// Three passes (here the first, normalize the other two), so that the square roots and the
+// divisions of successive rods overlap (within one rod each waits for the last); the same
+// operations as norm() and d / |d|. The minimum image with each rod's last periodic image n:
+// d - period n is Box::minimum_image(d), operation for operation, whenever rounding
+// d / period would give n, as it does when |d - period n| <= 0.4 period on every periodic
+// axis (d / period within 0.4 of n, and the rounding of the division far below 0.1). Only
+// when a rod leaves that range (a particle was wrapped, or a first call) is the image
+// rounded anew, for the whole pass: a branch and six operations per rod instead of the
+// roundings' conversions.
+void RodChain::differences(const std::vector<Vec3>& x, const Box& box, std::vector<Vec3>& d,
+                           std::vector<double>& d2) const {
   const std::size_t m = rows();
-  u.resize(m);
-  r.resize(m);
-  // Three passes, so that the square roots and the divisions of successive rods overlap
-  // (within one rod each waits for the last); the same operations as norm() and d / |d|.
+  d.resize(m);
+  d2.resize(m);
+  const Vec3 period = box.period();  // a copy: d's stores cannot alias it
+  constexpr double open = std::numeric_limits<double>::infinity();
+  const Vec3 limit{period.x > 0 ? 0.4 * period.x : open, period.y > 0 ? 0.4 * period.y : open,
+                   period.z > 0 ? 0.4 * period.z : open};
+  const Vec3* image = image_.data();
+  bool images_hold = true;
   for (std::size_t k = 0; k < m; ++k) {
-    u[k] = box.minimum_image(x[i_[k]] - x[j_[k]]);
-    r[k] = norm2(u[k]);
+    Vec3 e = x[i_[k]] - x[j_[k]];
+    e.x -= period.x * image[k].x;
+    e.y -= period.y * image[k].y;
+    e.z -= period.z * image[k].z;
+    // Also false for NaN. Bitwise: no branch per rod.
+    images_hold &=
+        (std::abs(e.x) <= limit.x) & (std::abs(e.y) <= limit.y) & (std::abs(e.z) <= limit.z);
+    d[k] = e;
+    d2[k] = norm2(e);
   }
+  if (images_hold) return;
+  const Vec3& inverse_period = box.inverse_period();
+  for (std::size_t k = 0; k < m; ++k) {
+    const Vec3 e = x[i_[k]] - x[j_[k]];
+    image_[k] = {Box::round_to_integer(e.x * inverse_period.x),
+                 Box::round_to_integer(e.y * inverse_period.y),
+                 Box::round_to_integer(e.z * inverse_period.z)};
+    d[k] = box.minimum_image(e);
+    d2[k] = norm2(d[k]);
+  }
+}
+
+void RodChain::normalize(std::vector<Vec3>& u, std::vector<double>& r) const {
+  const std::size_t m = rows();
   for (std::size_t k = 0; k < m; ++k) r[k] = std::sqrt(r[k]);
   for (std::size_t k = 0; k < m; ++k) u[k] = r[k] > 0 ? u[k] * (1.0 / r[k]) : Vec3{};
+}
+
+// The residual r_k - L_k with r_k = fl(sqrt(d2_k)) obeys, for d2_k within a quarter of L_k^2
+// (so that d2_k - fl(L_k^2) and r_k - L_k are exact subtractions, Sterbenz):
+//   |r_k - L_k| <= |sqrt(d2_k) - L_k| + |r_k - sqrt(d2_k)|
+//              <= (|fl(d2_k - fl(L_k^2))| + L_k^2 2^-53) / L_k + sqrt(d2_k) 2^-53
+//              <= fl(|d2_k - fl(L_k^2)| fl(1 / L_k)) (1 + 2^-51) + L_k 2^-51,
+// as |sqrt(d2) - L| = |d2 - L^2| / (sqrt(d2) + L) <= |d2 - L^2| / L. The bound below rounds
+// with slack 2^-50 on both terms, above all rounding of its own evaluation.
+double RodChain::held_bound(const std::vector<double>& d2, double tolerance) const {
+  constexpr double slack = 0x1p-50;
+  double bound = 0.0;
+  for (std::size_t k = 0; k < rows(); ++k) {
+    const double length = length_[k];
+    const double relative_gap = std::abs(d2[k] - length * length) * inverse_length_[k];
+    const double rod_bound = relative_gap * (1 + slack) + length * slack;
+    // Also false for NaN.
+    if (!(relative_gap <= 0.25 * length && rod_bound <= tolerance)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    bound = std::max(bound, rod_bound);
+  }
+  return bound;
 }
 
 // The Thomas algorithm of solve_tridiagonal with each band entry made as
@@ -180,20 +246,33 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
       x[p] = ws.x0[p] + impulse_on(p, ws.uq, z) * (h * inverse_mass_[p]);
     }
   };
-  // Gaps (the residual) and the rods' directions and lengths at x.
-  auto residual = [&](const std::vector<Vec3>& x, Eigen::VectorXd& phi, std::vector<Vec3>& u,
-                      std::vector<double>& r) {
-    directions(x, box, u, r);
+
+  // Whether the rods at x, whose differences and squared lengths u, r hold, are proven held
+  // (with the residual's norm below `merit_cap` too) without their square roots: the
+  // residual, then computed, would show it, so the iteration would take the same course.
+  // Otherwise u, r, phi become the directions, lengths and residual at x. At the last
+  // position of a solve this saves the square roots and divisions of one directions pass.
+  auto held_or_residual = [&](Eigen::VectorXd& phi, std::vector<Vec3>& u, std::vector<double>& r,
+                              double merit_cap) {
+    const double bound = held_bound(r, tolerance);
+    // sum_k phi_k^2 <= m bound^2; the factor 2 covers the rounding of Eigen's sum.
+    if (bound <= tolerance && static_cast<double>(m) * bound * bound * 2 <= merit_cap) {
+      status.residual = bound;
+      return true;
+    }
+    normalize(u, r);
     phi.resize(rows_count);
     for (std::size_t k = 0; k < m; ++k) phi(static_cast<Eigen::Index>(k)) = r[k] - length_[k];
+    return false;
   };
 
   status = SolverStatus{};
   ws.z.setZero(rows_count);
   // positions(z = 0): a zero impulse adds +0 to x0, which leaves it as it is.
   ws.x = ws.x0;
-  residual(ws.x, ws.phi, ws.ux, ws.rx);
-  for (;;) {
+  differences(ws.x, box, ws.ux, ws.rx);
+  bool held = held_or_residual(ws.phi, ws.ux, ws.rx, std::numeric_limits<double>::infinity());
+  while (!held) {
     status.residual = residual_norm(ws.phi);
     if (status.residual <= tolerance) {
       status.converged = true;
@@ -208,8 +287,15 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     for (int halvings = 0;; ++halvings) {
       ws.trial = ws.z + t * ws.step;
       positions(ws.trial, ws.xt);
-      residual(ws.xt, ws.pt, ws.uxt, ws.rxt);
-      if (ws.pt.squaredNorm() <= (1 - 1e-4 * t) * merit) {
+      const double merit_cap = (1 - 1e-4 * t) * merit;
+      differences(ws.xt, box, ws.uxt, ws.rxt);
+      if (held_or_residual(ws.pt, ws.uxt, ws.rxt, merit_cap)) {
+        std::swap(ws.z, ws.trial);
+        std::swap(ws.x, ws.xt);
+        held = true;
+        break;
+      }
+      if (ws.pt.squaredNorm() <= merit_cap) {
         std::swap(ws.z, ws.trial);
         std::swap(ws.x, ws.xt);
         std::swap(ws.phi, ws.pt);
@@ -221,6 +307,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
       t *= 0.5;
     }
   }
+  status.converged = true;
   for (std::size_t p = 0; p < n; ++p) impulse[particles_[p]] = impulse_on(p, ws.uq, ws.z);
   for (std::size_t k = 0; k < m; ++k) virial += ws.z(static_cast<Eigen::Index>(k)) * ws.rq[k];
   return true;

@@ -58,6 +58,15 @@ class RodChain {
   // Directions and lengths of every rod at local positions x.
   void directions(const std::vector<Vec3>& x, const Box& box, std::vector<Vec3>& u,
                   std::vector<double>& r) const;
+  // The two halves of directions(): the rods' minimum-image differences d and squared
+  // lengths d2, then d, d2 turned into directions and lengths in place.
+  void differences(const std::vector<Vec3>& x, const Box& box, std::vector<Vec3>& d,
+                   std::vector<double>& d2) const;
+  void normalize(std::vector<Vec3>& u, std::vector<double>& r) const;
+  // An upper bound, from the squared lengths d2 alone (no square roots), on max_k |r_k - L_k|
+  // as directions() and the residual would compute it; +inf when that bound exceeds
+  // `tolerance` for some rod (or d2 is not finite).
+  double held_bound(const std::vector<double>& d2, double tolerance) const;
   // Per particle: sum over its rods of s u z (the impulse C z).
   Vec3 impulse_on(std::size_t p, const std::vector<Vec3>& u, const Eigen::VectorXd& z) const {
     Vec3 out{};
@@ -89,6 +98,9 @@ class RodChain {
     Vec3 period, inverse_period;
   };
   mutable DirectionsMemo memo_;
+  // Per rod: the periodic image (in periods, per axis) its last minimum image subtracted,
+  // tried first by differences(). Mutable like memo_: a cache that never changes a number.
+  mutable std::vector<Vec3> image_;
 
   std::vector<std::int32_t> particles_;  // local -> global
   std::vector<double> inverse_mass_;
@@ -96,7 +108,7 @@ class RodChain {
   // with their signs (sums over particles run in particle order); the particle shared with
   // the next rod and the product of its signs in the two rods.
   std::vector<std::int32_t> i_, j_, low_, high_, shared_;
-  std::vector<double> length_, low_sign_, high_sign_, shared_sign_;
+  std::vector<double> length_, inverse_length_, low_sign_, high_sign_, shared_sign_;
   // Per particle: its rods in row order with their signs (second_row_ -1: none).
   std::vector<std::int32_t> first_row_, second_row_;
   std::vector<double> first_sign_, second_sign_;
