@@ -365,7 +365,8 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
   auto local = [&](std::int32_t g) {
     return cluster_of_particle_[g] == self ? local_index_of_particle_[g] : std::int32_t{-1};
   };
-  shadow.blocks.reserve(blocks_of_cluster_[c].size());
+  shadow.hessian = &hessian_blocks_;
+  shadow.pairs.reserve(blocks_of_cluster_[c].size());
   shadow.outside_velocity.reserve(blocks_of_cluster_[c].size());
   for (std::size_t k : blocks_of_cluster_[c]) {
     const PairHessian& b = hessian_blocks_[k];
@@ -377,7 +378,7 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
     } else if (other < 0) {
       outside_velocity = p[b.b] * (1.0 / P.mass[b.b]);
     }
-    shadow.blocks.push_back({a, other, b.block});
+    shadow.pairs.push_back({a, other, k});
     shadow.outside_velocity.push_back(outside_velocity);
   }
   return shadow;

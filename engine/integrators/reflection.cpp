@@ -27,15 +27,15 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
 
 Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool with_outside) const {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
-  for (std::size_t k = 0; k < blocks.size(); ++k) {
-    const PairHessian& b = blocks[k];
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const LocalPair& b = pairs[k];
     Eigen::Vector3d dv = v.segment<3>(3 * b.a);
     if (b.b >= 0) {
       dv -= v.segment<3>(3 * b.b);
     } else if (with_outside) {
       dv -= Eigen::Vector3d(outside_velocity[k].x, outside_velocity[k].y, outside_velocity[k].z);
     }
-    const Eigen::Vector3d f = b.block * dv;
+    const Eigen::Vector3d f = (*hessian)[b.block].block * dv;
     out.segment<3>(3 * b.a) += f;
     if (b.b >= 0) out.segment<3>(3 * b.b) -= f;
   }
