@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <numeric>
-#include <unordered_map>
 
 namespace deli {
 
@@ -15,34 +14,62 @@ std::int32_t root(std::vector<std::int32_t>& parent, std::int32_t a) {
 
 std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
                                    std::size_t particle_count) {
-  std::vector<std::int32_t> parent(particle_count);
-  std::iota(parent.begin(), parent.end(), 0);
+  // Scratch kept between calls (this runs several times a step, often with a handful of
+  // contact rows among thousands of particles): outside a call parent[p] == p and
+  // cluster_of_root[p] == -1 for every p; a call touches, and then resets, only the
+  // particles its rows name.
+  thread_local std::vector<std::int32_t> parent, cluster_of_root, touched;
+  if (parent.size() < particle_count) {
+    const std::size_t before = parent.size();
+    parent.resize(particle_count);
+    std::iota(parent.begin() + static_cast<std::ptrdiff_t>(before), parent.end(),
+              static_cast<std::int32_t>(before));
+    cluster_of_root.resize(particle_count, -1);
+  }
+  constexpr std::int32_t named = -2;  // in cluster_of_root: named by a row, no cluster yet
+  touched.clear();
+  auto name = [&](std::int32_t p) {
+    if (cluster_of_root[p] == -1) cluster_of_root[p] = named, touched.push_back(p);
+  };
   for (const Constraint& c : rows) {
+    name(c.i);
     if (c.j < 0) continue;
+    name(c.j);
     const std::int32_t a = root(parent, c.i), b = root(parent, c.j);
     if (a != b) parent[std::max(a, b)] = std::min(a, b);  // root = smallest index
   }
-  std::unordered_map<std::int32_t, std::size_t> cluster_of_root;
-  std::vector<Cluster> clusters;
-  std::vector<bool> seen(particle_count, false);
-  // Rows in order; a cluster is created at its first row, then renumbered by its root.
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    const std::int32_t top = root(parent, rows[r].i);
-    auto [it, added] = cluster_of_root.try_emplace(top, clusters.size());
-    if (added) clusters.emplace_back();
-    Cluster& cl = clusters[it->second];
-    cl.rows.push_back(static_cast<std::int32_t>(r));
-    for (std::int32_t p : {rows[r].i, rows[r].j}) {
-      if (p >= 0 && !seen[p]) {
-        seen[p] = true;
-        cl.particles.push_back(p);
-      }
+  // A component's root is its smallest particle, so visiting the particles in ascending
+  // order makes the clusters in the order of their first particle, each particle list
+  // ascending: the named particles sorted when few, else all particles scanned.
+  if (touched.size() * 8 < particle_count) {
+    std::sort(touched.begin(), touched.end());
+  } else {
+    touched.clear();
+    for (std::size_t p = 0; p < particle_count; ++p) {
+      if (cluster_of_root[p] == named) touched.push_back(static_cast<std::int32_t>(p));
     }
   }
-  for (Cluster& cl : clusters) std::sort(cl.particles.begin(), cl.particles.end());
-  std::sort(clusters.begin(), clusters.end(), [](const Cluster& a, const Cluster& b) {
-    return a.particles.front() < b.particles.front();
-  });
+  std::vector<Cluster> clusters;
+  std::vector<std::int32_t> row_count;
+  for (const std::int32_t p : touched) {
+    const std::int32_t top = root(parent, p);
+    if (cluster_of_root[top] < 0) {
+      cluster_of_root[top] = static_cast<std::int32_t>(clusters.size());
+      clusters.emplace_back();
+      row_count.push_back(0);
+    }
+    clusters[cluster_of_root[top]].particles.push_back(p);
+  }
+  std::vector<std::int32_t> cluster_of_row(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    cluster_of_row[r] = cluster_of_root[root(parent, rows[r].i)];
+    ++row_count[cluster_of_row[r]];
+  }
+  for (std::size_t k = 0; k < clusters.size(); ++k) clusters[k].rows.reserve(row_count[k]);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    clusters[cluster_of_row[r]].rows.push_back(static_cast<std::int32_t>(r));
+  }
+  for (const std::int32_t p : touched) parent[p] = p, cluster_of_root[p] = -1;
   return clusters;
 }
 

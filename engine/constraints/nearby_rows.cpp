@@ -15,6 +15,7 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   const std::vector<std::uint8_t>& codes = list.image_codes();
   shifted_ = !codes.empty();
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
+  if (bonded_pairs) index_bonded_pairs(set, particles.size());
   for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
     for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
       const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
@@ -32,11 +33,7 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
       const double contact = radius[a] + radius[b];
       const double within = contact + margin_;
       if (d2 > within * within * (1.0 + 1e-6) + 1e-300) continue;
-      if (bonded_pairs &&
-          std::binary_search(set.unconstrained_pairs.begin(), set.unconstrained_pairs.end(),
-                             std::array<std::int32_t, 2>{a, b})) {
-        continue;
-      }
+      if (bonded_pairs && bonded(a, b)) continue;
       pairs_.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
     }
   }
@@ -44,6 +41,29 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   moved_.assign(particles.size(), 0.0);
   list_ = &list;
   list_builds_ = list.builds();
+}
+
+void NearbyRows::index_bonded_pairs(const ConstraintSet& set, std::size_t particle_count) {
+  const auto& pairs = set.unconstrained_pairs;
+  if (bonded_source_ == &pairs && bonded_count_ == pairs.size() &&
+      bonded_first_.size() == particle_count + 1) {
+    return;
+  }
+  // Sorted by (a, b): each a's partners are one ascending run.
+  bonded_first_.assign(particle_count + 1, 0);
+  for (const auto& [a, b] : pairs) ++bonded_first_[a + 1];
+  for (std::size_t i = 0; i < particle_count; ++i) bonded_first_[i + 1] += bonded_first_[i];
+  bonded_partner_.resize(pairs.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) bonded_partner_[k] = pairs[k][1];
+  bonded_source_ = &pairs;
+  bonded_count_ = pairs.size();
+}
+
+bool NearbyRows::bonded(std::int32_t a, std::int32_t b) const {
+  for (std::int32_t k = bonded_first_[a]; k < bonded_first_[a + 1]; ++k) {
+    if (bonded_partner_[k] == b) return true;
+  }
+  return false;
 }
 
 void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,

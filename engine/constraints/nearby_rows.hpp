@@ -34,6 +34,11 @@ class NearbyRows {
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
             const NeighborList& list, const Box& box);
 
+  // ConstraintSet::unconstrained_pairs by first particle (a particle has a bond or two, so
+  // a short scan instead of a binary search over all bonds, whose branches mispredict).
+  void index_bonded_pairs(const ConstraintSet& set, std::size_t particle_count);
+  bool bonded(std::int32_t a, std::int32_t b) const;
+
   double margin_;
   // a < b, in the neighbour list's order, with their contact distance, their gap at the
   // anchor positions and, when the list has image codes, the periodic shift that makes
@@ -50,6 +55,9 @@ class NearbyRows {
   std::vector<std::int32_t> near_;  // pairs that may be within reach, by index
   const NeighborList* list_ = nullptr;
   std::int64_t list_builds_ = -1;
+  std::vector<std::int32_t> bonded_first_, bonded_partner_;
+  const void* bonded_source_ = nullptr;
+  std::size_t bonded_count_ = 0;
 };
 
 }  // namespace deli

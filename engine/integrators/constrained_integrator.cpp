@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 
 #include "constraints/clusters.hpp"
@@ -56,6 +57,15 @@ void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& wh
 }
 
 namespace {
+// a[i] == b[i] for every listed particle, bit for bit (a signed zero counts as itself).
+bool same_vectors(const std::vector<std::int32_t>& particles, const std::vector<Vec3>& a,
+                  const std::vector<Vec3>& b) {
+  for (std::int32_t i : particles) {
+    if (std::memcmp(&a[i], &b[i], sizeof(Vec3)) != 0) return false;
+  }
+  return true;
+}
+
 // A residual for a message: std::to_string prints 1e-9 as 0.000000.
 std::string scientific(double value) {
   char text[32];
@@ -92,17 +102,19 @@ double pair_virial(const Constraint& c, double z, const Vec3* x, const Box& box)
 }
 }  // namespace
 
-double ConstrainedIntegrator::solve_positions(System& system, const std::vector<Constraint>& rows,
-                                              const std::vector<bool>& equality,
-                                              const std::vector<Vec3>& q,
-                                              const std::vector<Vec3>& delta,
-                                              std::vector<Vec3>& impulse,
-                                              const std::vector<char>* delta_changed) {
+double ConstrainedIntegrator::solve_positions(
+    System& system, const std::vector<Constraint>& rows, const std::vector<bool>& equality,
+    const std::vector<Vec3>& q, const std::vector<Vec3>& delta, std::vector<Vec3>& impulse,
+    const std::vector<char>* delta_changed, const SolvedEqualities* solved_equalities) {
   const Particles& particles = system.particles;
   double virial = 0.0;
   const std::size_t cluster_count = cluster_rows(rows, particles);
   const bool equality_rows = &rows == &constraints_.equalities;
-  if (equality_rows) equality_iterations_.resize(cluster_count, 0);
+  if (equality_rows) {
+    equality_iterations_.resize(cluster_count, 0);
+    equality_chain_virial_.resize(cluster_count, 0.0);
+    equality_chain_solved_.resize(cluster_count, 0);
+  }
   auto count_solve = [&](int iterations) {
     ++stats_.solves;
     stats_.solver_iterations += iterations;
@@ -123,16 +135,32 @@ double ConstrainedIntegrator::solve_positions(System& system, const std::vector<
       // A chain of rods held as equalities: the chain kernel (same numbers, no gathering).
       bool held = true;
       for (std::int32_t r : cluster.rows) held = held && equality[r];
+      const auto own = static_cast<std::size_t>(prepared - equality_clusters_.all().data());
+      if (held && solved_equalities && own < equality_chain_solved_.size() &&
+          equality_chain_solved_[own] &&
+          same_vectors(cluster.particles, delta, solved_equalities->delta)) {
+        for (std::int32_t i : cluster.particles) impulse[i] = solved_equalities->impulse[i];
+        virial += equality_chain_virial_[own];
+        count_solve(equality_iterations_[own]);
+        continue;
+      }
       SolverStatus status;
+      double chain_virial = 0.0;
       if (held && prepared->chain->solve_positions(
                       q.data(), delta.data(), dt_, system.box, constraints_.tolerances.solver,
                       constraints_.limits.newton, constraints_.limits.line_search, chain_work_,
-                      impulse.data(), virial, status)) {
+                      impulse.data(), chain_virial, status)) {
+        virial += chain_virial;
         count_solve(status.iterations);
-        if (equality_rows) equality_iterations_[index] = status.iterations;
+        if (equality_rows) {
+          equality_iterations_[index] = status.iterations;
+          equality_chain_virial_[index] = chain_virial;
+          equality_chain_solved_[index] = 1;
+        }
         continue;
       }
     }
+    if (equality_rows) equality_chain_solved_[index] = 0;
     std::optional<LocalCluster> built;
     std::optional<ClusterRows> built_structure;
     if (!prepared) built_structure.emplace(built.emplace(localize(cluster, rows, particles.mass)));
@@ -337,7 +365,8 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
   auto local = [&](std::int32_t g) {
     return cluster_of_particle_[g] == self ? local_index_of_particle_[g] : std::int32_t{-1};
   };
-  shadow.blocks.reserve(blocks_of_cluster_[c].size());
+  shadow.hessian = &hessian_blocks_;
+  shadow.pairs.reserve(blocks_of_cluster_[c].size());
   shadow.outside_velocity.reserve(blocks_of_cluster_[c].size());
   for (std::size_t k : blocks_of_cluster_[c]) {
     const PairHessian& b = hessian_blocks_[k];
@@ -349,7 +378,7 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
     } else if (other < 0) {
       outside_velocity = p[b.b] * (1.0 / P.mass[b.b]);
     }
-    shadow.blocks.push_back({a, other, b.block});
+    shadow.pairs.push_back({a, other, k});
     shadow.outside_velocity.push_back(outside_velocity);
   }
   return shadow;

@@ -77,10 +77,20 @@ class ConstrainedIntegrator : public Integrator {
   // none of whose particles has a changed delta since the last such call at the same q are
   // not solved again; their impulses are left as that call wrote them, and its solver
   // iterations count again (the statistics are those of solving them again).
+  // With `solved` (any rows, the same q as the last call on the equality rows alone): a
+  // chain of rods left a cluster of its own whose delta equals, particle for particle and
+  // bit for bit, the delta that call solved it for takes that call's impulses
+  // (`solved->impulse`), virial and iteration count instead of being solved again.
+  // A chain's virial is summed on its own, then added.
+  struct SolvedEqualities {
+    const std::vector<Vec3>& delta;
+    const std::vector<Vec3>& impulse;
+  };
   double solve_positions(System& system, const std::vector<Constraint>& rows,
                          const std::vector<bool>& equality, const std::vector<Vec3>& q,
                          const std::vector<Vec3>& delta, std::vector<Vec3>& impulse,
-                         const std::vector<char>* delta_changed = nullptr);
+                         const std::vector<char>* delta_changed = nullptr,
+                         const SolvedEqualities* solved = nullptr);
   // The pair Hessian blocks touching the clusters marked `reflected`, in one scan; then
   // shadow_operator(..., c, p) is cluster c's shadow-energy operator.
   void gather_hessian_blocks(const System& system, const std::vector<Cluster>& clusters,
@@ -142,6 +152,10 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<Cluster> found_clusters_;
   RodChainWorkspace chain_work_;
   std::vector<int> equality_iterations_;  // per equality cluster, its last solve's iterations
+  // Per equality cluster: its chain's virial from that solve, and whether the chain kernel
+  // made it (else nothing to reuse).
+  std::vector<double> equality_chain_virial_;
+  std::vector<char> equality_chain_solved_;
   std::vector<PairHessian> hessian_blocks_;
   std::vector<std::vector<std::size_t>> blocks_of_cluster_;
   std::vector<std::int32_t> cluster_of_particle_;

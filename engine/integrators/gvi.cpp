@@ -276,13 +276,20 @@ void Gvi::solve_held_positions(System& system) {
   const std::vector<Vec3>& f_start = engine_.force();
   ws_.half.resize(n);
   for (std::size_t i = 0; i < n; ++i) ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h);
+  // Verlet: the free step is the constrained predictor's last one (the same numbers from
+  // the same momenta and forces) at the same q, so a chain no contact row joins, whose
+  // free step is bit for bit the one predicted, takes the prediction's impulses.
+  const bool predicted = lagrangian_ == Lagrangian::verlet && constrained_predictor_ &&
+                         ws_.kicked_displacement.size() == n && ws_.prediction_kick.size() == n;
+  const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
     ws_.free.resize(n);
     for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
     ws_.impulse.assign(n, Vec3{});
     if (!rows.empty()) {
       ws_.position_virial =
-          solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse);
+          solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse, nullptr,
+                          predicted ? &prediction : nullptr);
     }
   };
   if (lagrangian_ == Lagrangian::verlet) {

@@ -1,5 +1,6 @@
 #include "integrators/reflection.hpp"
 
+#include "solvers/chain_projection.hpp"
 #include "solvers/cluster_matrices.hpp"
 #include "solvers/nonnegative_qp.hpp"
 
@@ -12,7 +13,8 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
     (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
   }
   Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, x, box);
-  if (!eq_rows.empty()) {
+  Eigen::MatrixXd Y;
+  if (!eq_rows.empty() && !project_out_chains(cluster, eq_rows, x, box, N, Y)) {
     // N <- (I - F (F^T W F)^+ F^T W) G: normals in the rod manifold's cotangent space.
     const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
     const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, x, box);
@@ -25,15 +27,15 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
 
 Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool with_outside) const {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
-  for (std::size_t k = 0; k < blocks.size(); ++k) {
-    const PairHessian& b = blocks[k];
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const LocalPair& b = pairs[k];
     Eigen::Vector3d dv = v.segment<3>(3 * b.a);
     if (b.b >= 0) {
       dv -= v.segment<3>(3 * b.b);
     } else if (with_outside) {
       dv -= Eigen::Vector3d(outside_velocity[k].x, outside_velocity[k].y, outside_velocity[k].z);
     }
-    const Eigen::Vector3d f = b.block * dv;
+    const Eigen::Vector3d f = (*hessian)[b.block].block * dv;
     out.segment<3>(3 * b.a) += f;
     if (b.b >= 0) out.segment<3>(3 * b.b) -= f;
   }
@@ -56,7 +58,8 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
   // second one.
   Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, q, box);
   Eigen::MatrixXd Y;
-  if (!eq_rows.empty()) {
+  // Chains of rods in O(rows); other equality rows through the dense pseudo-inverse.
+  if (!eq_rows.empty() && !project_out_chains(cluster, eq_rows, q, box, N, Y)) {
     const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
     const Eigen::MatrixXd WF = w.asDiagonal() * F;
     const Eigen::MatrixXd FWF = F.transpose() * WF;

@@ -14,12 +14,18 @@ enum class ReflectionEnergy { hamiltonian, shadow };
 
 // Verlet's second-order shadow Hamiltonian restricted to one cluster:
 // H~ = H - h^2/24 dV^T M^-1 dV + h^2/12 v^T d2V v, quadratic in p with
-// K = M^-1/2 + h^2/12 M^-1 d2V M^-1. `blocks` are the pair Hessian blocks touching the
+// K = M^-1/2 + h^2/12 M^-1 d2V M^-1. `pairs` are the pair Hessian blocks touching the
 // cluster in local indices (b = -1: a particle outside it, whose velocity is in
-// `outside_velocity` at the same position).
+// `outside_velocity` at the same position), each naming its block in `hessian` (the
+// gathered blocks of every reflected cluster: referred to, not copied).
 struct ShadowOperator {
+  struct LocalPair {
+    std::int32_t a, b;
+    std::size_t block;
+  };
   double h = 0;
-  std::vector<PairHessian> blocks;
+  const std::vector<PairHessian>* hessian = nullptr;
+  std::vector<LocalPair> pairs;
   std::vector<Vec3> outside_velocity;
   // d2V v over the cluster's coordinates (3n); outside particles move with their own
   // velocities when `with_outside`, else stand still.

@@ -11,7 +11,9 @@
 // gives the relative size of the first difference to tell that from a change of method.
 //
 // A change of results that is intended (a new solver, a reordered sum) regenerates the file:
-//   DELI_GOLDEN_UPDATE=1 build/tests/deli_property_tests --gtest_filter='Golden.*'
+//   OMP_NUM_THREADS=1 DELI_GOLDEN_UPDATE=1 build/tests/deli_property_tests --gtest_filter=Golden.*
+// (one thread, as ctest runs it: the pair forces' partial sums, and so the last bits,
+// depend on the thread count)
 // and the commit says why the numbers moved.
 #include <gtest/gtest.h>
 
