@@ -26,6 +26,13 @@ inline int chunks_for(std::size_t n) {
   return n < kParallelMinimum ? 1 : thread_count();
 }
 
+// Chunks for a loop over `items` items of uneven size holding `work` units in all (a
+// cluster loop: its rows): one where the work is short or there is a single item.
+inline int chunks_for_work(std::size_t items, std::size_t work) {
+  if (items < 2 || work < kParallelMinimum) return 1;
+  return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(thread_count()), items));
+}
+
 struct IndexRange {
   std::size_t begin, end;
 };
@@ -75,6 +82,29 @@ void parallel_for(std::size_t n, Body&& body) {
   for_each_chunk(n, chunks_for(n), [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) body(i);
   });
+}
+
+// What the serial loop `m = start; for (i < n) m = std::max(m, term(i));` finds (term(i) may
+// also write item i's outputs): each chunk takes its maximum, the chunks' maxima are taken
+// in chunk order. The maximum is exact, and a NaN term is passed over as the serial loop
+// passes it over, so the result is the serial loop's on any number of threads.
+template <class Term>
+double ordered_max(std::size_t n, double start, Term&& term) {
+  const int chunks = chunks_for(n);
+  if (chunks == 1) {
+    double m = start;
+    for (std::size_t i = 0; i < n; ++i) m = std::max(m, term(i));
+    return m;
+  }
+  std::vector<double> partial(static_cast<std::size_t>(chunks), start);
+  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    double m = start;
+    for (std::size_t i = begin; i < end; ++i) m = std::max(m, term(i));
+    partial[static_cast<std::size_t>(c)] = m;
+  });
+  double m = start;
+  for (const double p : partial) m = std::max(m, p);
+  return m;
 }
 
 // The sum over i in [0, n) of term(i) (T: double, Vec3, SymTensor): each chunk sums its

@@ -8,6 +8,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "integrators/lone_row_reflection.hpp"
 #include "solvers/cluster_matrices.hpp"
 #include "solvers/momentum_update.hpp"
@@ -102,12 +103,31 @@ double pair_virial(const Constraint& c, double z, const Vec3* x, const Box& box)
 }
 }  // namespace
 
+const Cluster& ConstrainedIntegrator::cluster_at(const std::vector<Constraint>& rows,
+                                                 std::size_t index) const {
+  if (&rows == &constraints_.equalities) return equality_clusters_.all()[index].cluster;
+  return found_clusters_[index];
+}
+
+namespace {
+// A cluster's position update that did not converge, thrown out of the cluster loop: the
+// report (the problem written to a file, then the message) is made once, for the cluster a
+// serial loop meets first, after the loop.
+struct UnconvergedCluster {
+  PositionProblem problem;
+  std::string before_file, after_file;  // the message around "the problem FILE"
+};
+}  // namespace
+
+// The clusters are independent (disjoint particles): they are solved in chunks of clusters
+// on several threads, each cluster by the same operations as alone. What the serial loop
+// accumulated as it went (the virial, the solve statistics) is joined after the loop in
+// cluster order, so the results are the same bits on any number of threads.
 double ConstrainedIntegrator::solve_positions(
     System& system, const std::vector<Constraint>& rows, const std::vector<bool>& equality,
     const std::vector<Vec3>& q, const std::vector<Vec3>& delta, std::vector<Vec3>& impulse,
     const std::vector<char>* delta_changed, const SolvedEqualities* solved_equalities) {
   const Particles& particles = system.particles;
-  double virial = 0.0;
   const std::size_t cluster_count = cluster_rows(rows, particles);
   const bool equality_rows = &rows == &constraints_.equalities;
   if (equality_rows) {
@@ -115,20 +135,19 @@ double ConstrainedIntegrator::solve_positions(
     equality_chain_virial_.resize(cluster_count, 0.0);
     equality_chain_solved_.resize(cluster_count, 0);
   }
-  auto count_solve = [&](int iterations) {
-    ++stats_.solves;
-    stats_.solver_iterations += iterations;
-    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, iterations);
-  };
-  for (std::size_t index = 0; index < cluster_count; ++index) {
+  // A chain's virial is one term, a generic cluster's one per row.
+  virial_terms_.reset(cluster_count,
+                      [&](std::size_t k) { return cluster_at(rows, k).rows.size(); });
+  cluster_iterations_.assign(cluster_count, -1);
+  auto solve_cluster = [&](std::size_t index, RodChainWorkspace& chain_work) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
     if (delta_changed && equality_rows) {
       bool changed = false;
       for (std::int32_t i : cluster.particles) changed = changed || (*delta_changed)[i];
       if (!changed) {
-        count_solve(equality_iterations_[index]);
-        continue;
+        cluster_iterations_[index] = equality_iterations_[index];
+        return;
       }
     }
     if (prepared && prepared->chain) {
@@ -140,24 +159,24 @@ double ConstrainedIntegrator::solve_positions(
           equality_chain_solved_[own] &&
           same_vectors(cluster.particles, delta, solved_equalities->delta)) {
         for (std::int32_t i : cluster.particles) impulse[i] = solved_equalities->impulse[i];
-        virial += equality_chain_virial_[own];
-        count_solve(equality_iterations_[own]);
-        continue;
+        virial_terms_.add(index, equality_chain_virial_[own]);
+        cluster_iterations_[index] = equality_iterations_[own];
+        return;
       }
       SolverStatus status;
       double chain_virial = 0.0;
       if (held && prepared->chain->solve_positions(
                       q.data(), delta.data(), dt_, system.box, constraints_.tolerances.solver,
-                      constraints_.limits.newton, constraints_.limits.line_search, chain_work_,
+                      constraints_.limits.newton, constraints_.limits.line_search, chain_work,
                       impulse.data(), chain_virial, status)) {
-        virial += chain_virial;
-        count_solve(status.iterations);
+        virial_terms_.add(index, chain_virial);
+        cluster_iterations_[index] = status.iterations;
         if (equality_rows) {
           equality_iterations_[index] = status.iterations;
           equality_chain_virial_[index] = chain_virial;
           equality_chain_solved_[index] = 1;
         }
-        continue;
+        return;
       }
     }
     if (equality_rows) equality_chain_solved_[index] = 0;
@@ -175,10 +194,11 @@ double ConstrainedIntegrator::solve_positions(
         solve_position_update(structure, local_equality, q_local, x0_local, dt_, system.box,
                               constraints_.tolerances.solver, constraints_.limits.newton,
                               constraints_.limits.line_search);
-    count_solve(solved.status.iterations);
+    cluster_iterations_[index] = solved.status.iterations;
     if (equality_rows) equality_iterations_[index] = solved.status.iterations;
     if (!solved.status.converged) {
-      PositionProblem problem;
+      UnconvergedCluster failure;
+      PositionProblem& problem = failure.problem;
       problem.step = system.step + 1;
       problem.h = dt_;
       problem.tolerance = constraints_.tolerances.solver;
@@ -192,9 +212,7 @@ double ConstrainedIntegrator::solve_positions(
       problem.x0 = x0_local;
       problem.failed_residual = solved.status.residual;
       problem.failed_iterations = solved.status.iterations;
-      const std::string file = save_position_problem(
-          "deli-failed-solve-step" + std::to_string(problem.step) + ".txt", problem);
-      throw SimulationError(
+      failure.before_file =
           "step " + std::to_string(system.step + 1) +
           ": the position update did not converge for the cluster of " +
           std::to_string(cluster.particles.size()) + " atoms from atom " +
@@ -205,35 +223,60 @@ double ConstrainedIntegrator::solve_positions(
           std::to_string(solved.status.iterations) + " Newton iterations" +
           (solved.line_search_failed ? " (its line search found no step that lowers the residual)"
                                      : " ([constraints.limits] newton = " +
-                                           std::to_string(constraints_.limits.newton) + ")") +
-          "; the problem " + file + "; deli solve-problem FILE solves it again" +
-          (setting_up_
-               ? "; the equality constraints cannot all hold from the starting configuration "
-                 "(infeasible lengths, or a start far from them): check the rod and string "
-                 "lengths against the starting distances"
-               : "; reduce the timestep"));
+                                           std::to_string(constraints_.limits.newton) + ")");
+      failure.after_file =
+          "; deli solve-problem FILE solves it again" +
+          std::string(setting_up_
+                          ? "; the equality constraints cannot all hold from the starting "
+                            "configuration (infeasible lengths, or a start far from them): "
+                            "check the rod and string lengths against the starting distances"
+                          : "; reduce the timestep");
+      throw failure;
     }
     for (std::size_t k = 0; k < cluster.particles.size(); ++k) {
       impulse[cluster.particles[k]] = solved.impulse[k];
     }
     for (std::size_t r = 0; r < local.rows.size(); ++r) {
-      virial += pair_virial(local.rows[r], solved.z(static_cast<Eigen::Index>(r)), q_local.data(),
-                            system.box);
+      virial_terms_.add(index, pair_virial(local.rows[r], solved.z(static_cast<Eigen::Index>(r)),
+                                           q_local.data(), system.box));
     }
+  };
+  const int chunks = chunks_for_work(cluster_count, rows.size());
+  if (chain_works_.size() < static_cast<std::size_t>(chunks)) chain_works_.resize(chunks);
+  try {
+    for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      for (std::size_t index = begin; index < end; ++index) {
+        solve_cluster(index, chain_works_[static_cast<std::size_t>(c)]);
+      }
+    });
+  } catch (const UnconvergedCluster& failure) {
+    const PositionProblem& problem = failure.problem;
+    const std::string file = save_position_problem(
+        "deli-failed-solve-step" + std::to_string(problem.step) + ".txt", problem);
+    throw SimulationError(failure.before_file + "; the problem " + file + failure.after_file);
   }
+  for (const int iterations : cluster_iterations_) {
+    ++stats_.solves;
+    stats_.solver_iterations += iterations;
+    stats_.max_solver_iterations = std::max(stats_.max_solver_iterations, iterations);
+  }
+  double virial = 0.0;
+  virial_terms_.add_to(virial);
   return virial;
 }
 
 double ConstrainedIntegrator::project_momenta(System& system, const std::vector<Constraint>& rows,
                                               const std::vector<Vec3>& x, std::vector<Vec3>& p) {
-  double virial = 0.0;
   const std::size_t cluster_count = cluster_rows(rows, system.particles);
-  for (std::size_t index = 0; index < cluster_count; ++index) {
+  virial_terms_.reset(cluster_count,
+                      [&](std::size_t k) { return cluster_at(rows, k).rows.size(); });
+  auto project_cluster = [&](std::size_t index, RodChainWorkspace& chain_work) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
     if (prepared && prepared->chain &&
-        prepared->chain->project_momenta(x.data(), p.data(), system.box, chain_work_, virial)) {
-      continue;
+        prepared->chain->project_momenta(x.data(), p.data(), system.box, chain_work,
+                                         virial_terms_.take(index, prepared->chain->rows()))) {
+      return;
     }
     std::optional<LocalCluster> built;
     std::optional<ClusterRows> built_structure;
@@ -248,8 +291,8 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
     const SolverStatus status = project_momentum(structure, x_local, p_local, system.box,
                                                  constraints_.tolerances.velocity, mu);
     for (std::size_t r = 0; r < local.rows.size(); ++r) {
-      virial +=
-          pair_virial(local.rows[r], mu(static_cast<Eigen::Index>(r)), x_local.data(), system.box);
+      virial_terms_.add(index, pair_virial(local.rows[r], mu(static_cast<Eigen::Index>(r)),
+                                           x_local.data(), system.box));
     }
     if (!status.converged) {
       throw SimulationError(
@@ -265,7 +308,18 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
           "); the constraint matrix is singular beyond repair or the velocities are not finite");
     }
     scatter(p_local, cluster.particles, p);
-  }
+  };
+  const int chunks = chunks_for_work(cluster_count, rows.size());
+  if (chain_works_.size() < static_cast<std::size_t>(chunks)) chain_works_.resize(chunks);
+  // A failure is thrown once every chunk has ended: the lowest chunk's, whose loop stopped at
+  // the first failing cluster a serial loop meets.
+  for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    for (std::size_t index = begin; index < end; ++index) {
+      project_cluster(index, chain_works_[static_cast<std::size_t>(c)]);
+    }
+  });
+  double virial = 0.0;
+  virial_terms_.add_to(virial);
   return virial;
 }
 
@@ -483,10 +537,10 @@ void ConstrainedIntegrator::record_geometry(const System& system,
   }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
-  for (const Constraint& c : constraints_.equalities) {
-    const double violation = std::abs(gap_of(c, P.position.data(), system.box)) / c.length;
-    stats_.max_rod_violation = std::max(stats_.max_rod_violation, violation);
-  }
+  const std::vector<Constraint>& rods = constraints_.equalities;
+  stats_.max_rod_violation = ordered_max(rods.size(), stats_.max_rod_violation, [&](std::size_t k) {
+    return std::abs(gap_of(rods[k], P.position.data(), system.box)) / rods[k].length;
+  });
 }
 
 void ConstraintStatistics::add(const ConstraintStatistics& later) {

@@ -6,6 +6,7 @@
 
 #include "constraints/clusters.hpp"
 #include "constraints/constraint_set.hpp"
+#include "core/ordered_terms.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/reflection.hpp"
 #include "solvers/prepared_clusters.hpp"
@@ -133,6 +134,8 @@ class ConstrainedIntegrator : public Integrator {
   std::size_t cluster_rows(const std::vector<Constraint>& rows, const Particles& particles);
   const PreparedCluster* prepared_cluster(const std::vector<Constraint>& rows,
                                           std::size_t index) const;
+  // Cluster k of the last cluster_rows(rows, ...).
+  const Cluster& cluster_at(const std::vector<Constraint>& rows, std::size_t index) const;
   // Adds this step's statistics and virial to every sampler's.
   void finish_step();
 
@@ -150,7 +153,11 @@ class ConstrainedIntegrator : public Integrator {
   // Performance only: the equality rows' clusters, prepared once; the last clustering.
   EqualityClusters equality_clusters_;
   std::vector<Cluster> found_clusters_;
-  RodChainWorkspace chain_work_;
+  // Per chunk of a threaded cluster loop: its chains' scratch space.
+  std::vector<RodChainWorkspace> chain_works_;
+  // Per cluster of the last cluster loop: its virial terms, its solve's iterations.
+  OrderedTerms virial_terms_;
+  std::vector<int> cluster_iterations_;
   std::vector<int> equality_iterations_;  // per equality cluster, its last solve's iterations
   // Per equality cluster: its chain's virial from that solve, and whether the chain kernel
   // made it (else nothing to reuse).

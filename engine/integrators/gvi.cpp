@@ -5,6 +5,7 @@
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
 #include "solvers/cluster_matrices.hpp"
 
@@ -53,21 +54,20 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
   d.resize(n);
-  for (std::size_t i = 0; i < n; ++i) d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+  parallel_for(n, [&](std::size_t i) { d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]); });
   if (lagrangian_ != Lagrangian::midpoint) return;
   std::vector<Vec3>& mid = ws_.prediction_mid;
   mid.resize(n);
   iterate_midpoint(system, 0, [&] {
-    for (std::size_t i = 0; i < n; ++i) mid[i] = P.position[i] + d[i] * 0.5;
+    parallel_for(n, [&](std::size_t i) { mid[i] = P.position[i] + d[i] * 0.5; });
     engine_.forces_at(system, mid, ws_.prediction_force);
     const std::vector<Vec3>& f_mid = ws_.prediction_force;
-    double change = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
+    return ordered_max(n, 0.0, [&](std::size_t i) {
       const Vec3 next = (momenta[i] + f_mid[i] * (0.5 * h)) * (h / P.mass[i]);
-      change = std::max(change, norm(next - d[i]));
+      const double change = norm(next - d[i]);
       d[i] = next;
-    }
-    return change;
+      return change;
+    });
   });
 }
 
@@ -81,7 +81,7 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   std::vector<Vec3>& d = ws_.displacement;
   free_displacement(system, momenta, d);
   x.resize(n);
-  for (std::size_t i = 0; i < n; ++i) x[i] = P.position[i] + d[i];
+  parallel_for(n, [&](std::size_t i) { x[i] = P.position[i] + d[i]; });
   if (!constrained || constraints_.equalities.empty()) return;
   std::vector<Vec3>& j = ws_.prediction_kick;
   // Again in the same step: only the chains whose free displacement changed (those the
@@ -89,11 +89,11 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   const bool reuse = again && ws_.kicked_displacement.size() == n && j.size() == n;
   if (reuse) {
     ws_.displacement_changed.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    parallel_for(n, [&](std::size_t i) {
       const Vec3& a = d[i];
       const Vec3& b = ws_.kicked_displacement[i];
       ws_.displacement_changed[i] = !(a.x == b.x && a.y == b.y && a.z == b.z);
-    }
+    });
   } else {
     j.assign(n, Vec3{});
   }
@@ -101,14 +101,14 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j,
                   reuse ? &ws_.displacement_changed : nullptr);
   ws_.kicked_displacement = d;
-  for (std::size_t i = 0; i < n; ++i) x[i] += j[i] * (dt_ / P.mass[i]);
+  parallel_for(n, [&](std::size_t i) { x[i] += j[i] * (dt_ / P.mass[i]); });
 }
 
 void Gvi::start_step(System& system) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   ws_.p.resize(n);
-  for (std::size_t i = 0; i < n; ++i) ws_.p[i] = P.velocity[i] * P.mass[i];
+  parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
   // The free prediction first, even with the constrained predictor: it decides whether the
   // neighbour list still covers the step.
   predict(system, ws_.p, ws_.predicted, false);
@@ -151,7 +151,7 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
   if (exact) {
     largest2 = largest2_bound;
   } else {
-    for (std::size_t i = 0; i < q.size(); ++i) largest2 = std::max(largest2, norm2(x[i] - q[i]));
+    largest2 = ordered_max(q.size(), 0.0, [&](std::size_t i) { return norm2(x[i] - q[i]); });
   }
   ws_.largest2 = largest2;
   const double largest = std::sqrt(largest2);
@@ -194,16 +194,19 @@ void Gvi::find_active_set(System& system) {
         candidates_for(system, ws_.predicted, largest2_bound);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     bool grew = false;
+    // Which candidates are active (on several threads), then those joined in candidate order.
+    ws_.candidate_active.resize(candidates.size());
+    parallel_for(candidates.size(), [&](std::size_t k) {
+      const Constraint& c = candidates[k];
+      ws_.candidate_active[k] =
+          (every_row || ws_.prediction_changed[c.i] || (c.j >= 0 && ws_.prediction_changed[c.j])) &&
+          // Active at q, or overlapping at the prediction.
+          (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
+           gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0);
+    });
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       const Constraint& c = candidates[k];
-      if (!every_row && !ws_.prediction_changed[c.i] && (c.j < 0 || !ws_.prediction_changed[c.j])) {
-        continue;
-      }
-      // Active at q, or overlapping at the prediction.
-      if (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
-          gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0) {
-        if (!contains(active, c)) active.push_back(c), grew = true;
-      }
+      if (ws_.candidate_active[k] && !contains(active, c)) active.push_back(c), grew = true;
     }
     if (!grew || !reflections_) {
       settled = true;
@@ -218,14 +221,13 @@ void Gvi::find_active_set(System& system) {
     const TimedPhase predicting(Phase::prediction);
     std::swap(ws_.previous_prediction, ws_.predicted);
     predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
-    largest2_bound = ws_.largest2;
-    for (std::size_t i = 0; i < n; ++i) {
+    largest2_bound = ordered_max(n, ws_.largest2, [&](std::size_t i) {
       const Vec3& a = ws_.predicted[i];
       const Vec3& b = ws_.previous_prediction[i];
       const bool changed = a.x != b.x || a.y != b.y || a.z != b.z;
       ws_.prediction_changed[i] = changed;
-      if (changed) largest2_bound = std::max(largest2_bound, norm2(a - ws_.q[i]));
-    }
+      return changed ? norm2(a - ws_.q[i]) : 0.0;
+    });
   }
   stats_.active += static_cast<std::int64_t>(active.size());
   if (!settled) ++stats_.active_set_caps;
@@ -249,12 +251,10 @@ void Gvi::displaced(const Particles& P) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
-  double largest2 = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
+  ws_.x_largest2 = ordered_max(n, 0.0, [&](std::size_t i) {
     ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
-    largest2 = std::max(largest2, norm2(ws_.x[i] - ws_.q[i]));
-  }
-  ws_.x_largest2 = largest2;
+    return norm2(ws_.x[i] - ws_.q[i]);
+  });
   ws_.x_builds = engine_.neighbors().builds();
 }
 
@@ -275,7 +275,7 @@ void Gvi::solve_held_positions(System& system) {
   std::fill_n(ws_.equality.begin(), constraints_.equalities.size(), true);
   const std::vector<Vec3>& f_start = engine_.force();
   ws_.half.resize(n);
-  for (std::size_t i = 0; i < n; ++i) ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h);
+  parallel_for(n, [&](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
   // Verlet: the free step is the constrained predictor's last one (the same numbers from
   // the same momenta and forces) at the same q, so a chain no contact row joins, whose
   // free step is bit for bit the one predicted, takes the prediction's impulses.
@@ -284,7 +284,7 @@ void Gvi::solve_held_positions(System& system) {
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
     ws_.free.resize(n);
-    for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
+    parallel_for(n, [&](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
     ws_.impulse.assign(n, Vec3{});
     if (!rows.empty()) {
       ws_.position_virial =
@@ -300,15 +300,14 @@ void Gvi::solve_held_positions(System& system) {
     solve();
     displaced(P);
     ws_.mid.resize(n);
-    for (std::size_t i = 0; i < n; ++i) ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5;
+    parallel_for(n, [&](std::size_t i) { ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5; });
     engine_.forces_at(system, ws_.mid, ws_.f_mid);
-    double change = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
+    return ordered_max(n, 0.0, [&](std::size_t i) {
       const Vec3 next = ws_.p[i] + ws_.f_mid[i] * (0.5 * h);
-      change = std::max(change, norm(next - ws_.half[i]) * h / P.mass[i]);
+      const double change = norm(next - ws_.half[i]) * h / P.mass[i];
       ws_.half[i] = next;
-    }
-    return change;
+      return change;
+    });
   });
 }
 
@@ -325,11 +324,18 @@ void Gvi::update_positions(System& system) {
     displaced(system.particles);
     ws_.violated.clear();
     if (feasibility_ != Feasibility::none) {
-      // Overlapping beyond tolerance at x (such a row is also active there).
-      for (const Constraint& c : candidates_for(system, ws_.x, ws_.x_largest2, true)) {
-        if (gap_unless_beyond(c, ws_.x.data(), system.box, -gap_tolerance) < -gap_tolerance &&
-            !contains(ws_.held, c)) {
-          ws_.violated.push_back(c);
+      // Overlapping beyond tolerance at x (such a row is also active there): found on
+      // several threads, then joined in candidate order.
+      const std::vector<Constraint>& candidates =
+          candidates_for(system, ws_.x, ws_.x_largest2, true);
+      ws_.candidate_active.resize(candidates.size());
+      parallel_for(candidates.size(), [&](std::size_t k) {
+        ws_.candidate_active[k] = gap_unless_beyond(candidates[k], ws_.x.data(), system.box,
+                                                    -gap_tolerance) < -gap_tolerance;
+      });
+      for (std::size_t k = 0; k < candidates.size(); ++k) {
+        if (ws_.candidate_active[k] && !contains(ws_.held, candidates[k])) {
+          ws_.violated.push_back(candidates[k]);
         }
       }
     }
@@ -365,16 +371,16 @@ void Gvi::update_momenta(System& system, bool tally) {
   const bool landed = !ws_.landed.empty();
   const double target_energy =
       feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
+  parallel_for(n, [&](std::size_t i) {
     P.position[i] = ws_.x[i];
     p[i] = ws_.half[i] + ws_.impulse[i];
-  }
+  });
   system.step += 1;
   system.time += h;
   engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed));
   // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
   const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
-  for (std::size_t i = 0; i < n; ++i) p[i] += f[i] * (0.5 * h);
+  parallel_for(n, [&](std::size_t i) { p[i] += f[i] * (0.5 * h); });
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   ws_.momentum_rows.clear();
   for (const Constraint& c : ws_.held) {
@@ -405,7 +411,7 @@ void Gvi::update_momenta(System& system, bool tally) {
   if (feasibility_ == Feasibility::restore && landed) {
     restore_energy(system, ws_.landed, target_energy, p);
   }
-  for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
+  parallel_for(n, [&](std::size_t i) { P.velocity[i] = p[i] * (1.0 / P.mass[i]); });
 }
 
 // The rows that can have closed this step are among the candidates (their reach covers the

@@ -35,6 +35,8 @@ struct GviWorkspace {
   std::vector<Constraint> active, smooth;
   std::vector<Vec3> previous_prediction;
   std::vector<char> prediction_changed;
+  // Per candidate row: whether it joins the active set (or, in the guard, is overlapped).
+  std::vector<char> candidate_active;
   std::vector<Constraint> rows;  // equality rows followed by some inequality rows
 
   // Position update: half kick, impulses, end positions; rows held as complementarity rows

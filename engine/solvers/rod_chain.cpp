@@ -314,7 +314,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
 }
 
 bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
-                               double& virial) const {
+                               double* virial_terms) const {
   const std::size_t n = particles_.size();
   const std::size_t m = rows();
   ws.x.resize(n);
@@ -338,7 +338,8 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
   // Scale 1: multiplying by 1 leaves every entry as it is.
   if (!solve_coupled(ws.ux, ws.ux, 1.0, ws.pt, ws.z, ws.pivots)) return false;
   for (std::size_t k = 0; k < n; ++k) p[particles_[k]] += impulse_on(k, ws.ux, ws.z);
-  for (std::size_t k = 0; k < m; ++k) virial += ws.z(static_cast<Eigen::Index>(k)) * ws.rx[k];
+  for (std::size_t k = 0; k < m; ++k)
+    virial_terms[k] = ws.z(static_cast<Eigen::Index>(k)) * ws.rx[k];
   return true;
 }
 

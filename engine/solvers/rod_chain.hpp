@@ -47,11 +47,11 @@ class RodChain {
                                      RodChainWorkspace& ws, Vec3* impulse, double& virial,
                                      SolverStatus& status) const;
 
-  // Momentum projection at positions x: p <- p + C(x) mu with C(x)^T M^-1 p = 0; adds
-  // sum mu_k |x_i - x_j| to `virial`. Returns false (p untouched) when the generic path must
-  // take over.
+  // Momentum projection at positions x: p <- p + C(x) mu with C(x)^T M^-1 p = 0; writes
+  // rod k's virial term mu_k |x_i - x_j| to virial_terms[k], k < rows() (the caller adds
+  // them in row order). Returns false (p untouched) when the generic path must take over.
   [[nodiscard]] bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
-                                     double& virial) const;
+                                     double* virial_terms) const;
 
  private:
   RodChain() = default;
@@ -90,7 +90,8 @@ class RodChain {
 
   // The last directions computed at a step's end or start positions, with those positions
   // (local) and the box's periods: directions() is a function of these alone. Mutable: a
-  // cache, invisible in the results (the chains of a system are solved one at a time).
+  // cache, invisible in the results (a chain is solved by one thread at a time; threads
+  // solve different chains).
   struct DirectionsMemo {
     bool valid = false;
     std::vector<Vec3> x, u;

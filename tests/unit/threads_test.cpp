@@ -4,11 +4,16 @@
 // the one-thread evaluation of the same code (the serial loop, bit for bit: same_results.sh
 // against main).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
 
+#include "constraints/clusters.hpp"
+#include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "input/run_input.hpp"
+#include "integrators/gvi.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "support/test_systems.hpp"
 
@@ -208,6 +213,158 @@ TEST(Threads, AChunksExceptionIsTheOneASerialLoopMeetsFirst) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "chunk 0");
   }
+}
+
+// GVI's constraint phases on several threads: clusters solved and reflected on their own,
+// per-particle passes split by particle, every sum the serial loop made joined in its
+// order. Without pair forces nothing else is regrouped, so a trajectory on 2 threads is the
+// one-thread trajectory bit for bit (the one-thread run being the serial code, bit for bit:
+// tools/same_results.sh against main).
+struct GviTrajectory {
+  std::vector<Vec3> position, velocity;
+  double constraint_virial = 0.0;
+  std::vector<std::pair<std::string, double>> statistics;
+};
+
+GviTrajectory run_gvi(const RunInput& input, int threads, int steps) {
+  const ThreadCount count(threads);
+  System system = input.system;
+  Gvi gvi(*input.force_field, input.constraints, input.gvi, system.particles);
+  gvi.setup(system);
+  for (int n = 0; n < steps; ++n) gvi.step(system, n + 1 == steps);
+  return {system.particles.position, system.particles.velocity, gvi.take_constraint_virial(),
+          gvi.take_statistics()};
+}
+
+void expect_same_trajectory(const GviTrajectory& a, const GviTrajectory& b) {
+  EXPECT_TRUE(same_bits(a.position, b.position));
+  EXPECT_TRUE(same_bits(a.velocity, b.velocity));
+  EXPECT_EQ(a.constraint_virial, b.constraint_virial);
+  EXPECT_EQ(a.statistics, b.statistics);
+}
+
+// 40 random-walk chains of 30 beads held by rods (1160 rods, 40 clusters: past the rows
+// from which the cluster loops are cut into chunks), free of pair forces.
+RunInput rigid_chains() {
+  return testing::input_from(R"(
+[system]
+[system.chains]
+count = 40
+length = 30
+density = 0.5
+bond_length = 1.0
+min_distance = 0.8
+seed = 31
+[velocities]
+temperature = 1.0
+seed = 7
+[forcefield.pair]
+style = "none"
+[constraints]
+bonds = "rigid"
+rod_length = 1.0
+[integrator]
+type = "gvi"
+timestep = 0.005
+[run]
+steps = 0
+)");
+}
+
+TEST(ThreadsGvi, RigidChainsOnTwoThreadsAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const RunInput input = rigid_chains();
+  ASSERT_GE(input.constraints.equalities.size(), kParallelMinimum);
+  const GviTrajectory one = run_gvi(input, 1, 20), two = run_gvi(input, 2, 20),
+                      again = run_gvi(input, 2, 20);
+  expect_same_trajectory(two, again);
+  expect_same_trajectory(one, two);
+  EXPECT_NE(one.constraint_virial, 0.0);
+}
+
+// 1372 hard spheres (fcc, 7^3 cells) at packing fraction 0.30, as inputs/hard_spheres/
+// hs_4000.toml: some tens of reflections in 20 steps from the lattice.
+TEST(ThreadsGvi, HardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const RunInput input = testing::input_from(R"(
+[system]
+[system.lattice]
+type = "fcc"
+density = 0.5729577951308232
+cells = [7, 7, 7]
+[velocities]
+temperature = 1.0
+seed = 30
+[forcefield.pair]
+style = "none"
+[constraints]
+hard_spheres = { diameter = 1.0 }
+[neighbor]
+skin = 0.4
+[integrator]
+type = "gvi"
+timestep = 0.005
+[run]
+steps = 0
+)");
+  const GviTrajectory one = run_gvi(input, 1, 20), two = run_gvi(input, 2, 20),
+                      again = run_gvi(input, 2, 20);
+  expect_same_trajectory(two, again);
+  expect_same_trajectory(one, two);
+  double reflected = 0.0;
+  for (const auto& [name, value] : one.statistics) {
+    if (name == "reflected") reflected = value;
+  }
+  EXPECT_GT(reflected, 10.0);
+}
+
+// Two chains broken by a second rod of another length on one of their pairs, one in each
+// half of the cluster list (so in different chunks on two threads): the run stops at the
+// first, as a serial loop would, with the same message (and problem file) on 1 and 2 threads.
+TEST(ThreadsGvi, AFailedSolveOnTwoThreadsNamesTheClusterOfOneThread) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  RunInput input = rigid_chains();
+  const std::vector<Constraint> rods = input.constraints.equalities;
+  for (const std::size_t k : {rods.size() / 4, 3 * rods.size() / 4}) {
+    Constraint conflicting = rods[k];
+    conflicting.length = 1.5;
+    input.constraints.equalities.push_back(conflicting);
+  }
+  // The problem file goes to the working directory: a directory of this test's own.
+  const std::filesystem::path home = std::filesystem::current_path();
+  const std::filesystem::path own = std::filesystem::temp_directory_path() /
+                                    ("deli-ThreadsGviFailure-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(own);
+  std::filesystem::current_path(own);
+  struct Back {
+    std::filesystem::path home, own;
+    ~Back() {
+      std::filesystem::current_path(home);
+      std::filesystem::remove_all(own);
+    }
+  } back{home, own};
+  auto failure = [&](int threads) {
+    try {
+      run_gvi(input, threads, 1);
+    } catch (const SimulationError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no failure");
+  };
+  const std::string one = failure(1), two = failure(2);
+  // The first broken chain's cluster, named by its first atom.
+  std::string first_atom;
+  for (const Cluster& cluster :
+       find_clusters(input.constraints.equalities, input.system.particles.size())) {
+    if (std::find(cluster.particles.begin(), cluster.particles.end(), rods[rods.size() / 4].i) !=
+        cluster.particles.end()) {
+      first_atom = "from atom " + std::to_string(input.system.particles.id[cluster.particles[0]]);
+    }
+  }
+  EXPECT_NE(one.find("did not converge"), std::string::npos) << one;
+  EXPECT_NE(one.find(first_atom + " ("), std::string::npos) << first_atom << ": " << one;
+  EXPECT_EQ(one, two);
+  EXPECT_TRUE(std::filesystem::exists("deli-failed-solve-step1.txt"));
 }
 
 }  // namespace

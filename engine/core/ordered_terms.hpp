@@ -1,0 +1,42 @@
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace deli {
+
+// The terms of a sum (a virial) that a loop over items makes item by item, possibly on
+// several threads, added as the serial loop would have added them: item 0's terms in the
+// order it made them, then item 1's, and so on. The total is the serial loop's running sum
+// bit for bit, on any number of threads. Each item writes only its own slots.
+class OrderedTerms {
+ public:
+  // Room for `items` items, item k making at most capacity(k) terms; no term made yet.
+  template <class Capacity>
+  void reset(std::size_t items, Capacity&& capacity) {
+    begin_.resize(items + 1);
+    made_.assign(items, 0);
+    begin_[0] = 0;
+    for (std::size_t k = 0; k < items; ++k) begin_[k + 1] = begin_[k] + capacity(k);
+    terms_.resize(begin_[items]);
+  }
+  void add(std::size_t item, double term) { terms_[begin_[item] + made_[item]++] = term; }
+  // Item k's next `count` slots, to be written by the caller.
+  double* take(std::size_t item, std::size_t count) {
+    double* slots = terms_.data() + begin_[item] + made_[item];
+    made_[item] += count;
+    return slots;
+  }
+  // total += every term, in item order.
+  void add_to(double& total) const {
+    for (std::size_t k = 0; k < made_.size(); ++k) {
+      for (std::size_t t = begin_[k]; t < begin_[k] + made_[k]; ++t) total += terms_[t];
+    }
+  }
+
+ private:
+  std::vector<std::size_t> begin_, made_;
+  std::vector<double> terms_;
+};
+
+}  // namespace deli
