@@ -84,6 +84,24 @@ void parallel_for(std::size_t n, Body&& body) {
   });
 }
 
+// The serial loop `for (k < n) if (test(k)) join(k);` with the tests (independent of each
+// other and of the joins) on several threads: their outcomes are kept in `passed`, then
+// the joins are made in order on the calling thread. One chunk: the serial loop itself.
+template <class Test, class Join>
+void filter_in_order(std::size_t n, std::vector<char>& passed, Test&& test, Join&& join) {
+  if (chunks_for(n) == 1) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (test(k)) join(k);
+    }
+    return;
+  }
+  passed.resize(n);
+  parallel_for(n, [&](std::size_t k) { passed[k] = test(k); });
+  for (std::size_t k = 0; k < n; ++k) {
+    if (passed[k]) join(k);
+  }
+}
+
 // What the serial loop `m = start; for (i < n) m = std::max(m, term(i));` finds (term(i) may
 // also write item i's outputs): each chunk takes its maximum, the chunks' maxima are taken
 // in chunk order. The maximum is exact, and a NaN term is passed over as the serial loop

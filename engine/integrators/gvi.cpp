@@ -54,7 +54,10 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
   d.resize(n);
-  parallel_for(n, [&](std::size_t i) { d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]); });
+  // The step is captured by value here and below: a double behind a reference could alias
+  // the doubles the loop stores, and would be loaded again at every particle.
+  parallel_for(n,
+               [&, h](std::size_t i) { d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]); });
   if (lagrangian_ != Lagrangian::midpoint) return;
   std::vector<Vec3>& mid = ws_.prediction_mid;
   mid.resize(n);
@@ -62,7 +65,7 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
     parallel_for(n, [&](std::size_t i) { mid[i] = P.position[i] + d[i] * 0.5; });
     engine_.forces_at(system, mid, ws_.prediction_force);
     const std::vector<Vec3>& f_mid = ws_.prediction_force;
-    return ordered_max(n, 0.0, [&](std::size_t i) {
+    return ordered_max(n, 0.0, [&, h](std::size_t i) {
       const Vec3 next = (momenta[i] + f_mid[i] * (0.5 * h)) * (h / P.mass[i]);
       const double change = norm(next - d[i]);
       d[i] = next;
@@ -101,7 +104,7 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j,
                   reuse ? &ws_.displacement_changed : nullptr);
   ws_.kicked_displacement = d;
-  parallel_for(n, [&](std::size_t i) { x[i] += j[i] * (dt_ / P.mass[i]); });
+  parallel_for(n, [&, h = dt_](std::size_t i) { x[i] += j[i] * (h / P.mass[i]); });
 }
 
 void Gvi::start_step(System& system) {
@@ -194,20 +197,19 @@ void Gvi::find_active_set(System& system) {
         candidates_for(system, ws_.predicted, largest2_bound);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     bool grew = false;
-    // Which candidates are active (on several threads), then those joined in candidate order.
-    ws_.candidate_active.resize(candidates.size());
-    parallel_for(candidates.size(), [&](std::size_t k) {
-      const Constraint& c = candidates[k];
-      ws_.candidate_active[k] =
-          (every_row || ws_.prediction_changed[c.i] || (c.j >= 0 && ws_.prediction_changed[c.j])) &&
-          // Active at q, or overlapping at the prediction.
-          (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
-           gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0);
-    });
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-      const Constraint& c = candidates[k];
-      if (ws_.candidate_active[k] && !contains(active, c)) active.push_back(c), grew = true;
-    }
+    filter_in_order(
+        candidates.size(), ws_.candidate_active,
+        [&, every_row, gap_tolerance](std::size_t k) {
+          const Constraint& c = candidates[k];
+          return (every_row || ws_.prediction_changed[c.i] ||
+                  (c.j >= 0 && ws_.prediction_changed[c.j])) &&
+                 // Active at q, or overlapping at the prediction.
+                 (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
+                  gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0);
+        },
+        [&](std::size_t k) {
+          if (!contains(active, candidates[k])) active.push_back(candidates[k]), grew = true;
+        });
     if (!grew || !reflections_) {
       settled = true;
       break;
@@ -226,7 +228,8 @@ void Gvi::find_active_set(System& system) {
       const Vec3& b = ws_.previous_prediction[i];
       const bool changed = a.x != b.x || a.y != b.y || a.z != b.z;
       ws_.prediction_changed[i] = changed;
-      return changed ? norm2(a - ws_.q[i]) : 0.0;
+      if (!changed) return 0.0;
+      return norm2(a - ws_.q[i]);
     });
   }
   stats_.active += static_cast<std::int64_t>(active.size());
@@ -251,7 +254,7 @@ void Gvi::displaced(const Particles& P) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
-  ws_.x_largest2 = ordered_max(n, 0.0, [&](std::size_t i) {
+  ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
     ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
     return norm2(ws_.x[i] - ws_.q[i]);
   });
@@ -275,7 +278,7 @@ void Gvi::solve_held_positions(System& system) {
   std::fill_n(ws_.equality.begin(), constraints_.equalities.size(), true);
   const std::vector<Vec3>& f_start = engine_.force();
   ws_.half.resize(n);
-  parallel_for(n, [&](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
+  parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
   // Verlet: the free step is the constrained predictor's last one (the same numbers from
   // the same momenta and forces) at the same q, so a chain no contact row joins, whose
   // free step is bit for bit the one predicted, takes the prediction's impulses.
@@ -284,7 +287,7 @@ void Gvi::solve_held_positions(System& system) {
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
     ws_.free.resize(n);
-    parallel_for(n, [&](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
+    parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
     ws_.impulse.assign(n, Vec3{});
     if (!rows.empty()) {
       ws_.position_virial =
@@ -302,7 +305,7 @@ void Gvi::solve_held_positions(System& system) {
     ws_.mid.resize(n);
     parallel_for(n, [&](std::size_t i) { ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5; });
     engine_.forces_at(system, ws_.mid, ws_.f_mid);
-    return ordered_max(n, 0.0, [&](std::size_t i) {
+    return ordered_max(n, 0.0, [&, h](std::size_t i) {
       const Vec3 next = ws_.p[i] + ws_.f_mid[i] * (0.5 * h);
       const double change = norm(next - ws_.half[i]) * h / P.mass[i];
       ws_.half[i] = next;
@@ -324,20 +327,18 @@ void Gvi::update_positions(System& system) {
     displaced(system.particles);
     ws_.violated.clear();
     if (feasibility_ != Feasibility::none) {
-      // Overlapping beyond tolerance at x (such a row is also active there): found on
-      // several threads, then joined in candidate order.
+      // Overlapping beyond tolerance at x (such a row is also active there).
       const std::vector<Constraint>& candidates =
           candidates_for(system, ws_.x, ws_.x_largest2, true);
-      ws_.candidate_active.resize(candidates.size());
-      parallel_for(candidates.size(), [&](std::size_t k) {
-        ws_.candidate_active[k] = gap_unless_beyond(candidates[k], ws_.x.data(), system.box,
-                                                    -gap_tolerance) < -gap_tolerance;
-      });
-      for (std::size_t k = 0; k < candidates.size(); ++k) {
-        if (ws_.candidate_active[k] && !contains(ws_.held, candidates[k])) {
-          ws_.violated.push_back(candidates[k]);
-        }
-      }
+      filter_in_order(
+          candidates.size(), ws_.candidate_active,
+          [&, gap_tolerance](std::size_t k) {
+            return gap_unless_beyond(candidates[k], ws_.x.data(), system.box, -gap_tolerance) <
+                   -gap_tolerance;
+          },
+          [&](std::size_t k) {
+            if (!contains(ws_.held, candidates[k])) ws_.violated.push_back(candidates[k]);
+          });
     }
     if (ws_.violated.empty()) break;
     if (round == constraints_.limits.feasibility_rounds) {
@@ -380,7 +381,7 @@ void Gvi::update_momenta(System& system, bool tally) {
   engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed));
   // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
   const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
-  parallel_for(n, [&](std::size_t i) { p[i] += f[i] * (0.5 * h); });
+  parallel_for(n, [&, h](std::size_t i) { p[i] += f[i] * (0.5 * h); });
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   ws_.momentum_rows.clear();
   for (const Constraint& c : ws_.held) {
