@@ -532,9 +532,20 @@ void ConstrainedIntegrator::record_geometry(const System& system,
   double gap = full
                    ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
                    : std::numeric_limits<double>::infinity();
-  for (const Constraint& c : candidates) {
-    gap = std::min(gap, gap_unless_beyond(c, P.position.data(), system.box, gap));
-  }
+  // Per chunk of candidates, each bounded by its own running minimum: a row beyond that bound
+  // is beyond the overall minimum too, and every gap below it is evaluated exactly, so the
+  // minimum is the serial loop's on any number of threads.
+  const int chunks = chunks_for(candidates.size());
+  std::vector<double> chunk_gap(static_cast<std::size_t>(chunks), gap);
+  for_each_chunk(candidates.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+    double smallest = chunk_gap[static_cast<std::size_t>(c)];
+    for (std::size_t k = begin; k < end; ++k) {
+      smallest = std::min(
+          smallest, gap_unless_beyond(candidates[k], P.position.data(), system.box, smallest));
+    }
+    chunk_gap[static_cast<std::size_t>(c)] = smallest;
+  });
+  for (const double smallest : chunk_gap) gap = std::min(gap, smallest);
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
   const std::vector<Constraint>& rods = constraints_.equalities;
