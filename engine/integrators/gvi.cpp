@@ -184,7 +184,13 @@ void Gvi::find_active_set(System& system) {
   const double gap_tolerance = constraints_.tolerances.gap;
   std::vector<Constraint>& active = ws_.active;
   active.clear();
-  ws_.prediction_changed.assign(n, 1);
+  // Without equality rows a Verlet prediction is the free step, particle by particle: after a
+  // reflection only the reflected particles' predictions can change, and only theirs are
+  // made again (the same numbers a whole prediction would give).
+  const bool local_predictions =
+      lagrangian_ == Lagrangian::verlet && constraints_.equalities.empty();
+  ws_.prediction_changed.assign(n, local_predictions ? 0 : 1);
+  ws_.changed_particles.clear();
   bool settled = false;
   // After the first round: a bound on max |prediction - q|^2, from the last round's and the
   // particles whose prediction changed.
@@ -193,6 +199,16 @@ void Gvi::find_active_set(System& system) {
     const std::vector<Constraint>& candidates =
         candidates_for(system, ws_.predicted, largest2_bound);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
+    // Per candidate, whether it is in the active set already (the candidates are distinct
+    // rows): made again by search when the candidates were refreshed.
+    if (every_row) {
+      ws_.candidate_active.assign(candidates.size(), 0);
+      if (!active.empty()) {
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+          ws_.candidate_active[k] = contains(active, candidates[k]) ? 1 : 0;
+        }
+      }
+    }
     bool grew = false;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       const Constraint& c = candidates[k];
@@ -200,9 +216,11 @@ void Gvi::find_active_set(System& system) {
         continue;
       }
       // Active at q, or overlapping at the prediction.
+      if (ws_.candidate_active[k]) continue;
       if (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
           gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0) {
-        if (!contains(active, c)) active.push_back(c), grew = true;
+        active.push_back(c), grew = true;
+        ws_.candidate_active[k] = 1;
       }
     }
     if (!grew || !reflections_) {
@@ -216,6 +234,10 @@ void Gvi::find_active_set(System& system) {
       reflect_clusters(system, ws_.rows, constraints_.equalities.size(), ws_.q, ws_.p);
     }
     const TimedPhase predicting(Phase::prediction);
+    if (local_predictions) {
+      largest2_bound = predict_reflected(system);
+      continue;
+    }
     std::swap(ws_.previous_prediction, ws_.predicted);
     predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
     largest2_bound = ws_.largest2;
@@ -229,6 +251,35 @@ void Gvi::find_active_set(System& system) {
   }
   stats_.active += static_cast<std::int64_t>(active.size());
   if (!settled) ++stats_.active_set_caps;
+}
+
+// The free Verlet prediction made again for the particles of the active rows (the only ones
+// reflections move), as free_displacement and predict make it; marks those whose prediction
+// changed and returns the bound on max |prediction - q|^2.
+double Gvi::predict_reflected(const System& system) {
+  const Particles& P = system.particles;
+  const double h = dt_;
+  const std::vector<Vec3>& f = engine_.force();
+  std::vector<Vec3>& d = ws_.displacement;
+  for (std::int32_t i : ws_.changed_particles) ws_.prediction_changed[i] = 0;
+  ws_.changed_particles.clear();
+  double largest2_bound = ws_.largest2;
+  auto again = [&](std::int32_t i) {
+    d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    const Vec3 next = P.position[i] + d[i];
+    Vec3& now = ws_.predicted[i];
+    if (next.x != now.x || next.y != now.y || next.z != now.z) {
+      now = next;
+      ws_.prediction_changed[i] = 1;
+      ws_.changed_particles.push_back(i);
+      largest2_bound = std::max(largest2_bound, norm2(next - ws_.q[i]));
+    }
+  };
+  for (const Constraint& c : ws_.active) {
+    again(c.i);
+    if (c.j >= 0) again(c.j);
+  }
+  return largest2_bound;
 }
 
 // Smooth set: active at q and tangent to the momenta after reflection.

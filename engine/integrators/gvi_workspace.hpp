@@ -35,7 +35,9 @@ struct GviWorkspace {
   std::vector<Constraint> active, smooth;
   std::vector<Vec3> previous_prediction;
   std::vector<char> prediction_changed;
-  std::vector<Constraint> rows;  // equality rows followed by some inequality rows
+  std::vector<std::int32_t> changed_particles;  // those marked in prediction_changed
+  std::vector<char> candidate_active;           // per candidate row: in the active set
+  std::vector<Constraint> rows;                 // equality rows followed by some inequality rows
 
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
