@@ -473,13 +473,18 @@ std::vector<Constraint> ConstrainedIntegrator::candidates_for_step(System& syste
 }
 
 void ConstrainedIntegrator::record_geometry(const System& system,
-                                            const std::vector<Constraint>& candidates, bool full) {
+                                            const std::vector<Constraint>& candidates, bool full,
+                                            const double* candidates_smallest) {
   const Particles& P = system.particles;
   double gap = full
                    ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
                    : std::numeric_limits<double>::infinity();
-  for (const Constraint& c : candidates) {
-    gap = std::min(gap, gap_unless_beyond(c, P.position.data(), system.box, gap));
+  if (candidates_smallest) {
+    gap = std::min(gap, *candidates_smallest);
+  } else {
+    for (const Constraint& c : candidates) {
+      gap = std::min(gap, gap_unless_beyond(c, P.position.data(), system.box, gap));
+    }
   }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;

@@ -111,7 +111,10 @@ class ConstrainedIntegrator : public Integrator {
   // the step.
   std::vector<Constraint> candidates_for_step(System& system, std::vector<Vec3>& q,
                                               std::vector<Vec3>& x);
-  void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
+  // `candidates_smallest`, when given, is the smallest gap of the candidates at the current
+  // positions, already found: the candidates are not scanned again.
+  void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full,
+                       const double* candidates_smallest = nullptr);
   // The implicit midpoint's fixed point, the one loop of every integrator that has one:
   // repeats `pass` (one pass, returning the largest change it made, sigma) until a pass
   // from the `first_checked`-th on changes less than the solver tolerance; at

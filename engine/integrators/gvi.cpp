@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
@@ -375,14 +376,20 @@ void Gvi::update_positions(System& system) {
     solve_held_positions(system);
     displaced(system.particles);
     ws_.violated.clear();
+    ws_.x_smallest_gap_known = false;
     if (feasibility_ != Feasibility::none) {
-      // Overlapping beyond tolerance at x (such a row is also active there).
+      // Overlapping beyond tolerance at x (such a row is also active there). The same pass
+      // keeps the smallest candidate gap at x for the constraint checks: every gap that may
+      // be below the smallest so far (or the tolerance) exactly, the others beyond both.
+      double smallest = std::numeric_limits<double>::infinity();
       for (const Constraint& c : candidates_for(system, ws_.x, ws_.x_largest2, true)) {
-        if (gap_unless_beyond(c, ws_.x.data(), system.box, -gap_tolerance) < -gap_tolerance &&
-            !contains(ws_.held, c)) {
-          ws_.violated.push_back(c);
-        }
+        const double gap =
+            gap_unless_beyond(c, ws_.x.data(), system.box, std::max(smallest, -gap_tolerance));
+        smallest = std::min(smallest, gap);
+        if (gap < -gap_tolerance && !contains(ws_.held, c)) ws_.violated.push_back(c);
       }
+      ws_.x_smallest_gap = smallest;
+      ws_.x_smallest_gap_known = true;
     }
     if (ws_.violated.empty()) break;
     if (round == constraints_.limits.feasibility_rounds) {
@@ -465,12 +472,16 @@ void Gvi::update_momenta(System& system, bool tally) {
 void Gvi::check_constraints(const System& system, bool tally) {
   // The positions are ws_.x unless the force evaluation rebuilt the neighbour list, which
   // wraps them.
-  if (engine_.neighbors().builds() == ws_.x_builds) {
+  const bool at_x = engine_.neighbors().builds() == ws_.x_builds;
+  if (at_x) {
     candidates_for(system, system.particles.position, ws_.x_largest2, true);
   } else {
     candidates_for(system, system.particles.position);
   }
-  record_geometry(system, ws_.nearby, tally);
+  // The feasibility guard's last pass saw the same candidates at the same positions.
+  const bool known = at_x && ws_.x_smallest_gap_known && !ws_.nearby_refreshed;
+  ws_.x_smallest_gap_known = false;
+  record_geometry(system, ws_.nearby, tally, known ? &ws_.x_smallest_gap : nullptr);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
