@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <optional>
 
 #include "constraints/clusters.hpp"
@@ -394,7 +395,7 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   // the same single-row problem with H as its energy.
   const bool lone_rows_closed =
       energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
-  if (lone_rows_closed && first_inequality == 0 && reflect_lone_rows(system, rows, x, p)) return;
+  if (lone_rows_closed && first_inequality == 0) return reflect_inequalities(system, rows, x, p);
   const std::vector<Cluster> clusters = find_clusters(rows, P.size());
   std::vector<bool> holds_inequality(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c) {
@@ -431,33 +432,51 @@ bool ConstrainedIntegrator::reflect_closed_form(System& system, const Constraint
   return true;
 }
 
-// Rows of which no two share a particle (the usual contacts of a hard-sphere fluid) are each
-// a cluster of their own: reflected in closed form in find_clusters' order (by smallest
-// particle, which orders the virial's sum), without clustering. False, with nothing done,
-// when two rows share a particle.
-bool ConstrainedIntegrator::reflect_lone_rows(System& system, const std::vector<Constraint>& rows,
-                                              const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+// Inequality rows alone (the contacts of a hard-sphere fluid): a row that shares no particle
+// with another is a cluster of its own, reflected in closed form without clustering; only
+// the rows that share particles are clustered. Clusters are taken in find_clusters' order
+// (by smallest particle), which orders the virial's sum.
+void ConstrainedIntegrator::reflect_inequalities(System& system,
+                                                 const std::vector<Constraint>& rows,
+                                                 const std::vector<Vec3>& x, std::vector<Vec3>& p) {
   // Zero for every particle outside a call.
   rows_at_particle_.resize(system.particles.size(), 0);
-  bool lone = true;
   for (const Constraint& c : rows) {
-    lone = ++rows_at_particle_[c.i] == 1 && lone;
-    if (c.j >= 0) lone = ++rows_at_particle_[c.j] == 1 && lone;
+    ++rows_at_particle_[c.i];
+    if (c.j >= 0) ++rows_at_particle_[c.j];
+  }
+  lone_order_.clear();
+  shared_rows_.clear();
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const Constraint& c = rows[r];
+    if (rows_at_particle_[c.i] == 1 && (c.j < 0 || rows_at_particle_[c.j] == 1)) {
+      lone_order_.push_back(static_cast<std::int32_t>(r));
+    } else {
+      shared_rows_.push_back(c);
+    }
   }
   for (const Constraint& c : rows) {
     rows_at_particle_[c.i] = 0;
     if (c.j >= 0) rows_at_particle_[c.j] = 0;
   }
-  if (!lone) return false;
   auto first = [&](std::int32_t r) {
     const Constraint& c = rows[r];
     return c.j >= 0 ? std::min(c.i, c.j) : c.i;
   };
-  lone_order_.resize(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) lone_order_[r] = static_cast<std::int32_t>(r);
   std::sort(lone_order_.begin(), lone_order_.end(),
             [&](std::int32_t a, std::int32_t b) { return first(a) < first(b); });
+  const std::vector<Cluster> shared = shared_rows_.empty()
+                                          ? std::vector<Cluster>{}
+                                          : find_clusters(shared_rows_, system.particles.size());
+  std::size_t next_shared = 0;
+  auto reflect_shared_before = [&](std::int32_t particle) {
+    for (; next_shared < shared.size() && shared[next_shared].particles.front() < particle;
+         ++next_shared) {
+      reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr);
+    }
+  };
   for (const std::int32_t r : lone_order_) {
+    reflect_shared_before(first(r));
     if (reflect_closed_form(system, rows[r], x, p)) continue;
     Cluster cluster;  // a row without a closed form (no direction): the general reflection
     const Constraint& c = rows[r];
@@ -467,7 +486,7 @@ bool ConstrainedIntegrator::reflect_lone_rows(System& system, const std::vector<
     cluster.rows.push_back(r);
     reflect_cluster(system, rows, 0, cluster, x, p, nullptr);
   }
-  return true;
+  reflect_shared_before(std::numeric_limits<std::int32_t>::max());
 }
 
 void ConstrainedIntegrator::reflect_cluster(System& system, const std::vector<Constraint>& rows,

@@ -103,16 +103,15 @@ class ConstrainedIntegrator : public Integrator {
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p);
   // Parts of reflect_clusters: one cluster through reflect(); one row in closed form (false,
-  // with nothing done, where it has none); every row when no two share a particle (false,
-  // with nothing done, otherwise).
+  // with nothing done, where it has none); rows without equalities, with closed forms.
   void reflect_cluster(System& system, const std::vector<Constraint>& rows,
                        std::size_t first_inequality, const Cluster& cluster,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p,
                        const ShadowOperator* shadow);
   bool reflect_closed_form(System& system, const Constraint& row, const std::vector<Vec3>& x,
                            std::vector<Vec3>& p);
-  bool reflect_lone_rows(System& system, const std::vector<Constraint>& rows,
-                         const std::vector<Vec3>& x, std::vector<Vec3>& p);
+  void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
+                            const std::vector<Vec3>& x, std::vector<Vec3>& p);
   double project_momenta(System& system, const std::vector<Constraint>& rows,
                          const std::vector<Vec3>& x, std::vector<Vec3>& p);
   // The inequality rows a step from q (the system's positions) towards x (the
@@ -174,8 +173,11 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<std::vector<std::size_t>> blocks_of_cluster_;
   std::vector<std::int32_t> cluster_of_particle_;
   std::vector<std::int32_t> local_index_of_particle_;  // within its cluster, where gathered
-  std::vector<std::int32_t> rows_at_particle_;  // reflect_lone_rows' count, zero between calls
+  // reflect_inequalities' scratch: rows per particle (zero between calls), the rows sharing
+  // no particle, the others.
+  std::vector<std::int32_t> rows_at_particle_;
   std::vector<std::int32_t> lone_order_;
+  std::vector<Constraint> shared_rows_;
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);
