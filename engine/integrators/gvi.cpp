@@ -37,9 +37,12 @@ void Gvi::step(System& system, bool tally) {
   timer.enter(Phase::momentum_update);
   update_momenta(system, tally);
   ++stats_.steps;
-  previous_positions_ = ws_.q;  // same size: the buffer (and pointers into it) stays
+  // Same size: the buffer (and pointers into it) stays. Only linearised rows read it during
+  // the checks; otherwise the start positions, no longer needed, are swapped in.
+  if (constraints_.linearized) previous_positions_ = ws_.q;
   timer.enter(Phase::constraint_checks);
   check_constraints(system, tally);
+  if (!constraints_.linearized) std::swap(previous_positions_, ws_.q);
   finish_step();
   timer.enter(outer);
 }
@@ -109,10 +112,23 @@ void Gvi::start_step(System& system) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   ws_.p.resize(n);
-  for (std::size_t i = 0; i < n; ++i) ws_.p[i] = P.velocity[i] * P.mass[i];
   // The free prediction first, even with the constrained predictor: it decides whether the
-  // neighbour list still covers the step.
-  predict(system, ws_.p, ws_.predicted, false);
+  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  if (lagrangian_ == Lagrangian::verlet) {
+    const double h = dt_;
+    const std::vector<Vec3>& f = engine_.force();
+    std::vector<Vec3>& d = ws_.displacement;
+    d.resize(n);
+    ws_.predicted.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      ws_.p[i] = P.velocity[i] * P.mass[i];
+      d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+      ws_.predicted[i] = P.position[i] + d[i];
+    }
+  } else {
+    for (std::size_t i = 0; i < n; ++i) ws_.p[i] = P.velocity[i] * P.mass[i];
+    predict(system, ws_.p, ws_.predicted, false);
+  }
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
   if (pairs_matter && !engine_.neighbors_cover(ws_.predicted)) {
@@ -335,10 +351,10 @@ void Gvi::solve_held_positions(System& system) {
                          ws_.kicked_displacement.size() == n && ws_.prediction_kick.size() == n;
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
-    ws_.free.resize(n);
-    for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
     ws_.impulse.assign(n, Vec3{});
     if (!rows.empty()) {
+      ws_.free.resize(n);
+      for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
       ws_.position_virial =
           solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse, nullptr,
                           predicted ? &prediction : nullptr);
