@@ -146,7 +146,12 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
         gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
         if (!(gap <= reach)) continue;
       }
-      out.push_back(sphere_pair(pair.a, pair.b, particles));
+      // sphere_pair(a, b)'s row, made in place (its contact is the pair's).
+      Constraint& row = out.emplace_back();
+      row.kind = ConstraintKind::sphere_pair;
+      row.i = pair.a;
+      row.j = pair.b;
+      row.length = pair.contact;
       gap_at_q.push_back(gap);
     }
   }
