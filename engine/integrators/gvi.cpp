@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
@@ -36,9 +37,12 @@ void Gvi::step(System& system, bool tally) {
   timer.enter(Phase::momentum_update);
   update_momenta(system, tally);
   ++stats_.steps;
-  previous_positions_ = ws_.q;  // same size: the buffer (and pointers into it) stays
+  // Same size: the buffer (and pointers into it) stays. Only linearised rows read it during
+  // the checks; otherwise the start positions, no longer needed, are swapped in.
+  if (constraints_.linearized) previous_positions_ = ws_.q;
   timer.enter(Phase::constraint_checks);
   check_constraints(system, tally);
+  if (!constraints_.linearized) std::swap(previous_positions_, ws_.q);
   finish_step();
   timer.enter(outer);
 }
@@ -108,10 +112,23 @@ void Gvi::start_step(System& system) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   ws_.p.resize(n);
-  for (std::size_t i = 0; i < n; ++i) ws_.p[i] = P.velocity[i] * P.mass[i];
   // The free prediction first, even with the constrained predictor: it decides whether the
-  // neighbour list still covers the step.
-  predict(system, ws_.p, ws_.predicted, false);
+  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  if (lagrangian_ == Lagrangian::verlet) {
+    const double h = dt_;
+    const std::vector<Vec3>& f = engine_.force();
+    std::vector<Vec3>& d = ws_.displacement;
+    d.resize(n);
+    ws_.predicted.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      ws_.p[i] = P.velocity[i] * P.mass[i];
+      d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+      ws_.predicted[i] = P.position[i] + d[i];
+    }
+  } else {
+    for (std::size_t i = 0; i < n; ++i) ws_.p[i] = P.velocity[i] * P.mass[i];
+    predict(system, ws_.p, ws_.predicted, false);
+  }
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
   if (pairs_matter && !engine_.neighbors_cover(ws_.predicted)) {
@@ -184,7 +201,13 @@ void Gvi::find_active_set(System& system) {
   const double gap_tolerance = constraints_.tolerances.gap;
   std::vector<Constraint>& active = ws_.active;
   active.clear();
-  ws_.prediction_changed.assign(n, 1);
+  // Without equality rows a Verlet prediction is the free step, particle by particle: after a
+  // reflection only the reflected particles' predictions can change, and only theirs are
+  // made again (the same numbers a whole prediction would give).
+  const bool local_predictions =
+      lagrangian_ == Lagrangian::verlet && constraints_.equalities.empty();
+  ws_.prediction_changed.assign(n, local_predictions ? 0 : 1);
+  ws_.changed_particles.clear();
   bool settled = false;
   // After the first round: a bound on max |prediction - q|^2, from the last round's and the
   // particles whose prediction changed.
@@ -193,6 +216,16 @@ void Gvi::find_active_set(System& system) {
     const std::vector<Constraint>& candidates =
         candidates_for(system, ws_.predicted, largest2_bound);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
+    // Per candidate, whether it is in the active set already (the candidates are distinct
+    // rows): made again by search when the candidates were refreshed.
+    if (every_row) {
+      ws_.candidate_active.assign(candidates.size(), 0);
+      if (!active.empty()) {
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+          ws_.candidate_active[k] = contains(active, candidates[k]) ? 1 : 0;
+        }
+      }
+    }
     bool grew = false;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       const Constraint& c = candidates[k];
@@ -200,9 +233,11 @@ void Gvi::find_active_set(System& system) {
         continue;
       }
       // Active at q, or overlapping at the prediction.
+      if (ws_.candidate_active[k]) continue;
       if (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
           gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0) {
-        if (!contains(active, c)) active.push_back(c), grew = true;
+        active.push_back(c), grew = true;
+        ws_.candidate_active[k] = 1;
       }
     }
     if (!grew || !reflections_) {
@@ -216,6 +251,10 @@ void Gvi::find_active_set(System& system) {
       reflect_clusters(system, ws_.rows, constraints_.equalities.size(), ws_.q, ws_.p);
     }
     const TimedPhase predicting(Phase::prediction);
+    if (local_predictions) {
+      largest2_bound = predict_reflected(system);
+      continue;
+    }
     std::swap(ws_.previous_prediction, ws_.predicted);
     predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
     largest2_bound = ws_.largest2;
@@ -229,6 +268,35 @@ void Gvi::find_active_set(System& system) {
   }
   stats_.active += static_cast<std::int64_t>(active.size());
   if (!settled) ++stats_.active_set_caps;
+}
+
+// The free Verlet prediction made again for the particles of the active rows (the only ones
+// reflections move), as free_displacement and predict make it; marks those whose prediction
+// changed and returns the bound on max |prediction - q|^2.
+double Gvi::predict_reflected(const System& system) {
+  const Particles& P = system.particles;
+  const double h = dt_;
+  const std::vector<Vec3>& f = engine_.force();
+  std::vector<Vec3>& d = ws_.displacement;
+  for (std::int32_t i : ws_.changed_particles) ws_.prediction_changed[i] = 0;
+  ws_.changed_particles.clear();
+  double largest2_bound = ws_.largest2;
+  auto again = [&](std::int32_t i) {
+    d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    const Vec3 next = P.position[i] + d[i];
+    Vec3& now = ws_.predicted[i];
+    if (next.x != now.x || next.y != now.y || next.z != now.z) {
+      now = next;
+      ws_.prediction_changed[i] = 1;
+      ws_.changed_particles.push_back(i);
+      largest2_bound = std::max(largest2_bound, norm2(next - ws_.q[i]));
+    }
+  };
+  for (const Constraint& c : ws_.active) {
+    again(c.i);
+    if (c.j >= 0) again(c.j);
+  }
+  return largest2_bound;
 }
 
 // Smooth set: active at q and tangent to the momenta after reflection.
@@ -283,10 +351,10 @@ void Gvi::solve_held_positions(System& system) {
                          ws_.kicked_displacement.size() == n && ws_.prediction_kick.size() == n;
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
-    ws_.free.resize(n);
-    for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
     ws_.impulse.assign(n, Vec3{});
     if (!rows.empty()) {
+      ws_.free.resize(n);
+      for (std::size_t i = 0; i < n; ++i) ws_.free[i] = ws_.half[i] * (h / P.mass[i]);
       ws_.position_virial =
           solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse, nullptr,
                           predicted ? &prediction : nullptr);
@@ -324,14 +392,20 @@ void Gvi::update_positions(System& system) {
     solve_held_positions(system);
     displaced(system.particles);
     ws_.violated.clear();
+    ws_.x_smallest_gap_known = false;
     if (feasibility_ != Feasibility::none) {
-      // Overlapping beyond tolerance at x (such a row is also active there).
+      // Overlapping beyond tolerance at x (such a row is also active there). The same pass
+      // keeps the smallest candidate gap at x for the constraint checks: every gap that may
+      // be below the smallest so far (or the tolerance) exactly, the others beyond both.
+      double smallest = std::numeric_limits<double>::infinity();
       for (const Constraint& c : candidates_for(system, ws_.x, ws_.x_largest2, true)) {
-        if (gap_unless_beyond(c, ws_.x.data(), system.box, -gap_tolerance) < -gap_tolerance &&
-            !contains(ws_.held, c)) {
-          ws_.violated.push_back(c);
-        }
+        const double gap =
+            gap_unless_beyond(c, ws_.x.data(), system.box, std::max(smallest, -gap_tolerance));
+        smallest = std::min(smallest, gap);
+        if (gap < -gap_tolerance && !contains(ws_.held, c)) ws_.violated.push_back(c);
       }
+      ws_.x_smallest_gap = smallest;
+      ws_.x_smallest_gap_known = true;
     }
     if (ws_.violated.empty()) break;
     if (round == constraints_.limits.feasibility_rounds) {
@@ -414,12 +488,16 @@ void Gvi::update_momenta(System& system, bool tally) {
 void Gvi::check_constraints(const System& system, bool tally) {
   // The positions are ws_.x unless the force evaluation rebuilt the neighbour list, which
   // wraps them.
-  if (engine_.neighbors().builds() == ws_.x_builds) {
+  const bool at_x = engine_.neighbors().builds() == ws_.x_builds;
+  if (at_x) {
     candidates_for(system, system.particles.position, ws_.x_largest2, true);
   } else {
     candidates_for(system, system.particles.position);
   }
-  record_geometry(system, ws_.nearby, tally);
+  // The feasibility guard's last pass saw the same candidates at the same positions.
+  const bool known = at_x && ws_.x_smallest_gap_known && !ws_.nearby_refreshed;
+  ws_.x_smallest_gap_known = false;
+  record_geometry(system, ws_.nearby, tally, known ? &ws_.x_smallest_gap : nullptr);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,

@@ -111,6 +111,9 @@ class Gvi final : public ConstrainedIntegrator {
   // what decides a refresh without a pass over the particles when it shows none is due.
   const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
                                                 double largest2_bound = -1.0, bool exact = false);
+  // After a reflection, without equality rows and with Verlet: the free prediction made again
+  // for the reflected particles alone.
+  double predict_reflected(const System& system);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   void solve_held_positions(System& system);
   // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
