@@ -6,6 +6,8 @@
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
 
 namespace deli {
 
@@ -117,8 +119,18 @@ std::optional<ShadowCorrection> shadow_correction_on_rods(
     const std::vector<Vec3>& d, const std::vector<Constraint>& rods,
     const std::function<void(std::vector<Vec3>&)>& project) {
   if (rods.empty()) return shadow_correction_along(engine, system, h, p, d);
+  // The projection is linear; it runs on the force scaled to order one (by a power of two,
+  // exactly), so that its velocity tolerance means the same as for momenta however steep the
+  // force.
+  double largest = 0;
+  for (const Vec3& f : engine.force()) largest = std::max(largest, norm(f));
+  if (!(largest > 0)) return shadow_correction_along(engine, system, h, p, d);
+  int exponent = 0;
+  std::frexp(largest, &exponent);
   std::vector<Vec3> projected = engine.force();
+  for (Vec3& f : projected) f = f * std::ldexp(1.0, -exponent);
   project(projected);
+  for (Vec3& f : projected) f = f * std::ldexp(1.0, exponent);
   const auto terms = rod_shadow_terms(system, rods, engine.force(), std::move(projected));
   if (!terms) return std::nullopt;
   return shadow_correction_along(engine, system, h, p, d, &rods, &*terms);
