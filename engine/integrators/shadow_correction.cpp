@@ -22,15 +22,25 @@ std::optional<RodShadowTerms> rod_shadow_terms(const System& system,
     if (rods[k].kind != ConstraintKind::rod) return std::nullopt;
     grad[k] = system.box.minimum_image(P.position[rods[k].i] - P.position[rods[k].j]);
   }
-  // (G G^T) mu = -G f_c: rods k and l share a particle where their blocks overlap.
+  // (G G^T) mu = -G f_c: rods k and l couple where they share a particle.
+  std::vector<std::vector<std::size_t>> rods_of(P.size());
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    rods_of[static_cast<std::size_t>(rods[k].i)].push_back(k);
+    rods_of[static_cast<std::size_t>(rods[k].j)].push_back(k);
+  }
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::VectorXd rhs(m);
+  std::vector<std::size_t> coupled;
   for (std::size_t k = 0; k < rods.size(); ++k) {
     const Constraint& a = rods[k];
     const Vec3 fc_i = projected_force[a.i] - force[a.i];
     const Vec3 fc_j = projected_force[a.j] - force[a.j];
     rhs(static_cast<Eigen::Index>(k)) = -dot(grad[k], fc_i - fc_j);
-    for (std::size_t l = 0; l < rods.size(); ++l) {
+    coupled = rods_of[static_cast<std::size_t>(a.i)];
+    for (std::size_t l : rods_of[static_cast<std::size_t>(a.j)]) {
+      if (std::find(coupled.begin(), coupled.end(), l) == coupled.end()) coupled.push_back(l);
+    }
+    for (std::size_t l : coupled) {
       const Constraint& b = rods[l];
       double sign = 0;
       sign += (a.i == b.i) - (a.i == b.j);
