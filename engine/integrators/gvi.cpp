@@ -7,6 +7,7 @@
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
+#include "integrators/shadow_correction.hpp"
 #include "solvers/cluster_matrices.hpp"
 
 namespace deli {
@@ -501,7 +502,7 @@ void Gvi::check_constraints(const System& system, bool tally) {
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
-                         std::vector<Vec3>& p) {
+                         std::vector<Vec3>& p, std::optional<double> shadow_target) {
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   // Direction: the sum of the landed rows' normals at x, projected onto the rod manifold's
@@ -526,8 +527,21 @@ void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, 
     a += norm2(d[i]) / P.mass[i];
     b += dot(d[i], p[i]) / P.mass[i];
   }
-  const double missing = target - (kinetic + engine_.last().potential);
+  double missing = target - (kinetic + engine_.last().potential);
   if (!(a > 0)) return;
+  if (shadow_target) {
+    // S(p + alpha d) = S(start): the shadow correction's own dependence on alpha joins the
+    // quadratic, so the momenta it is taken with are the restored ones.
+    const auto s = shadow_correction_on_rods(
+        engine_, system, dt_, p, d, constraints_.equalities, [&](std::vector<Vec3>& force) {
+          project_momenta(system, constraints_.equalities, P.position, force);
+        });
+    if (s && a + 2.0 * s->quadratic > 0) {
+      missing = *shadow_target - (kinetic + engine_.last().potential + s->constant);
+      a += 2.0 * s->quadratic;
+      b += s->linear;
+    }
+  }
   // K(p + alpha d) = K(p) + missing: a/2 alpha^2 + b alpha - missing = 0.
   const double discriminant = b * b + 2.0 * a * missing;
   double alpha;
