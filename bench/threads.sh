@@ -1,17 +1,32 @@
 #!/usr/bin/env bash
-# deli on 1 and 2 threads (and, with DELI_OLD, an older binary on 1 thread), alternated
-# in one run so that the ratios share the machine's load: the LJ liquid (4000 and 32000),
-# the rigid-rod chain melt (GVI) and the hard-sphere fluid (GVI). Prints atom-steps/s per
-# run and the ratios of the medians.
+# deli on 1 and 2 threads (and, with DELI_OLD, an older binary on 1 thread) beside its peers,
+# alternated in one run so that the ratios share the machine's load: the LJ liquid (4000 and
+# 32000), the rigid-rod chain melt (GVI) and the hard-sphere fluid (GVI). Prints atom-steps/s
+# per run, the medians, each engine's scaling and deli's ratio to each peer.
 #   bench/threads.sh                       3 rounds, each input's own step count capped
 #   ROUNDS=5 DELI_OLD=/tmp/deli-old bench/threads.sh [input.toml:steps ...]
-# The peers (LAMMPS serial and 2 MPI ranks, OpenMM CPU on 1 and 2 threads) run in process
-# from bench/peers (issue 10's driver).
+#   THREADS="1 2 4" bench/threads.sh       other thread (and rank) counts
+#   PEERS=0 bench/threads.sh               deli alone
+# The peers run in process from bench/peers (deli-peers, built here on first use): OpenMM's
+# CPU platform on the same thread counts (CCMA at 1e-4 for rods), LAMMPS on as many MPI ranks
+# (mpirun -np N; with rods LAMMPS gets its own model: see deli-peers). The hard-sphere fluid
+# has no peer (neither engine has hard spheres).
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 deli=${DELI:-$top/build/deli}
 old=${DELI_OLD:-}
 rounds=${ROUNDS:-3}
+read -r -a counts <<< "${THREADS:-1 2}"
+peers=${PEERS_BIN:-$top/build/bench/peers/deli-peers}
+[[ ${PEERS:-1} == 0 ]] && peers=
+if [[ -n $peers && ! -x $peers && -z ${PEERS_BIN:-} && -f $top/build/CMakeCache.txt ]]; then
+  cmake --build "$top/build" --target deli-peers >&2 || true
+fi
+if [[ -n $peers && ! -x $peers ]]; then
+  echo "note: $peers not built (configure with -DDELI_CROSSCHECK=ON): deli alone" >&2
+  peers=
+fi
+mpirun=${MPIRUN:-$(command -v mpirun || true)}
 # Threads waiting at a barrier sleep: on a shared machine a spinning thread takes the core
 # its partner needs (a 4000-atom LJ run 30x slower, measured). OMP_WAIT_POLICY=active
 # (libgomp spins a while first) suits a machine of one's own.
@@ -20,25 +35,41 @@ wait=${OMP_WAIT_POLICY:-passive}
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000)
 [[ $# -gt 0 ]] && cases=("$@")
-# Reads lines "old|new THREADS RATE...": medians and their ratios.
+# Reads lines "ENGINE THREADS RATE...": medians, scaling and deli's ratio to each peer.
 summarise=$(cat <<'PY'
 import statistics, sys
-median = {}
+median, order = {}, []
 for line in sys.stdin:
-    which, threads, *rates = line.split()
-    key = f"{which} {threads}"
-    median[key] = statistics.median(float(x) for x in rates)
-    print(f"  {which} deli, {threads} thread(s): median {median[key]:.4g} atom-steps/s"
+    engine, threads, *rates = line.split()
+    if not rates:
+        continue
+    median[(engine, threads)] = statistics.median(float(x) for x in rates)
+    order.append((engine, threads))
+    print(f"  {engine}, {threads}: median {median[(engine, threads)]:.4g} atom-steps/s"
           f" (runs: {' '.join(rates)})")
-ratio = f"  2 threads / 1 thread: {median['new 2'] / median['new 1']:.2f}x"
-if "old 1" in median:
-    ratio += f"; new / old on 1 thread: {median['new 1'] / median['old 1']:.3f}x"
-print(ratio)
+counts = sorted({t for _, t in order}, key=int)
+for engine in dict.fromkeys(e for e, _ in order):
+    if engine == "old-deli":
+        continue
+    base = median.get((engine, counts[0]))
+    scaling = [f"{t}: {median[(engine, t)] / base:.2f}x" for t in counts[1:]
+               if base and (engine, t) in median]
+    if scaling:
+        print(f"  {engine} scaling over {counts[0]}: {', '.join(scaling)}")
+for t in counts:
+    ratios = [f"{e} {median[('deli', t)] / median[(e, t)]:.2f}x" for e in ("openmm", "lammps")
+              if ("deli", t) in median and (e, t) in median]
+    if ratios:
+        print(f"  deli / peer at {t}: {', '.join(ratios)}")
+if ("old-deli", counts[0]) in median and ("deli", counts[0]) in median:
+    print(f"  new / old deli on {counts[0]}: "
+          f"{median[('deli', counts[0])] / median[('old-deli', counts[0])]:.3f}x")
 PY
 )
 work=$(mktemp -d /tmp/deli-bench-threads.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=$wait"
+echo "thread/rank counts: ${counts[*]}; peers: ${peers:-none}; mpirun: ${mpirun:-none}"
 for spec in "${cases[@]}"; do
   input=${spec%%:*} steps=${spec#*:}
   name=$(basename "$input" .toml)
@@ -52,23 +83,49 @@ for spec in "${cases[@]}"; do
     section == "[run]" && /^steps *=/ { $0 = "steps = " cap }
     { print }' "$top/$input" > "$dir/input.toml"
   declare -A rate=()
-  variants=("new 1" "new 2")
-  [[ -n $old ]] && variants=("old 1" "${variants[@]}")
+  variants=()
+  [[ -n $old ]] && variants+=("old-deli ${counts[0]}")
+  for t in "${counts[@]}"; do variants+=("deli $t"); done
+  has_peers=
+  if [[ -n $peers ]] && (cd "$dir" && "$peers" input.toml 1 openmm > /dev/null 2>&1); then
+    has_peers=1
+    for t in "${counts[@]}"; do variants+=("openmm $t"); done
+    for t in "${counts[@]}"; do
+      [[ $t == 1 || -n $mpirun ]] && variants+=("lammps $t")
+    done
+  fi
   for ((r = 0; r < rounds; ++r)); do
     for v in "${variants[@]}"; do
-      read -r which threads <<< "$v"
-      bin=$deli
-      [[ $which == old ]] && bin=$old
-      args=(--threads "$threads")
-      [[ $which == old ]] && args=()
-      line=$(cd "$dir" && OMP_WAIT_POLICY=$wait OMP_NUM_THREADS=$threads "$bin" run input.toml "${args[@]}" | grep "^loop time")
-      value=$(echo "$line" | sed -E 's/.*: ([0-9.e+]+) atom-steps\/s.*/\1/')
+      read -r engine threads <<< "$v"
+      case $engine in
+        old-deli)
+          line=$(cd "$dir" && OMP_WAIT_POLICY=$wait OMP_NUM_THREADS=$threads "$old" run input.toml |
+            grep "^loop time") ;;
+        deli)
+          line=$(cd "$dir" && OMP_WAIT_POLICY=$wait OMP_NUM_THREADS=$threads "$deli" run input.toml \
+            --threads "$threads" | grep "^loop time") ;;
+        openmm)
+          line=$(cd "$dir" && "$peers" input.toml "$steps" openmm 1e-4 "$threads") ||
+            echo "note: OpenMM on $threads thread(s) failed on $name" >&2 ;;
+        lammps)
+          if [[ $threads == 1 ]]; then
+            line=$(cd "$dir" && OMP_NUM_THREADS=1 "$peers" input.toml "$steps" lammps) ||
+              echo "note: LAMMPS failed on $name" >&2
+          else
+            line=$(cd "$dir" && OMP_NUM_THREADS=1 OMPI_ALLOW_RUN_AS_ROOT=1 \
+              OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpirun" -np "$threads" --oversubscribe \
+              "$peers" input.toml "$steps" lammps) ||
+              echo "note: LAMMPS on $threads MPI ranks failed on $name ($mpirun)" >&2
+          fi ;;
+      esac
+      value=$(echo "$line" | grep -oE '[0-9.]+e[+-]?[0-9]+ atom-steps/s|atom-steps/s [0-9.e+-]+' |
+        grep -oE '[0-9.]+(e[+-]?[0-9]+)?' | head -1 || true)
       rate[$v]+="$value "
     done
   done
   summary=$(for v in "${variants[@]}"; do echo "$v ${rate[$v]}"; done |
     /usr/bin/python3 -c "$summarise")
-  echo "$name ($steps steps):"
+  echo "$name ($steps steps${has_peers:+; peers: OpenMM CPU, LAMMPS}):"
   echo "$summary"
   unset rate
 done

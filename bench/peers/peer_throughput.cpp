@@ -1,11 +1,13 @@
-// deli-peers: the throughput of OpenMM (C++ API, CPU platform, one thread) and LAMMPS
-// (liblammps, in this process) on a deli input's model, for bench/constrained.sh. Not a test.
+// deli-peers: the throughput of OpenMM (C++ API, CPU platform) and LAMMPS (liblammps, in this
+// process) on a deli input's model, for bench/constrained.sh and bench/threads.sh. Not a test.
 //
-//   deli-peers INPUT.toml STEPS openmm [TOLERANCE]   Verlet; the input's rods as constraints
-//                                                    (CCMA) held to TOLERANCE (default 1e-4)
-//   deli-peers INPUT.toml STEPS lammps [K]           fix nve; with rods, fix rattle on the
-//                                                    rods LAMMPS can hold (below), the others
-//                                                    harmonic bonds of stiffness K (100)
+//   deli-peers INPUT.toml STEPS openmm [TOLERANCE [THREADS]]
+//       Verlet; the input's rods as constraints (CCMA) held to TOLERANCE (default 1e-4);
+//       the CPU platform on THREADS threads (default 1)
+//   deli-peers INPUT.toml STEPS lammps [K]
+//       fix nve; with rods, fix rattle on the rods LAMMPS can hold (below), the others
+//       harmonic bonds of stiffness K (100). Started by mpirun -np R, LAMMPS runs on R ranks
+//       (liblammps initialises MPI itself) and rank 0 alone reports.
 //
 // Prints one line: "atom-steps/s X" and what ran. The clock covers the integration loop only
 // (after a few warm-up steps in OpenMM, LAMMPS' run setup included), as deli's "loop time".
@@ -67,7 +69,10 @@ Model load_model(const std::string& path) {
   };
   if (!spec.pair || spec.pair->style->name != "lj/cut" || spec.pair->coefficients.type_count() != 1)
     refuse("the pair style is not lj/cut with one atom type");
-  if (spec.special_lj != std::array<double, 3>{0.0, 1.0, 1.0}) refuse("special_bonds differ");
+  // Without bonds (a simple liquid) the special_bonds factors apply to no pair.
+  if (!input.system.topology.bonds.empty() &&
+      spec.special_lj != std::array<double, 3>{0.0, 1.0, 1.0})
+    refuse("special_bonds differ");
   if (spec.angle || spec.gravity || !spec.radial.empty()) refuse("it has angles or fields");
   for (bool p : input.system.box.periodic()) {
     if (!p) refuse("an axis is open");
@@ -113,7 +118,7 @@ void report(const char* engine, std::size_t atoms, int steps, double seconds,
               what.c_str());
 }
 
-void run_openmm(const Model& m, int steps, double tolerance) {
+void run_openmm(const Model& m, int steps, double tolerance, int threads) {
   const deli::System& s = m.start;
   const std::size_t n = s.particles.size();
   OpenMM::System system;
@@ -144,7 +149,7 @@ void run_openmm(const Model& m, int steps, double tolerance) {
   OpenMM::VerletIntegrator verlet(m.timestep);
   verlet.setConstraintTolerance(tolerance);
   OpenMM::Context context(system, verlet, OpenMM::Platform::getPlatformByName("CPU"),
-                          {{"Threads", "1"}});
+                          {{"Threads", std::to_string(threads)}});
   std::vector<OpenMM::Vec3> x, v;
   for (std::size_t i = 0; i < n; ++i) {
     const deli::Vec3 u = s.box.unwrapped(s.particles.position[i], s.particles.image[i]);
@@ -166,7 +171,8 @@ void run_openmm(const Model& m, int steps, double tolerance) {
       what, sizeof what, "%s; unshifted LJ energy per atom %.5g -> %.5g",
       m.rods.empty() ? "Verlet" : ("Verlet, CCMA at tolerance " + number(tolerance)).c_str(),
       start_energy / n, end_energy / n);
-  report("OpenMM CPU", n, steps, seconds, what);
+  report("OpenMM CPU", n, steps, seconds,
+         std::string(what) + "; " + std::to_string(threads) + " thread(s)");
 }
 
 // Rods LAMMPS' fix rattle can hold: along each chain, two rods sharing a central bead, then
@@ -260,30 +266,35 @@ void run_lammps(const Model& m, int steps, double free_bond_k) {
   char energies[100];
   std::snprintf(energies, sizeof energies, "; potential energy per atom %.5g -> %.5g", start_energy,
                 lammps_get_thermo(lmp, "pe"));
+  const int ranks = lammps_extract_setting(lmp, "world_size");
+  const int rank = lammps_extract_setting(lmp, "world_rank");
   lammps_close(lmp);
-  report("LAMMPS", n, steps, seconds, what + energies);
+  if (rank == 0) {
+    report("LAMMPS", n, steps, seconds,
+           what + energies + "; " + std::to_string(ranks) + " MPI rank(s)");
+  }
+  lammps_mpi_finalize();
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 4 || argc > 5) {
+  const bool openmm = argc >= 4 && std::string(argv[3]) == "openmm";
+  const bool lammps = argc >= 4 && std::string(argv[3]) == "lammps";
+  if (!(openmm && argc <= 6) && !(lammps && argc <= 5)) {
     std::fprintf(stderr,
-                 "usage: deli-peers INPUT.toml STEPS openmm [CCMA_TOLERANCE]\n"
+                 "usage: deli-peers INPUT.toml STEPS openmm [CCMA_TOLERANCE [THREADS]]\n"
                  "       deli-peers INPUT.toml STEPS lammps [FREE_BOND_K]\n");
     return 2;
   }
   try {
     const Model model = load_model(argv[1]);
     const int steps = std::stoi(argv[2]);
-    const std::string engine = argv[3];
-    if (engine == "openmm") {
-      run_openmm(model, steps, argc == 5 ? std::stod(argv[4]) : 1e-4);
-    } else if (engine == "lammps") {
-      run_lammps(model, steps, argc == 5 ? std::stod(argv[4]) : 100.0);
+    if (openmm) {
+      run_openmm(model, steps, argc >= 5 ? std::stod(argv[4]) : 1e-4,
+                 argc == 6 ? std::stoi(argv[5]) : 1);
     } else {
-      std::fprintf(stderr, "deli-peers: unknown engine '%s' (openmm | lammps)\n", argv[3]);
-      return 2;
+      run_lammps(model, steps, argc == 5 ? std::stod(argv[4]) : 100.0);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "deli-peers: %s\n", e.what());

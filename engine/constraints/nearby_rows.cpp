@@ -9,6 +9,7 @@ namespace deli {
 void NearbyRows::make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                       const NeighborList& list, const Box& box) {
   pairs_.clear();
+  bounds_.clear();
   const auto& offsets = list.offsets();
   const auto& neighbors = list.neighbors();
   const std::vector<double>& radius = particles.radius;
@@ -35,6 +36,7 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
       if (d2 > within * within * (1.0 + 1e-6) + 1e-300) continue;
       if (bonded_pairs && bonded(a, b)) continue;
       pairs_.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
+      bounds_.push_back({a, b, pairs_.back().anchor_gap});
     }
   }
   anchor_.assign(q, q + particles.size());
@@ -99,42 +101,58 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     // if it may be at most `exact_below`.
     const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
     const double infinity = std::numeric_limits<double>::infinity();
-    auto keep_pair = [&](const Pair& pair, double d2) {
+    // A pair whose gap at q is certainly beyond the reach (its anchor gap less both
+    // displacements exceeds it by far more than rounding) is one the exact test drops too.
+    // The others' indices are gathered first without a branch (about half the pairs pass,
+    // unpredictably), then, again without a branch, those within the screen with their
+    // squared distances, which are then tested in order.
+    const double beyond = reach + 1e-9;
+    const double* moved = moved_.data();
+    const std::size_t pair_count = bounds_.size();
+    near_.resize(pair_count);
+    near_d2_.resize(pair_count);
+    std::size_t count = 0;
+    for (std::size_t k = 0; k < pair_count; ++k) {
+      const PairBound& bound = bounds_[k];
+      near_[count] = static_cast<std::int32_t>(k);
+      count += !(bound.anchor_gap - moved[bound.a] - moved[bound.b] > beyond) ? 1 : 0;
+    }
+    std::size_t within_count = 0;
+    auto screen_pair = [&](std::int32_t k, double d2) {
+      const double within = pairs_[k].contact + reach;
+      near_[within_count] = k;
+      near_d2_[within_count] = d2;
+      within_count += !(d2 > within * within * screen + 1e-300) ? 1 : 0;
+    };
+    if (shifted_) {
+      for (std::size_t m = 0; m < count; ++m) {
+        const Pair& pair = pairs_[near_[m]];
+        screen_pair(near_[m], norm2(q[pair.a] - q[pair.b] - pair.shift));
+      }
+    } else {
+      for (std::size_t m = 0; m < count; ++m) {
+        const Pair& pair = pairs_[near_[m]];
+        screen_pair(near_[m], norm2(box.minimum_image(q[pair.a] - q[pair.b])));
+      }
+    }
+    for (std::size_t m = 0; m < within_count; ++m) {
+      const Pair& pair = pairs_[near_[m]];
+      const double d2 = near_d2_[m];
       const double within = pair.contact + reach;
-      if (d2 > within * within * screen + 1e-300) return;
       const double near = pair.contact + exact_below;
       double gap = infinity;
       if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
           d2 <= near * near * screen + 1e-300) {
         gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
-        if (!(gap <= reach)) return;
+        if (!(gap <= reach)) continue;
       }
-      out.push_back(sphere_pair(pair.a, pair.b, particles));
+      // sphere_pair(a, b)'s row, made in place (its contact is the pair's).
+      Constraint& row = out.emplace_back();
+      row.kind = ConstraintKind::sphere_pair;
+      row.i = pair.a;
+      row.j = pair.b;
+      row.length = pair.contact;
       gap_at_q.push_back(gap);
-    };
-    // A pair whose gap at q is certainly beyond the reach (its anchor gap less both
-    // displacements exceeds it by far more than rounding) is one the exact test drops too.
-    // The others' indices are gathered first without a branch (about half the pairs pass,
-    // unpredictably), then screened in order.
-    const double beyond = reach + 1e-9;
-    const double* moved = moved_.data();
-    near_.resize(pairs_.size());
-    std::size_t count = 0;
-    for (std::size_t k = 0; k < pairs_.size(); ++k) {
-      const Pair& pair = pairs_[k];
-      near_[count] = static_cast<std::int32_t>(k);
-      count += !(pair.anchor_gap - moved[pair.a] - moved[pair.b] > beyond) ? 1 : 0;
-    }
-    if (shifted_) {
-      for (std::size_t m = 0; m < count; ++m) {
-        const Pair& pair = pairs_[near_[m]];
-        keep_pair(pair, norm2(q[pair.a] - q[pair.b] - pair.shift));
-      }
-    } else {
-      for (std::size_t m = 0; m < count; ++m) {
-        const Pair& pair = pairs_[near_[m]];
-        keep_pair(pair, norm2(box.minimum_image(q[pair.a] - q[pair.b])));
-      }
     }
   }
   for (const Wall& wall : set.walls) {

@@ -49,10 +49,17 @@ class NearbyRows {
     Vec3 shift;
   };
   std::vector<Pair> pairs_;
+  // What the first screen reads of each pair, packed apart (a third of Pair's bytes).
+  struct PairBound {
+    std::int32_t a, b;
+    double anchor_gap;
+  };
+  std::vector<PairBound> bounds_;
   bool shifted_ = false;
   std::vector<Vec3> anchor_;
   std::vector<double> moved_;       // per particle, |q - anchor| at the last call
   std::vector<std::int32_t> near_;  // pairs that may be within reach, by index
+  std::vector<double> near_d2_;     // their squared distances at q, after the second screen
   const NeighborList* list_ = nullptr;
   std::int64_t list_builds_ = -1;
   std::vector<std::int32_t> bonded_first_, bonded_partner_;

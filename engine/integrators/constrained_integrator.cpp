@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <optional>
 
 #include "constraints/clusters.hpp"
@@ -444,6 +445,11 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
                                              std::size_t first_inequality,
                                              const std::vector<Vec3>& x, std::vector<Vec3>& p) {
   const Particles& P = system.particles;
+  // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
+  // the same single-row problem with H as its energy.
+  const bool lone_rows_closed =
+      energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
+  if (lone_rows_closed && first_inequality == 0) return reflect_inequalities(system, rows, x, p);
   const std::vector<Cluster> clusters = find_clusters(rows, P.size());
   std::vector<bool> holds_inequality(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c) {
@@ -454,44 +460,111 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   if (energy_ == ReflectionEnergy::shadow && any) {
     gather_hessian_blocks(system, clusters, holds_inequality);
   }
-  // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
-  // the same single-row problem with H as its energy.
-  const bool lone_rows_closed =
-      energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!holds_inequality[c]) continue;
     const Cluster& cluster = clusters[c];
-    if (lone_rows_closed && cluster.rows.size() == 1) {
-      const Constraint& row = rows[cluster.rows.front()];
-      const double lambda = reflect_lone_row(row, x.data(), system.box, P.mass,
-                                             constraints_.tolerances.velocity, p.data());
-      if (lambda >= 0.0) {
-        step_virial_ += pair_virial(row, lambda, x.data(), system.box);
-        stats_.reflected += lambda > 0.0 ? 1 : 0;
-        continue;
-      }
+    if (lone_rows_closed && cluster.rows.size() == 1 &&
+        reflect_closed_form(system, rows[cluster.rows.front()], x, p)) {
+      continue;
     }
-    const LocalCluster local = localize(cluster, rows, P.mass);
-    std::vector<bool> equality;
-    for (std::int32_t r : cluster.rows)
-      equality.push_back(r < static_cast<std::int32_t>(first_inequality));
-    std::vector<Vec3> p_local = gather(p, cluster.particles);
-    ShadowOperator shadow;
-    if (energy_ == ReflectionEnergy::shadow) shadow = shadow_operator(system, c, p);
-    const std::vector<Vec3> x_local = gather(x, cluster.particles);
-    const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
-                                      constraints_.tolerances.velocity, constraints_.limits,
-                                      energy_ == ReflectionEnergy::shadow ? &shadow : nullptr);
-    for (std::size_t k = 0; k < local.rows.size(); ++k) {
-      step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
+    if (energy_ == ReflectionEnergy::shadow) {
+      const ShadowOperator shadow = shadow_operator(system, c, p);
+      reflect_cluster(system, rows, first_inequality, cluster, x, p, &shadow);
+    } else {
+      reflect_cluster(system, rows, first_inequality, cluster, x, p, nullptr);
     }
-    stats_.reflected += r.reflected;
-    stats_.shadow_fallbacks += r.shadow_fallbacks;
-    stats_.stalled += r.capped ? 1 : 0;
-    stats_.cycled += r.cycled ? 1 : 0;
-    stats_.qp_caps += r.qp_caps;
-    scatter(p_local, cluster.particles, p);
   }
+}
+
+bool ConstrainedIntegrator::reflect_closed_form(System& system, const Constraint& row,
+                                                const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+  const double lambda = reflect_lone_row(row, x.data(), system.box, system.particles.mass,
+                                         constraints_.tolerances.velocity, p.data());
+  if (lambda < 0.0) return false;
+  step_virial_ += pair_virial(row, lambda, x.data(), system.box);
+  stats_.reflected += lambda > 0.0 ? 1 : 0;
+  return true;
+}
+
+// Inequality rows alone (the contacts of a hard-sphere fluid): a row that shares no particle
+// with another is a cluster of its own, reflected in closed form without clustering; only
+// the rows that share particles are clustered. Clusters are taken in find_clusters' order
+// (by smallest particle), which orders the virial's sum.
+void ConstrainedIntegrator::reflect_inequalities(System& system,
+                                                 const std::vector<Constraint>& rows,
+                                                 const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+  // Zero for every particle outside a call.
+  rows_at_particle_.resize(system.particles.size(), 0);
+  for (const Constraint& c : rows) {
+    ++rows_at_particle_[c.i];
+    if (c.j >= 0) ++rows_at_particle_[c.j];
+  }
+  lone_order_.clear();
+  shared_rows_.clear();
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const Constraint& c = rows[r];
+    if (rows_at_particle_[c.i] == 1 && (c.j < 0 || rows_at_particle_[c.j] == 1)) {
+      lone_order_.push_back(static_cast<std::int32_t>(r));
+    } else {
+      shared_rows_.push_back(c);
+    }
+  }
+  for (const Constraint& c : rows) {
+    rows_at_particle_[c.i] = 0;
+    if (c.j >= 0) rows_at_particle_[c.j] = 0;
+  }
+  auto first = [&](std::int32_t r) {
+    const Constraint& c = rows[r];
+    return c.j >= 0 ? std::min(c.i, c.j) : c.i;
+  };
+  std::sort(lone_order_.begin(), lone_order_.end(),
+            [&](std::int32_t a, std::int32_t b) { return first(a) < first(b); });
+  const std::vector<Cluster> shared = shared_rows_.empty()
+                                          ? std::vector<Cluster>{}
+                                          : find_clusters(shared_rows_, system.particles.size());
+  std::size_t next_shared = 0;
+  auto reflect_shared_before = [&](std::int32_t particle) {
+    for (; next_shared < shared.size() && shared[next_shared].particles.front() < particle;
+         ++next_shared) {
+      reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr);
+    }
+  };
+  for (const std::int32_t r : lone_order_) {
+    reflect_shared_before(first(r));
+    if (reflect_closed_form(system, rows[r], x, p)) continue;
+    Cluster cluster;  // a row without a closed form (no direction): the general reflection
+    const Constraint& c = rows[r];
+    cluster.particles.push_back(c.i);
+    if (c.j >= 0) cluster.particles.push_back(c.j);
+    std::sort(cluster.particles.begin(), cluster.particles.end());
+    cluster.rows.push_back(r);
+    reflect_cluster(system, rows, 0, cluster, x, p, nullptr);
+  }
+  reflect_shared_before(std::numeric_limits<std::int32_t>::max());
+}
+
+void ConstrainedIntegrator::reflect_cluster(System& system, const std::vector<Constraint>& rows,
+                                            std::size_t first_inequality, const Cluster& cluster,
+                                            const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                                            const ShadowOperator* shadow) {
+  const Particles& P = system.particles;
+  const LocalCluster local = localize(cluster, rows, P.mass);
+  std::vector<bool> equality;
+  for (std::int32_t r : cluster.rows)
+    equality.push_back(r < static_cast<std::int32_t>(first_inequality));
+  std::vector<Vec3> p_local = gather(p, cluster.particles);
+  const std::vector<Vec3> x_local = gather(x, cluster.particles);
+  const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
+                                    constraints_.tolerances.velocity, constraints_.limits, shadow);
+  for (std::size_t k = 0; k < local.rows.size(); ++k) {
+    step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
+  }
+  stats_.reflected += r.reflected;
+  stats_.shadow_fallbacks += r.shadow_fallbacks;
+  stats_.stalled += r.capped ? 1 : 0;
+  stats_.cycled += r.cycled ? 1 : 0;
+  stats_.qp_caps += r.qp_caps;
+  scatter(p_local, cluster.particles, p);
 }
 
 void ConstrainedIntegrator::finish_step() {
@@ -527,25 +600,30 @@ std::vector<Constraint> ConstrainedIntegrator::candidates_for_step(System& syste
 }
 
 void ConstrainedIntegrator::record_geometry(const System& system,
-                                            const std::vector<Constraint>& candidates, bool full) {
+                                            const std::vector<Constraint>& candidates, bool full,
+                                            const double* candidates_smallest) {
   const Particles& P = system.particles;
   double gap = full
                    ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
                    : std::numeric_limits<double>::infinity();
-  // Per chunk of candidates, each bounded by its own running minimum: a row beyond that bound
-  // is beyond the overall minimum too, and every gap below it is evaluated exactly, so the
-  // minimum is the serial loop's on any number of threads.
-  const int chunks = chunks_for(candidates.size());
-  std::vector<double> chunk_gap(static_cast<std::size_t>(chunks), gap);
-  for_each_chunk(candidates.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
-    double smallest = chunk_gap[static_cast<std::size_t>(c)];
-    for (std::size_t k = begin; k < end; ++k) {
-      smallest = std::min(
-          smallest, gap_unless_beyond(candidates[k], P.position.data(), system.box, smallest));
-    }
-    chunk_gap[static_cast<std::size_t>(c)] = smallest;
-  });
-  for (const double smallest : chunk_gap) gap = std::min(gap, smallest);
+  if (candidates_smallest) {
+    gap = std::min(gap, *candidates_smallest);
+  } else {
+    // Per chunk of candidates, each bounded by its own running minimum: a row beyond that
+    // bound is beyond the overall minimum too, and every gap below it is evaluated exactly,
+    // so the minimum is the serial loop's on any number of threads.
+    const int chunks = chunks_for(candidates.size());
+    std::vector<double> chunk_gap(static_cast<std::size_t>(chunks), gap);
+    for_each_chunk(candidates.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+      double smallest = chunk_gap[static_cast<std::size_t>(c)];
+      for (std::size_t k = begin; k < end; ++k) {
+        smallest = std::min(
+            smallest, gap_unless_beyond(candidates[k], P.position.data(), system.box, smallest));
+      }
+      chunk_gap[static_cast<std::size_t>(c)] = smallest;
+    });
+    for (const double smallest : chunk_gap) gap = std::min(gap, smallest);
+  }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
   const std::vector<Constraint>& rods = constraints_.equalities;

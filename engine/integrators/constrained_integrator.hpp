@@ -103,6 +103,16 @@ class ConstrainedIntegrator : public Integrator {
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p);
+  // Parts of reflect_clusters: one cluster through reflect(); one row in closed form (false,
+  // with nothing done, where it has none); rows without equalities, with closed forms.
+  void reflect_cluster(System& system, const std::vector<Constraint>& rows,
+                       std::size_t first_inequality, const Cluster& cluster,
+                       const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                       const ShadowOperator* shadow);
+  bool reflect_closed_form(System& system, const Constraint& row, const std::vector<Vec3>& x,
+                           std::vector<Vec3>& p);
+  void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
+                            const std::vector<Vec3>& x, std::vector<Vec3>& p);
   double project_momenta(System& system, const std::vector<Constraint>& rows,
                          const std::vector<Vec3>& x, std::vector<Vec3>& p);
   // The inequality rows a step from q (the system's positions) towards x (the
@@ -112,7 +122,10 @@ class ConstrainedIntegrator : public Integrator {
   // the step.
   std::vector<Constraint> candidates_for_step(System& system, std::vector<Vec3>& q,
                                               std::vector<Vec3>& x);
-  void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full);
+  // `candidates_smallest`, when given, is the smallest gap of the candidates at the current
+  // positions, already found: the candidates are not scanned again.
+  void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full,
+                       const double* candidates_smallest = nullptr);
   // The implicit midpoint's fixed point, the one loop of every integrator that has one:
   // repeats `pass` (one pass, returning the largest change it made, sigma) until a pass
   // from the `first_checked`-th on changes less than the solver tolerance; at
@@ -167,6 +180,11 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<std::vector<std::size_t>> blocks_of_cluster_;
   std::vector<std::int32_t> cluster_of_particle_;
   std::vector<std::int32_t> local_index_of_particle_;  // within its cluster, where gathered
+  // reflect_inequalities' scratch: rows per particle (zero between calls), the rows sharing
+  // no particle, the others.
+  std::vector<std::int32_t> rows_at_particle_;
+  std::vector<std::int32_t> lone_order_;
+  std::vector<Constraint> shared_rows_;
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);

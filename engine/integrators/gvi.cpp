@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
+#include "integrators/shadow_correction.hpp"
 #include "solvers/cluster_matrices.hpp"
 
 namespace deli {
@@ -37,9 +39,12 @@ void Gvi::step(System& system, bool tally) {
   timer.enter(Phase::momentum_update);
   update_momenta(system, tally);
   ++stats_.steps;
-  previous_positions_ = ws_.q;  // same size: the buffer (and pointers into it) stays
+  // Same size: the buffer (and pointers into it) stays. Only linearised rows read it during
+  // the checks; otherwise the start positions, no longer needed, are swapped in.
+  if (constraints_.linearized) previous_positions_ = ws_.q;
   timer.enter(Phase::constraint_checks);
   check_constraints(system, tally);
+  if (!constraints_.linearized) std::swap(previous_positions_, ws_.q);
   finish_step();
   timer.enter(outer);
 }
@@ -111,10 +116,23 @@ void Gvi::start_step(System& system) {
   Particles& P = system.particles;
   const std::size_t n = P.size();
   ws_.p.resize(n);
-  parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
   // The free prediction first, even with the constrained predictor: it decides whether the
-  // neighbour list still covers the step.
-  predict(system, ws_.p, ws_.predicted, false);
+  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  if (lagrangian_ == Lagrangian::verlet) {
+    const double h = dt_;
+    const std::vector<Vec3>& f = engine_.force();
+    std::vector<Vec3>& d = ws_.displacement;
+    d.resize(n);
+    ws_.predicted.resize(n);
+    parallel_for(n, [&, h](std::size_t i) {
+      ws_.p[i] = P.velocity[i] * P.mass[i];
+      d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+      ws_.predicted[i] = P.position[i] + d[i];
+    });
+  } else {
+    parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
+    predict(system, ws_.p, ws_.predicted, false);
+  }
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
   if (pairs_matter && !engine_.neighbors_cover(ws_.predicted)) {
@@ -187,7 +205,13 @@ void Gvi::find_active_set(System& system) {
   const double gap_tolerance = constraints_.tolerances.gap;
   std::vector<Constraint>& active = ws_.active;
   active.clear();
-  ws_.prediction_changed.assign(n, 1);
+  // Without equality rows a Verlet prediction is the free step, particle by particle: after a
+  // reflection only the reflected particles' predictions can change, and only theirs are
+  // made again (the same numbers a whole prediction would give).
+  const bool local_predictions =
+      lagrangian_ == Lagrangian::verlet && constraints_.equalities.empty();
+  ws_.prediction_changed.assign(n, local_predictions ? 0 : 1);
+  ws_.changed_particles.clear();
   bool settled = false;
   // After the first round: a bound on max |prediction - q|^2, from the last round's and the
   // particles whose prediction changed.
@@ -196,19 +220,33 @@ void Gvi::find_active_set(System& system) {
     const std::vector<Constraint>& candidates =
         candidates_for(system, ws_.predicted, largest2_bound);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
+    // Per candidate, whether it is in the active set already (the candidates are distinct
+    // rows): made again by search when the candidates were refreshed.
+    if (every_row) {
+      ws_.candidate_active.assign(candidates.size(), 0);
+      if (!active.empty()) {
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+          ws_.candidate_active[k] = contains(active, candidates[k]) ? 1 : 0;
+        }
+      }
+    }
     bool grew = false;
     filter_in_order(
-        candidates.size(), ws_.candidate_active,
+        candidates.size(), ws_.candidate_passed,
         [&, every_row, gap_tolerance](std::size_t k) {
           const Constraint& c = candidates[k];
-          return (every_row || ws_.prediction_changed[c.i] ||
-                  (c.j >= 0 && ws_.prediction_changed[c.j])) &&
-                 // Active at q, or overlapping at the prediction.
+          if (!every_row && !ws_.prediction_changed[c.i] &&
+              (c.j < 0 || !ws_.prediction_changed[c.j])) {
+            return false;
+          }
+          // Not yet active, and active at q or overlapping at the prediction.
+          return !ws_.candidate_active[k] &&
                  (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
                   gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0);
         },
         [&](std::size_t k) {
-          if (!contains(active, candidates[k])) active.push_back(candidates[k]), grew = true;
+          active.push_back(candidates[k]), grew = true;
+          ws_.candidate_active[k] = 1;
         });
     if (!grew || !reflections_) {
       settled = true;
@@ -221,6 +259,10 @@ void Gvi::find_active_set(System& system) {
       reflect_clusters(system, ws_.rows, constraints_.equalities.size(), ws_.q, ws_.p);
     }
     const TimedPhase predicting(Phase::prediction);
+    if (local_predictions) {
+      largest2_bound = predict_reflected(system);
+      continue;
+    }
     std::swap(ws_.previous_prediction, ws_.predicted);
     predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
     largest2_bound = ordered_max(n, ws_.largest2, [&](std::size_t i) {
@@ -234,6 +276,35 @@ void Gvi::find_active_set(System& system) {
   }
   stats_.active += static_cast<std::int64_t>(active.size());
   if (!settled) ++stats_.active_set_caps;
+}
+
+// The free Verlet prediction made again for the particles of the active rows (the only ones
+// reflections move), as free_displacement and predict make it; marks those whose prediction
+// changed and returns the bound on max |prediction - q|^2.
+double Gvi::predict_reflected(const System& system) {
+  const Particles& P = system.particles;
+  const double h = dt_;
+  const std::vector<Vec3>& f = engine_.force();
+  std::vector<Vec3>& d = ws_.displacement;
+  for (std::int32_t i : ws_.changed_particles) ws_.prediction_changed[i] = 0;
+  ws_.changed_particles.clear();
+  double largest2_bound = ws_.largest2;
+  auto again = [&](std::int32_t i) {
+    d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    const Vec3 next = P.position[i] + d[i];
+    Vec3& now = ws_.predicted[i];
+    if (next.x != now.x || next.y != now.y || next.z != now.z) {
+      now = next;
+      ws_.prediction_changed[i] = 1;
+      ws_.changed_particles.push_back(i);
+      largest2_bound = std::max(largest2_bound, norm2(next - ws_.q[i]));
+    }
+  };
+  for (const Constraint& c : ws_.active) {
+    again(c.i);
+    if (c.j >= 0) again(c.j);
+  }
+  return largest2_bound;
 }
 
 // Smooth set: active at q and tangent to the momenta after reflection.
@@ -286,10 +357,10 @@ void Gvi::solve_held_positions(System& system) {
                          ws_.kicked_displacement.size() == n && ws_.prediction_kick.size() == n;
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
-    ws_.free.resize(n);
-    parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
     ws_.impulse.assign(n, Vec3{});
     if (!rows.empty()) {
+      ws_.free.resize(n);
+      parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
       ws_.position_virial =
           solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse, nullptr,
                           predicted ? &prediction : nullptr);
@@ -326,19 +397,40 @@ void Gvi::update_positions(System& system) {
     solve_held_positions(system);
     displaced(system.particles);
     ws_.violated.clear();
+    ws_.x_smallest_gap_known = false;
     if (feasibility_ != Feasibility::none) {
-      // Overlapping beyond tolerance at x (such a row is also active there).
+      // Overlapping beyond tolerance at x (such a row is also active there). The same pass
+      // keeps the smallest candidate gap at x for the constraint checks: every gap that may
+      // be below the smallest so far (or the tolerance) exactly, the others beyond both. Per
+      // chunk of candidates, each bounded by its own running minimum: the exact minimum and
+      // the serial order of the overlapping rows on any number of threads.
       const std::vector<Constraint>& candidates =
           candidates_for(system, ws_.x, ws_.x_largest2, true);
-      filter_in_order(
-          candidates.size(), ws_.candidate_active,
-          [&, gap_tolerance](std::size_t k) {
-            return gap_unless_beyond(candidates[k], ws_.x.data(), system.box, -gap_tolerance) <
-                   -gap_tolerance;
-          },
-          [&](std::size_t k) {
-            if (!contains(ws_.held, candidates[k])) ws_.violated.push_back(candidates[k]);
-          });
+      const int chunks = chunks_for(candidates.size());
+      ws_.candidate_passed.resize(candidates.size());
+      std::vector<double> chunk_smallest(static_cast<std::size_t>(chunks),
+                                         std::numeric_limits<double>::infinity());
+      for_each_chunk(candidates.size(), chunks,
+                     [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
+                       double smallest = std::numeric_limits<double>::infinity();
+                       for (std::size_t k = begin; k < end; ++k) {
+                         const double gap =
+                             gap_unless_beyond(candidates[k], ws_.x.data(), system.box,
+                                               std::max(smallest, -gap_tolerance));
+                         smallest = std::min(smallest, gap);
+                         ws_.candidate_passed[k] = gap < -gap_tolerance;
+                       }
+                       chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
+                     });
+      double smallest = std::numeric_limits<double>::infinity();
+      for (const double s : chunk_smallest) smallest = std::min(smallest, s);
+      for (std::size_t k = 0; k < candidates.size(); ++k) {
+        if (ws_.candidate_passed[k] && !contains(ws_.held, candidates[k])) {
+          ws_.violated.push_back(candidates[k]);
+        }
+      }
+      ws_.x_smallest_gap = smallest;
+      ws_.x_smallest_gap_known = true;
     }
     if (ws_.violated.empty()) break;
     if (round == constraints_.limits.feasibility_rounds) {
@@ -421,16 +513,20 @@ void Gvi::update_momenta(System& system, bool tally) {
 void Gvi::check_constraints(const System& system, bool tally) {
   // The positions are ws_.x unless the force evaluation rebuilt the neighbour list, which
   // wraps them.
-  if (engine_.neighbors().builds() == ws_.x_builds) {
+  const bool at_x = engine_.neighbors().builds() == ws_.x_builds;
+  if (at_x) {
     candidates_for(system, system.particles.position, ws_.x_largest2, true);
   } else {
     candidates_for(system, system.particles.position);
   }
-  record_geometry(system, ws_.nearby, tally);
+  // The feasibility guard's last pass saw the same candidates at the same positions.
+  const bool known = at_x && ws_.x_smallest_gap_known && !ws_.nearby_refreshed;
+  ws_.x_smallest_gap_known = false;
+  record_geometry(system, ws_.nearby, tally, known ? &ws_.x_smallest_gap : nullptr);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,
-                         std::vector<Vec3>& p) {
+                         std::vector<Vec3>& p, std::optional<double> shadow_target) {
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   // Direction: the sum of the landed rows' normals at x, projected onto the rod manifold's
@@ -455,8 +551,21 @@ void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, 
     a += norm2(d[i]) / P.mass[i];
     b += dot(d[i], p[i]) / P.mass[i];
   }
-  const double missing = target - (kinetic + engine_.last().potential);
+  double missing = target - (kinetic + engine_.last().potential);
   if (!(a > 0)) return;
+  if (shadow_target) {
+    // S(p + alpha d) = S(start): the shadow correction's own dependence on alpha joins the
+    // quadratic, so the momenta it is taken with are the restored ones.
+    const auto s = shadow_correction_on_rods(
+        engine_, system, dt_, p, d, constraints_.equalities, [&](std::vector<Vec3>& force) {
+          project_momenta(system, constraints_.equalities, P.position, force);
+        });
+    if (s && a + 2.0 * s->quadratic > 0) {
+      missing = *shadow_target - (kinetic + engine_.last().potential + s->constant);
+      a += 2.0 * s->quadratic;
+      b += s->linear;
+    }
+  }
   // K(p + alpha d) = K(p) + missing: a/2 alpha^2 + b alpha - missing = 0.
   const double discriminant = b * b + 2.0 * a * missing;
   double alpha;

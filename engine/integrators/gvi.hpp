@@ -1,6 +1,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "constraints/nearby_rows.hpp"
@@ -111,14 +112,22 @@ class Gvi final : public ConstrainedIntegrator {
   // what decides a refresh without a pass over the particles when it shows none is due.
   const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
                                                 double largest2_bound = -1.0, bool exact = false);
+  // After a reflection, without equality rows and with Verlet: the free prediction made again
+  // for the reflected particles alone.
+  double predict_reflected(const System& system);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   void solve_held_positions(System& system);
   // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
   // ws_.x_largest2.
   void displaced(const Particles& particles);
   double start_energy(System& system);
+  // Verlet's shadow energy at the step's start, from its H `start` (none where a force term
+  // has no pairwise Hessian).
+  std::optional<double> start_shadow_energy(System& system, double start);
+  // An impulse along the landed rows' normals that brings H back to `target`, or, given
+  // `shadow_target`, Verlet's shadow energy to it (H where the shadow energy is unavailable).
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
-                      std::vector<Vec3>& p);
+                      std::vector<Vec3>& p, std::optional<double> shadow_target = std::nullopt);
 
   GviWorkspace ws_;
   NearbyRows nearby_rows_;  // candidate rows from a short list kept between steps

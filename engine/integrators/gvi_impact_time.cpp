@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
 #include "integrators/gvi.hpp"
+#include "integrators/shadow_correction.hpp"
 
 namespace deli {
 
@@ -22,6 +23,16 @@ void Gvi::refuse_impact_times_unless_supported() const {
         "[integrator] contact = \"impact_time\" is a Verlet splitting of GVI: use type = "
         "\"gvi\", lagrangian = \"verlet\"");
   }
+}
+
+std::optional<double> Gvi::start_shadow_energy(System& system, double start) {
+  const auto s = shadow_correction_on_rods(engine_, system, dt_, ws_.p_start, {},
+                                           constraints_.equalities, [&](std::vector<Vec3>& force) {
+                                             project_momenta(system, constraints_.equalities,
+                                                             system.particles.position, force);
+                                           });
+  if (!s) return std::nullopt;
+  return start + s->constant;
 }
 
 void Gvi::drift_with_covering_rows(System& system, bool pairs_matter,
@@ -95,8 +106,10 @@ void Gvi::step_with_impact_times(System& system, bool tally) {
   std::vector<Constraint>& touched = ws_.landed;
   touched.clear();
   double target = 0.0;
+  std::optional<double> shadow_target;
   if (forced && drift.events > 0) {
     target = start_energy(system);
+    shadow_target = start_shadow_energy(system, target);
     const double tolerance = 1e-9;
     for (const Constraint& c : ws_.nearby) {
       bool met = false;
@@ -120,7 +133,7 @@ void Gvi::step_with_impact_times(System& system, bool tally) {
   engine_.compute(system, tally || !touched.empty());
   const std::vector<Vec3>& f_end = engine_.force();
   for (std::size_t i = 0; i < n; ++i) ws_.p[i] += f_end[i] * (0.5 * h);
-  if (!touched.empty()) restore_energy(system, touched, target, ws_.p);
+  if (!touched.empty()) restore_energy(system, touched, target, ws_.p, shadow_target);
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = ws_.p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
   previous_positions_ = ws_.q;

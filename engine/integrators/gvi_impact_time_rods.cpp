@@ -241,6 +241,8 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
 
   timer.enter(Phase::momentum_update);
   const double target = forced && events > 0 ? start_energy(system) : 0.0;
+  const std::optional<double> shadow_target =
+      forced && events > 0 ? start_shadow_energy(system, target) : std::nullopt;
   if (!forced) touched.clear();
   ws_.x = x;
   ws_.x_largest2 = 0.0;
@@ -254,7 +256,7 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   const std::vector<Vec3>& f_end = engine_.force();
   for (std::size_t i = 0; i < n; ++i) p[i] += f_end[i] * (0.5 * h);
   step_virial_ += project_momenta(system, rods, P.position, p);
-  if (!touched.empty()) restore_energy(system, touched, target, p);
+  if (!touched.empty()) restore_energy(system, touched, target, p, shadow_target);
   ws_.p = p;
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;

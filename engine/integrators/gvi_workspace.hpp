@@ -35,15 +35,18 @@ struct GviWorkspace {
   std::vector<Constraint> active, smooth;
   std::vector<Vec3> previous_prediction;
   std::vector<char> prediction_changed;
-  // Per candidate row: whether it joins the active set (or, in the guard, is overlapped).
-  std::vector<char> candidate_active;
-  std::vector<Constraint> rows;  // equality rows followed by some inequality rows
+  std::vector<std::int32_t> changed_particles;  // those marked in prediction_changed
+  std::vector<char> candidate_active;           // per candidate row: in the active set
+  std::vector<char> candidate_passed;           // per candidate row: a threaded test's result
+  std::vector<Constraint> rows;                 // equality rows followed by some inequality rows
 
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
   std::vector<Vec3> half, impulse, x, free, mid, f_mid;
-  double x_largest2 = 0.0;    // max |x - q|^2
-  std::int64_t x_builds = 0;  // neighbour list builds when x was made (a rebuild wraps)
+  double x_largest2 = 0.0;            // max |x - q|^2
+  std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
+  double x_smallest_gap = 0.0;        // smallest candidate gap at x (feasibility guard's pass)
+  bool x_smallest_gap_known = false;  // for the x of the last position update
   std::vector<Constraint> held, landed, violated;
   std::vector<bool> equality;
   double position_virial = 0.0;

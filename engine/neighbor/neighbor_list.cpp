@@ -224,65 +224,73 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
   chunk_codes_.resize(static_cast<std::size_t>(chunks));
   std::vector<char> chunk_coded(static_cast<std::size_t>(chunks), 1);
-  for_each_chunk(
-      static_cast<std::size_t>(n), chunks, [&](int chunk, std::size_t begin, std::size_t end) {
-        std::vector<std::int32_t>& out = chunk_neighbors_[static_cast<std::size_t>(chunk)];
-        std::vector<std::uint8_t>& out_codes = chunk_codes_[static_cast<std::size_t>(chunk)];
-        out.clear();
-        out_codes.clear();
-        bool coded = grid.shifted;
-        // Copies of what the scan reads on every candidate: through this body's captured
-        // references they would be reloaded after each store of a (uint8, may alias
-        // anything) code, 8 % more instructions for the whole build (callgrind).
-        const Vec3* const at = member_position.data();
-        const double within2 = reach2;
-        const bool shifted = grid.shifted;
-        const Box here = box;
-        // Candidates within reach, as member slots and shift codes. The scan appends every
-        // candidate and advances only for hits: no branch on the distance test, which the
-        // predictor would lose about a third of the time.
-        std::vector<std::int32_t> hit_slot(static_cast<std::size_t>(n) + 1);
-        std::vector<std::uint8_t> hit_code(static_cast<std::size_t>(n) + 1);
-        for (std::size_t slot = begin; slot < end; ++slot) {
-          const std::int32_t i = member[slot];
-          const Vec3 xi = at[slot];
-          std::size_t hits = 0;
-          auto scan = [&](std::size_t first, std::size_t last, int code) {
-            const Vec3 origin = xi - image_shifts_[code];
-            std::int32_t* slot_out = hit_slot.data();
-            std::uint8_t* code_out = hit_code.data();
-            for (std::size_t m = first; m < last; ++m) {
-              Vec3 d = at[m] - origin;
-              if (!shifted) d = here.minimum_image(d);
-              slot_out[hits] = static_cast<std::int32_t>(m);
-              code_out[hits] = static_cast<std::uint8_t>(code);
-              hits += d.x * d.x + d.y * d.y + d.z * d.z < within2;
-            }
-          };
-          const int c = member_cell[slot];
-          if (shifted) scan(slot + 1, cell_start[c + 1], kNoShift);
-          for (std::size_t s = stencil_offsets_[c]; s < stencil_offsets_[c + 1]; ++s) {
-            const std::int32_t cell = stencil_cells_[s];
-            scan(cell_start[cell], cell_start[cell + 1], stencil_codes_[s]);
-          }
-          // i's excluded partners (a chain bead's one or two bonded neighbours): a linear scan.
-          const std::int32_t* partners =
-              partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
-          const std::int32_t* partners_end =
-              partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
-          for (std::size_t h = 0; h < hits; ++h) {
-            const auto m = static_cast<std::size_t>(hit_slot[h]);
-            const std::int32_t j = member[m];
-            if (!shifted && j <= i) continue;
-            if (std::find(partners, partners_end, j) != partners_end) continue;
-            out.push_back(j);
-            if (shifted) out_codes.push_back(pair_code(hit_code[h], slot, m, coded));
-          }
-          // Counts within the chunk for now; made global offsets below.
-          slot_offsets_[slot + 1] = out.size();
+  // Each chunk's lists are moved to its thread's stack for the scan and back after it.
+  // Appended to in place, the vector objects (adjacent in chunk_neighbors_, several to a
+  // cache line) would have each push_back of one thread take the line from the others: false
+  // sharing, measured on 16 idle cores (LJ 32000, 300 steps): the scan 1.9 s on one thread,
+  // 2.0-2.5 s on four, 1.1-1.3 s on eight; moved, 0.52 and 0.27 s.
+  auto list_chunk = [&](int chunk, std::size_t begin, std::size_t end) {
+    const auto k = static_cast<std::size_t>(chunk);
+    std::vector<std::int32_t> out = std::move(chunk_neighbors_[k]);
+    std::vector<std::uint8_t> out_codes = std::move(chunk_codes_[k]);
+    out.clear();
+    out_codes.clear();
+    bool coded = grid.shifted;
+    // Copies of what the scan reads on every candidate: through this body's captured
+    // references they would be reloaded after each store of a (uint8, may alias
+    // anything) code, 8 % more instructions for the whole build (callgrind).
+    const Vec3* const at = member_position.data();
+    const double within2 = reach2;
+    const bool shifted = grid.shifted;
+    const Box here = box;
+    // Candidates within reach, as member slots and shift codes. The scan appends
+    // every candidate and advances only for hits: no branch on the distance test,
+    // which the predictor would lose about a third of the time.
+    std::vector<std::int32_t> hit_slot(static_cast<std::size_t>(n) + 1);
+    std::vector<std::uint8_t> hit_code(static_cast<std::size_t>(n) + 1);
+    for (std::size_t slot = begin; slot < end; ++slot) {
+      const std::int32_t i = member[slot];
+      const Vec3 xi = at[slot];
+      std::size_t hits = 0;
+      auto scan = [&](std::size_t first, std::size_t last, int code) {
+        const Vec3 origin = xi - image_shifts_[code];
+        std::int32_t* slot_out = hit_slot.data();
+        std::uint8_t* code_out = hit_code.data();
+        for (std::size_t m = first; m < last; ++m) {
+          Vec3 d = at[m] - origin;
+          if (!shifted) d = here.minimum_image(d);
+          slot_out[hits] = static_cast<std::int32_t>(m);
+          code_out[hits] = static_cast<std::uint8_t>(code);
+          hits += d.x * d.x + d.y * d.y + d.z * d.z < within2;
         }
-        chunk_coded[static_cast<std::size_t>(chunk)] = coded;
-      });
+      };
+      const int c = member_cell[slot];
+      if (shifted) scan(slot + 1, cell_start[c + 1], kNoShift);
+      for (std::size_t s = stencil_offsets_[c]; s < stencil_offsets_[c + 1]; ++s) {
+        const std::int32_t cell = stencil_cells_[s];
+        scan(cell_start[cell], cell_start[cell + 1], stencil_codes_[s]);
+      }
+      // i's excluded partners (a chain bead's one or two bonded neighbours): a
+      // linear scan.
+      const std::int32_t* partners = partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
+      const std::int32_t* partners_end =
+          partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
+      for (std::size_t h = 0; h < hits; ++h) {
+        const auto m = static_cast<std::size_t>(hit_slot[h]);
+        const std::int32_t j = member[m];
+        if (!shifted && j <= i) continue;
+        if (std::find(partners, partners_end, j) != partners_end) continue;
+        out.push_back(j);
+        if (shifted) out_codes.push_back(pair_code(hit_code[h], slot, m, coded));
+      }
+      // Counts within the chunk for now; made global offsets below.
+      slot_offsets_[slot + 1] = out.size();
+    }
+    chunk_coded[k] = coded;
+    chunk_neighbors_[k] = std::move(out);
+    chunk_codes_[k] = std::move(out_codes);
+  };
+  for_each_chunk(static_cast<std::size_t>(n), chunks, list_chunk);
   std::vector<std::size_t> chunk_start(static_cast<std::size_t>(chunks) + 1, 0);
   for (int c = 0; c < chunks; ++c) {
     chunk_start[c + 1] = chunk_start[c] + chunk_neighbors_[static_cast<std::size_t>(c)].size();

@@ -15,8 +15,9 @@ namespace deli::testing {
 // halves cannot tell them apart: a pure linear drift gives exactly 2, a bounded error
 // that peaks late gives the same.
 struct EnergyTrend {
-  double trend = 0;        // |fitted change| from the first sample to the last
-  double fluctuation = 0;  // max |residual| about the fitted line
+  double trend = 0;         // |fitted change| from the first sample to the last
+  double signed_trend = 0;  // the fitted change with its sign
+  double fluctuation = 0;   // max |residual| about the fitted line
   // The trend as a fraction of the fluctuation: below 1 the run is dominated by bounded
   // oscillation; a drifting run gives tens and more.
   double ratio() const { return trend / std::max(fluctuation, 1e-300); }
@@ -37,7 +38,8 @@ inline EnergyTrend energy_trend(const std::vector<double>& error) {
     ske += dk * (error[k] - mean_e);
   }
   const double slope = ske / skk;
-  r.trend = std::abs(slope) * static_cast<double>(n - 1);
+  r.signed_trend = slope * static_cast<double>(n - 1);
+  r.trend = std::abs(r.signed_trend);
   for (std::size_t k = 0; k < n; ++k) {
     const double fitted = mean_e + slope * (static_cast<double>(k) - mean_k);
     r.fluctuation = std::max(r.fluctuation, std::abs(error[k] - fitted));
