@@ -18,16 +18,7 @@
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 deli=${DELI:-$top/build/deli}
-peers=${PEERS_BIN:-$top/build/bench/peers/deli-peers}
-[[ ${PEERS:-1} == 0 ]] && peers=
-# Not part of the default build (a benchmark's driver): build it on first use.
-if [[ -n $peers && ! -x $peers && -z ${PEERS_BIN:-} && -f $top/build/CMakeCache.txt ]]; then
-  cmake --build "$top/build" --target deli-peers >&2 || true
-fi
-if [[ -n $peers && ! -x $peers ]]; then
-  echo "note: $peers not built (configure with -DDELI_CROSSCHECK=ON): deli alone" >&2
-  peers=
-fi
+source "$top/bench/peers/locate.sh"
 work=$(mktemp -d /tmp/deli-bench-constrained.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 declare -A inputs=(

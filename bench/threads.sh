@@ -17,15 +17,7 @@ deli=${DELI:-$top/build/deli}
 old=${DELI_OLD:-}
 rounds=${ROUNDS:-3}
 read -r -a counts <<< "${THREADS:-1 2}"
-peers=${PEERS_BIN:-$top/build/bench/peers/deli-peers}
-[[ ${PEERS:-1} == 0 ]] && peers=
-if [[ -n $peers && ! -x $peers && -z ${PEERS_BIN:-} && -f $top/build/CMakeCache.txt ]]; then
-  cmake --build "$top/build" --target deli-peers >&2 || true
-fi
-if [[ -n $peers && ! -x $peers ]]; then
-  echo "note: $peers not built (configure with -DDELI_CROSSCHECK=ON): deli alone" >&2
-  peers=
-fi
+source "$top/bench/peers/locate.sh"
 mpirun=${MPIRUN:-$(command -v mpirun || true)}
 # Threads waiting at a barrier sleep: on a shared machine a spinning thread takes the core
 # its partner needs (a 4000-atom LJ run 30x slower, measured). OMP_WAIT_POLICY=active

@@ -19,6 +19,7 @@
 #include "simulation/thermo.hpp"
 #include "solvers/position_problem.hpp"
 #include "support/atoms_input.hpp"
+#include "support/scratch_files.hpp"
 #include "support/statistic.hpp"
 
 namespace deli {
@@ -97,18 +98,7 @@ TEST(SolverLimits, NewtonLimitHitStopsWithTheProblemToSolveAgain) {
   gvi.setup(input.system);  // the start is on the rods: setup needs no iteration
   // The problem file goes to the working directory, where other tests' failures write
   // theirs under the same name: work in a directory of this test's own.
-  const std::filesystem::path home = std::filesystem::current_path();
-  const std::filesystem::path own =
-      std::filesystem::temp_directory_path() / ("deli-NewtonLimit-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(own);
-  std::filesystem::current_path(own);
-  struct Back {
-    std::filesystem::path home, own;
-    ~Back() {
-      std::filesystem::current_path(home);
-      std::filesystem::remove_all(own);
-    }
-  } back{home, own};
+  const testing::ScratchDirectory own("NewtonLimit");
   try {
     gvi.step(input.system, true);
     FAIL() << "expected the Newton limit to stop the run";

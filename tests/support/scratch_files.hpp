@@ -37,4 +37,29 @@ class ScratchFiles {
   std::vector<std::string> paths_;
 };
 
+// The working directory, for one test, moved to a new directory of its own under the
+// temporary folder (named from `name` and the process id), and back when it ends, the
+// directory removed. For code that writes to the working directory under fixed names (a
+// failed solve's problem file), which other tests running at the same time also write.
+class ScratchDirectory {
+ public:
+  explicit ScratchDirectory(const std::string& name)
+      : home_(std::filesystem::current_path()),
+        own_(std::filesystem::temp_directory_path() /
+             ("deli-" + name + "-" + std::to_string(::getpid()))) {
+    std::filesystem::create_directories(own_);
+    std::filesystem::current_path(own_);
+  }
+  ScratchDirectory(const ScratchDirectory&) = delete;
+  ScratchDirectory& operator=(const ScratchDirectory&) = delete;
+  ~ScratchDirectory() {
+    std::filesystem::current_path(home_);
+    std::filesystem::remove_all(own_);
+  }
+  const std::filesystem::path& path() const { return own_; }
+
+ private:
+  std::filesystem::path home_, own_;
+};
+
 }  // namespace deli::testing

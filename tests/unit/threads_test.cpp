@@ -15,6 +15,7 @@
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "neighbor/neighbor_list.hpp"
+#include "support/scratch_files.hpp"
 #include "support/short_runs.hpp"
 #include "support/test_systems.hpp"
 
@@ -337,18 +338,7 @@ TEST(ThreadsGvi, AFailedSolveOnTwoThreadsNamesTheClusterOfOneThread) {
     input.constraints.equalities.push_back(conflicting);
   }
   // The problem file goes to the working directory: a directory of this test's own.
-  const std::filesystem::path home = std::filesystem::current_path();
-  const std::filesystem::path own = std::filesystem::temp_directory_path() /
-                                    ("deli-ThreadsGviFailure-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(own);
-  std::filesystem::current_path(own);
-  struct Back {
-    std::filesystem::path home, own;
-    ~Back() {
-      std::filesystem::current_path(home);
-      std::filesystem::remove_all(own);
-    }
-  } back{home, own};
+  const testing::ScratchDirectory own("ThreadsGviFailure");
   auto failure = [&](int threads) {
     try {
       run_gvi(input, threads, 1);
