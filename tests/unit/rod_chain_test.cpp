@@ -56,6 +56,27 @@ Chain random_chain(std::size_t n, const Box& box, std::uint64_t seed) {
   return c;
 }
 
+// The generic solvers' position update of the chain from q (its rows all equalities).
+PositionUpdate generic_position_update(const Chain& c, const std::vector<Vec3>& q, double h,
+                                       const Box& box, double tolerance,
+                                       const SolverLimits& limits) {
+  std::vector<Vec3> x0 = c.delta;
+  for (std::size_t k = 0; k < x0.size(); ++k) x0[k] += q[k];
+  return solve_position_update(ClusterRows(c.cluster),
+                               std::vector<bool>(c.cluster.rows.size(), true), q, x0, h, box,
+                               tolerance, limits.newton, limits.line_search);
+}
+
+// Every component equal (EXPECT_EQ: the same numbers, bit for bit but for the sign of zero).
+void expect_equal_components(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].x, b[k].x);
+    EXPECT_EQ(a[k].y, b[k].y);
+    EXPECT_EQ(a[k].z, b[k].z);
+  }
+}
+
 TEST(RodChain, SameNumbersAsTheGenericSolvers) {
   const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
   const double h = 0.005, tolerance = 1e-12;
@@ -65,12 +86,9 @@ TEST(RodChain, SameNumbersAsTheGenericSolvers) {
     const std::unique_ptr<RodChain> chain = RodChain::make(c.cluster);
     ASSERT_NE(chain, nullptr);
     const ClusterRows structure(c.cluster);
-    const std::vector<bool> equality(c.cluster.rows.size(), true);
-
     std::vector<Vec3> x0 = c.delta;
     for (std::size_t k = 0; k < x0.size(); ++k) x0[k] += c.q[k];
-    const PositionUpdate generic = solve_position_update(
-        structure, equality, c.q, x0, h, box, tolerance, limits.newton, limits.line_search);
+    const PositionUpdate generic = generic_position_update(c, c.q, h, box, tolerance, limits);
     ASSERT_TRUE(generic.status.converged);
     RodChainWorkspace work;
     std::vector<Vec3> impulse(c.q.size());
@@ -86,11 +104,7 @@ TEST(RodChain, SameNumbersAsTheGenericSolvers) {
                         norm(box.minimum_image(c.q[rod.i] - c.q[rod.j]));
     }
     EXPECT_EQ(virial, generic_virial);
-    for (std::size_t k = 0; k < impulse.size(); ++k) {
-      EXPECT_EQ(impulse[k].x, generic.impulse[k].x);
-      EXPECT_EQ(impulse[k].y, generic.impulse[k].y);
-      EXPECT_EQ(impulse[k].z, generic.impulse[k].z);
-    }
+    expect_equal_components(impulse, generic.impulse);
     // The rods are held at the end positions.
     std::vector<Vec3> x(c.q.size());
     for (std::size_t k = 0; k < x.size(); ++k) {
@@ -115,11 +129,7 @@ TEST(RodChain, SameNumbersAsTheGenericSolvers) {
           mu(static_cast<Eigen::Index>(r)) * norm(box.minimum_image(x[rod.i] - x[rod.j]));
     }
     EXPECT_EQ(momentum_virial, generic_momentum_virial);
-    for (std::size_t k = 0; k < p_chain.size(); ++k) {
-      EXPECT_EQ(p_chain[k].x, p_generic[k].x);
-      EXPECT_EQ(p_chain[k].y, p_generic[k].y);
-      EXPECT_EQ(p_chain[k].z, p_generic[k].z);
-    }
+    expect_equal_components(p_chain, p_generic);
     // Tangent to every rod.
     for (const Constraint& rod : c.cluster.rows) {
       const Vec3 d = box.minimum_image(x[rod.i] - x[rod.j]);
@@ -159,11 +169,7 @@ TEST(RodChain, RememberedDirectionsChangeNothing) {
                                            limits.newton, limits.line_search, work,
                                            impulse_projected.data(), virial_projected, status));
     EXPECT_EQ(virial_projected, virial_fresh);
-    for (std::size_t k = 0; k < c.q.size(); ++k) {
-      EXPECT_EQ(impulse_projected[k].x, impulse_fresh[k].x);
-      EXPECT_EQ(impulse_projected[k].y, impulse_fresh[k].y);
-      EXPECT_EQ(impulse_projected[k].z, impulse_fresh[k].z);
-    }
+    expect_equal_components(impulse_projected, impulse_fresh);
   }
 }
 
@@ -194,34 +200,21 @@ TEST(RodChain, RememberedImagesChangeNothing) {
   ASSERT_TRUE(chain->solve_positions(c.q.data(), c.delta.data(), h, box, tolerance, limits.newton,
                                      limits.line_search, work, impulse.data(), virial, status));
 
-  const ClusterRows structure(c.cluster);
-  const std::vector<bool> equality(c.cluster.rows.size(), true);
-  std::vector<Vec3> x0 = c.delta;
-  for (std::size_t k = 0; k < x0.size(); ++k) x0[k] += rewrapped[k];
-  const PositionUpdate generic = solve_position_update(
-      structure, equality, rewrapped, x0, h, box, tolerance, limits.newton, limits.line_search);
+  const PositionUpdate generic = generic_position_update(c, rewrapped, h, box, tolerance, limits);
   ASSERT_TRUE(generic.status.converged);
   ASSERT_TRUE(chain->solve_positions(rewrapped.data(), c.delta.data(), h, box, tolerance,
                                      limits.newton, limits.line_search, work, impulse.data(),
                                      virial, status));
   EXPECT_EQ(status.iterations, generic.status.iterations);
-  for (std::size_t k = 0; k < impulse.size(); ++k) {
-    EXPECT_EQ(impulse[k].x, generic.impulse[k].x);
-    EXPECT_EQ(impulse[k].y, generic.impulse[k].y);
-    EXPECT_EQ(impulse[k].z, generic.impulse[k].z);
-  }
+  expect_equal_components(impulse, generic.impulse);
 
   // The momentum projection at the original wrapping after the rewrapped solve.
   std::vector<Vec3> p_generic = c.p, p_chain = c.p;
   Eigen::VectorXd mu;
-  ASSERT_TRUE(project_momentum(structure, c.q, p_generic, box, 1e-10, mu).converged);
+  ASSERT_TRUE(project_momentum(ClusterRows(c.cluster), c.q, p_generic, box, 1e-10, mu).converged);
   std::vector<double> terms(chain->rows());
   ASSERT_TRUE(chain->project_momenta(c.q.data(), p_chain.data(), box, work, terms.data()));
-  for (std::size_t k = 0; k < p_chain.size(); ++k) {
-    EXPECT_EQ(p_chain[k].x, p_generic[k].x);
-    EXPECT_EQ(p_chain[k].y, p_generic[k].y);
-    EXPECT_EQ(p_chain[k].z, p_generic[k].z);
-  }
+  expect_equal_components(p_chain, p_generic);
 }
 
 TEST(RodChain, OnlyLinearChainsOfRods) {
