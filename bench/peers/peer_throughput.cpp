@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "crosscheck/single_process_mpi.hpp"
 #include "input/lammps_data.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
@@ -231,6 +232,7 @@ void run_lammps(const Model& m, int steps, double free_bond_k) {
                                .string();
   deli::write_lammps_data(s, data, "bond", "deli-peers");
   const char* args[] = {"deli-peers", "-screen", "none", "-log", "none", "-nocite"};
+  deli::prefer_single_process_mpi();
   void* lmp = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   auto command = [&](const std::string& line) { lammps_command(lmp, line.c_str()); };
   command("units lj");

@@ -11,6 +11,7 @@
 #include <numbers>
 #include <unordered_map>
 
+#include "crosscheck/single_process_mpi.hpp"
 #include "input/lammps_data.hpp"
 
 namespace deli {
@@ -69,6 +70,7 @@ LammpsBridge::LammpsBridge(const System& system, const ForceFieldSpec& spec, dou
   ids_ = system.particles.id;
 
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
+  prefer_single_process_mpi();
   lammps_ = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   // A missing style would be a LAMMPS error, which ends the process: ask first.
   const bool external = spec.gravity || !spec.radial.empty();

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "crosscheck/single_process_mpi.hpp"
 #include "support/source_tree.hpp"
 #include "support/test_systems.hpp"
 
@@ -40,6 +41,7 @@ std::string write_hybrid_data() {
 // the rows' style names are read.
 double lammps_energy(const std::string& data, std::size_t atoms) {
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
+  deli::prefer_single_process_mpi();
   void* lmp = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   for (const std::string& line : std::vector<std::string>{
            "units lj", "atom_style bond", "bond_style hybrid fene harmonic", "read_data " + data,

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "crosscheck/single_process_mpi.hpp"
 #include "input/lammps_data.hpp"
 #include "support/shell.hpp"
 #include "support/source_tree.hpp"
@@ -24,6 +25,7 @@ double lammps_write_data(const System& system, const std::string& out, bool pair
   const std::string in = out + ".deli_for_lammps";
   write_lammps_data(system, in, "bond", "deli melt for LAMMPS");
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
+  deli::prefer_single_process_mpi();
   void* lmp = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   for (const std::string& line : std::vector<std::string>{
            "units lj", "atom_style bond", "read_data " + in, "pair_style lj/cut 1.122462048309373",

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "crosscheck/single_process_mpi.hpp"
 #include "input/lammps_data.hpp"
 #include "support/test_systems.hpp"
 
@@ -15,6 +16,7 @@ namespace {
 double lammps_potential_energy(const System& system, const std::string& data) {
   write_lammps_data(system, data, "atomic", "deli mixing test");
   const char* args[] = {"deli", "-screen", "none", "-log", "none", "-nocite"};
+  deli::prefer_single_process_mpi();
   void* lmp = lammps_open_no_mpi(6, const_cast<char**>(args), nullptr);
   for (const std::string line : std::vector<std::string>{
            "units lj", "atom_style atomic", "read_data " + data, "pair_style lj/cut 2.5",
