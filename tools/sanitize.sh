@@ -39,24 +39,14 @@ skip="^(Layers|Setup)\\."
 # full. The two-thread runs of the binary (ThreadsRun) are shortened the same way; the
 # equation-of-state tool (two short runs) runs as it is.
 export DELI_SANITIZER_SHORT_RUNS=1
-# Left out for CI time only (the budget is 20 minutes on 2 cores; the plain pass runs them):
-# the whole-system cross-checks of the four 32000-atom inputs (the LJ liquid and the chain
-# benchmark, each as data file and as builder), whose code paths their 4000-atom siblings
-# run here, and of the 4000-bead chain builder (its quickmin relaxation, 13 s under the
-# sanitizers: the builder and quickmin run here in the unit tests, its data file's two
-# melts in the cross-checks); the OpenMM CPU-platform variant of every shipped input's cross-check (the same
-# deli code as the reference-platform variant, which runs here, against an uninstrumented
-# library); and the paper reproduction script (--quick: 40 s plain, mostly Python and
-# plotting; the runs it makes are the paper examples' inputs, which tests/paper runs here).
-# Measured on a loaded machine, the left-out tests were 60 % of the cross-checks' sanitizer
-# time (1117 of 1857 s of test time). Every other shipped input and every model of
-# Models/AgreesWithOpenMMAndLammps runs here, on the short trajectories
-# DELI_SANITIZER_SHORT_RUNS asks for (2 and 10 steps).
-# DELI_SANITIZE_ALL=1 runs the left-out ones too, shortened the same way (the script's runs
-# on a tenth of --quick's steps).
-big="(lj_chains_(build_)?chain_benchmark|lj_liquid_(build_)?lj_32000|lj_chains_build_chains_4000)_toml"
-long="Inputs/ShippedInput\\.[A-Za-z]+/$big|Inputs/ShippedInput\\.OpenMMCpuPlatform|PaperReproduction\\."
-[ -n "${DELI_SANITIZE_ALL:-}" ] && long="^$"
+# Every test runs here, the whole-system cross-checks included (every shipped input against
+# OpenMM's reference and CPU platforms and LAMMPS, the 32000-atom ones too, every model) on
+# the short trajectories DELI_SANITIZER_SHORT_RUNS asks for (2 and 10 steps), and the paper
+# reproduction script on a tenth of --quick's steps. They became affordable when MPI stopped
+# starting a daemon per process (io/crosscheck/single_process_mpi.hpp): Open MPI then loads
+# few components and unloads none before the exit, so LSan's fast unwinder gives stacks that
+# match lsan.supp, and the slow one (40 % of a 32000-atom cross-check, measured with perf)
+# is no longer needed.
 # (The two cross-checks of chains_4000_harmonic, which run here, once saw LeakSanitizer's
 # tracer take a SIGSEGV at their exit leak check after both had passed, and not in 8 runs
 # since: a known intermittent failure of the sanitizer runtime, google/sanitizers#1353.
@@ -69,9 +59,5 @@ long="Inputs/ShippedInput\\.[A-Za-z]+/$big|Inputs/ShippedInput\\.OpenMMCpuPlatfo
 export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=0:check_initialization_order=1:allocator_may_return_null=1:suppressions=$here/asan.supp"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0"
-# The cross-check tests, which start OpenMM and LAMMPS, add fast_unwind_on_malloc=0 to
-# ASAN_OPTIONS (their ctest property, tests/CMakeLists.txt): LSan's fast unwinder stops at
-# those libraries' frames, so only complete stacks match lsan.supp. It costs about 1.7x on
-# allocation-heavy code, so only there.
 cd build-asan
-ctest --output-on-failure -j "$jobs" -E "$skip|$long" "$@"
+ctest --output-on-failure -j "$jobs" -E "$skip" "$@"
