@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
@@ -104,6 +105,7 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   std::vector<double> path(n);
   std::vector<Vec3> x(n), p(n), end(n), p_end(n), trial(n);
   std::vector<Candidate> candidates;
+  std::vector<std::pair<std::size_t, double>> closed_at_contact;  // row, gap there
   std::vector<Constraint> reflecting;
   const std::int64_t max_events = std::max<std::int64_t>(1000, 100 * static_cast<std::int64_t>(n));
   double virial = 0.0;
@@ -132,7 +134,6 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
       // constrained path's secant), earliest first.
       candidates.clear();
       for (std::size_t r = 0; r < ws_.nearby.size(); ++r) {
-        if (just_reflected && *just_reflected == r) continue;
         const Constraint& c = ws_.nearby[r];
         Vec3 d, v;
         if (c.j >= 0) {
@@ -148,35 +149,42 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
       std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
         return a.time != b.time ? a.time < b.time : a.row < b.row;
       });
-      // The first candidate whose gap really closes along the constrained drift: its contact
-      // time bracketed between a time where the gap is open and one where it is closed.
-      std::optional<std::size_t> row;
-      double tau = 0.0;
-      for (const Candidate& k : candidates) {
-        const Constraint& c = ws_.nearby[k.row];
-        const double open_gap = gap_of(c, x.data(), system.box);
-        if (k.time == 0.0 || open_gap <= 0.0) {
-          row = k.row;
-          tau = 0.0;
-          break;
+      auto gap_after = [&](const Constraint& c, double t) {
+        drift(x, p, t, trial, nullptr);
+        return gap_of(c, trial.data(), system.box);
+      };
+      // The time in [lo, hi] where row c's gap, open (g_lo > 0) after lo and closed
+      // (g_hi <= 0) after hi along the constrained drift, reaches 0; the open side, so the
+      // contact configuration does not overlap. Nothing where the row is passed over.
+      // A row touching at lo (a contact met earlier in the step, whose gap at x is rounding)
+      // first needs a time where it is open after its contact: halving from hi towards lo.
+      // Where it never opens measurably, it closes at lo, unless its reflection at x has
+      // just turned it away (a reflection there would change nothing: passed over).
+      auto contact_time = [&](const Constraint& c, bool reflected_here, double lo, double g_lo,
+                              double hi, double g_hi) -> std::optional<double> {
+        const double touching = 1e-13 * std::max(1.0, c.length);
+        const double span = hi - lo;
+        for (int s = 1; s <= kRootSteps && g_lo <= touching; ++s) {
+          const double t = lo + std::ldexp(span, -s);
+          if (!(t - lo > 1e-15 * h)) break;
+          const double g = gap_after(c, t);
+          if (g > touching) {
+            lo = t, g_lo = g;
+          } else if (g <= 0.0) {
+            hi = t, g_hi = g;
+          }
         }
-        auto gap_after = [&](double t) {
-          drift(x, p, t, trial, nullptr);
-          return gap_of(c, trial.data(), system.box);
-        };
-        double lo = 0.0, g_lo = open_gap, hi = k.time, g_hi = gap_after(k.time);
-        if (g_hi > 0.0) {
-          lo = k.time, g_lo = g_hi;
-          hi = rest, g_hi = gap_of(c, end.data(), system.box);
-          if (g_hi > 0.0) continue;  // the constrained drift passes by (or grazes)
+        if (g_lo <= touching) {
+          if (reflected_here) return std::nullopt;
+          return lo;
         }
-        // Illinois: the end that stays is down-weighted, so both ends converge.
+        // Bisection-safeguarded regula falsi (Illinois: the end that stays is down-weighted,
+        // so both ends converge).
         int kept = 0;
-        for (int s = 0;
-             s < kRootSteps && g_lo > 1e-13 * std::max(1.0, c.length) && hi - lo > 1e-15 * h; ++s) {
+        for (int s = 0; s < kRootSteps && g_lo > touching && hi - lo > 1e-15 * h; ++s) {
           double t = lo + (hi - lo) * g_lo / (g_lo - g_hi);
           if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
-          const double g = gap_after(t);
+          const double g = gap_after(c, t);
           if (g > 0.0) {
             lo = t, g_lo = g;
             if (kept == -1) g_hi *= 0.5;
@@ -187,9 +195,64 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
             kept = 1;
           }
         }
+        return lo;
+      };
+      // The first candidate whose gap really closes along the constrained drift: its contact
+      // time bracketed between a time where the gap is open and one where it is closed. The
+      // row just reflected is a candidate too: the rods bend the drift, so a row that leaves
+      // at its contact can close again later in the step.
+      std::optional<std::size_t> row;
+      double tau = 0.0;
+      for (const Candidate& k : candidates) {
+        const Constraint& c = ws_.nearby[k.row];
+        const bool reflected_here = just_reflected && *just_reflected == k.row;
+        const double open_gap = gap_of(c, x.data(), system.box);
+        if (open_gap <= 0.0) {
+          if (reflected_here) continue;  // turned away at this very configuration
+          row = k.row;
+          tau = 0.0;
+          break;
+        }
+        double lo = 0.0, g_lo = open_gap, hi = rest, g_hi = gap_of(c, end.data(), system.box);
+        if (k.time > 0.0 && k.time < rest) {
+          const double g = gap_after(c, k.time);
+          if (g > 0.0) {
+            lo = k.time, g_lo = g;
+          } else {
+            hi = k.time, g_hi = g;
+          }
+        }
+        if (g_hi > 0.0) continue;  // the constrained drift passes by (or grazes)
+        const std::optional<double> t = contact_time(c, reflected_here, lo, g_lo, hi, g_hi);
+        if (!t) continue;
         row = k.row;
-        tau = lo;  // the open side: the contact configuration does not overlap
+        tau = *t;
         break;
+      }
+      // The chord orders the candidates only roughly and misses rows the bent drift closes
+      // on its own: a row open at x but closed at the contact configuration met its own
+      // contact earlier, inside [0, tau]; it is the one taken (repeated until none is).
+      for (std::size_t pass = 0; row && tau > 0.0 && pass < ws_.nearby.size(); ++pass) {
+        drift(x, p, tau, trial, nullptr);
+        closed_at_contact.clear();
+        for (std::size_t r = 0; r < ws_.nearby.size(); ++r) {
+          const double g = gap_of(ws_.nearby[r], trial.data(), system.box);
+          if (r != *row && g <= 0.0 && gap_of(ws_.nearby[r], x.data(), system.box) > 0.0) {
+            closed_at_contact.emplace_back(r, g);
+          }
+        }
+        std::optional<std::size_t> earliest;
+        double t_earliest = tau;
+        for (const auto& [r, g_closed] : closed_at_contact) {
+          const Constraint& c = ws_.nearby[r];
+          const bool reflected_here = just_reflected && *just_reflected == r;
+          const std::optional<double> t =
+              contact_time(c, reflected_here, 0.0, gap_of(c, x.data(), system.box), tau, g_closed);
+          if (t && *t < t_earliest) earliest = r, t_earliest = *t;
+        }
+        if (!earliest) break;
+        row = earliest;
+        tau = t_earliest;
       }
       if (!row) {
         virial += rod_virial;
