@@ -3,14 +3,9 @@
 #include <algorithm>
 #include <numeric>
 
-namespace deli {
+#include "constraints/union_find.hpp"
 
-namespace {
-std::int32_t root(std::vector<std::int32_t>& parent, std::int32_t a) {
-  while (parent[a] != a) a = parent[a] = parent[parent[a]];
-  return a;
-}
-}  // namespace
+namespace deli {
 
 std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
                                    std::size_t particle_count) {
@@ -35,7 +30,7 @@ std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
     name(c.i);
     if (c.j < 0) continue;
     name(c.j);
-    const std::int32_t a = root(parent, c.i), b = root(parent, c.j);
+    const std::int32_t a = union_find_root(parent, c.i), b = union_find_root(parent, c.j);
     if (a != b) parent[std::max(a, b)] = std::min(a, b);  // root = smallest index
   }
   // A component's root is its smallest particle, so visiting the particles in ascending
@@ -52,7 +47,7 @@ std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
   std::vector<Cluster> clusters;
   std::vector<std::int32_t> row_count;
   for (const std::int32_t p : touched) {
-    const std::int32_t top = root(parent, p);
+    const std::int32_t top = union_find_root(parent, p);
     if (cluster_of_root[top] < 0) {
       cluster_of_root[top] = static_cast<std::int32_t>(clusters.size());
       clusters.emplace_back();
@@ -62,7 +57,7 @@ std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
   }
   std::vector<std::int32_t> cluster_of_row(rows.size());
   for (std::size_t r = 0; r < rows.size(); ++r) {
-    cluster_of_row[r] = cluster_of_root[root(parent, rows[r].i)];
+    cluster_of_row[r] = cluster_of_root[union_find_root(parent, rows[r].i)];
     ++row_count[cluster_of_row[r]];
   }
   for (std::size_t k = 0; k < clusters.size(); ++k) clusters[k].rows.reserve(row_count[k]);

@@ -5,14 +5,11 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "constraints/union_find.hpp"
+
 namespace deli {
 
 namespace {
-
-std::int32_t root(std::vector<std::int32_t>& parent, std::int32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 struct Component {
   std::vector<std::size_t> rows;
@@ -52,13 +49,13 @@ std::size_t independent_equalities(const std::vector<Constraint>& rows, const Ve
   std::vector<std::int32_t> parent(particle_count);
   std::iota(parent.begin(), parent.end(), 0);
   for (const Constraint& c : rows) {
-    if (c.j >= 0) parent[root(parent, c.i)] = root(parent, c.j);
+    if (c.j >= 0) parent[union_find_root(parent, c.i)] = union_find_root(parent, c.j);
   }
   std::unordered_map<std::int32_t, Component> components;
   std::vector<char> seen(particle_count, 0);
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Constraint& c = rows[r];
-    Component& component = components[root(parent, c.i)];
+    Component& component = components[union_find_root(parent, c.i)];
     component.rows.push_back(r);
     component.pair_rows_only = component.pair_rows_only && c.j >= 0;
     for (std::int32_t i : {c.i, c.j}) {
