@@ -195,18 +195,20 @@ bool RodChain::solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>
   return finite;
 }
 
+bool RodChain::remembered_at(const std::vector<Vec3>& x, const Box& box) const {
+  const DirectionsMemo& memo = memo_;
+  return memo.valid && memo.period.x == box.period().x && memo.period.y == box.period().y &&
+         memo.period.z == box.period().z && memo.inverse_period.x == box.inverse_period().x &&
+         memo.inverse_period.y == box.inverse_period().y &&
+         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == x.size() &&
+         std::memcmp(memo.x.data(), x.data(), x.size() * sizeof(Vec3)) == 0;
+}
+
 void RodChain::start_directions(const std::vector<Vec3>& q, const Box& box, std::vector<Vec3>& u,
                                 std::vector<double>& r) const {
-  DirectionsMemo& memo = memo_;
-  const bool same = memo.valid && memo.period.x == box.period().x &&
-                    memo.period.y == box.period().y && memo.period.z == box.period().z &&
-                    memo.inverse_period.x == box.inverse_period().x &&
-                    memo.inverse_period.y == box.inverse_period().y &&
-                    memo.inverse_period.z == box.inverse_period().z &&
-                    std::memcmp(memo.x.data(), q.data(), q.size() * sizeof(Vec3)) == 0;
-  if (same) {
-    u = memo.u;
-    r = memo.r;
+  if (remembered_at(q, box)) {
+    u = memo_.u;
+    r = memo_.r;
     return;
   }
   directions(q, box, u, r);
@@ -341,6 +343,24 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
   for (std::size_t k = 0; k < m; ++k)
     virial_terms[k] = ws.z(static_cast<Eigen::Index>(k)) * ws.rx[k];
   return true;
+}
+
+double RodChain::largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
+                                            double start) const {
+  const std::size_t n = particles_.size();
+  ws.x.resize(n);
+  for (std::size_t k = 0; k < n; ++k) ws.x[k] = x[particles_[k]];
+  const std::vector<double>* r = &memo_.r;
+  if (!remembered_at(ws.x, box)) {
+    directions(ws.x, box, ws.ux, ws.rx);
+    r = &ws.rx;
+  }
+  // gap_of's rod gap, norm(minimum_image(x_i - x_j)) - L: directions' length minus L.
+  double largest = start;
+  for (std::size_t k = 0; k < rows(); ++k) {
+    largest = std::max(largest, std::abs((*r)[k] - length_[k]) / length_[k]);
+  }
+  return largest;
 }
 
 }  // namespace deli

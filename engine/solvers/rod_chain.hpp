@@ -53,6 +53,13 @@ class RodChain {
   [[nodiscard]] bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
                                      double* virial_terms) const;
 
+  // max_k |r_k - L_k| / L_k over the rods at positions x (indexed globally), at least
+  // `start`: the number a loop over the rows with gap_of would give, bit for bit. The lengths
+  // are those last computed at these positions (the momentum projection's, at the end of a
+  // step) when x is bit for bit where they were computed, else computed.
+  double largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
+                                    double start) const;
+
  private:
   RodChain() = default;
   // Directions and lengths of every rod at local positions x.
@@ -85,6 +92,8 @@ class RodChain {
   // unless the neighbour list wrapped them in between; computed otherwise.
   void start_directions(const std::vector<Vec3>& q, const Box& box, std::vector<Vec3>& u,
                         std::vector<double>& r) const;
+  // Whether the memo holds the directions at local positions x in this box.
+  bool remembered_at(const std::vector<Vec3>& x, const Box& box) const;
   void remember(const std::vector<Vec3>& x, const Box& box, const std::vector<Vec3>& u,
                 const std::vector<double>& r) const;
 
