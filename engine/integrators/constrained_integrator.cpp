@@ -626,10 +626,41 @@ void ConstrainedIntegrator::record_geometry(const System& system,
   }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
+  stats_.max_rod_violation = largest_rod_violation(system, stats_.max_rod_violation);
+}
+
+// Per equality cluster: a chain's rod lengths are those its momentum projection computed at
+// these positions (the end of the step), when they are still these positions; otherwise,
+// and for other clusters, gap_of. A maximum, so the clusters' order and chunks change no bit.
+double ConstrainedIntegrator::largest_rod_violation(const System& system, double start) {
   const std::vector<Constraint>& rods = constraints_.equalities;
-  stats_.max_rod_violation = ordered_max(rods.size(), stats_.max_rod_violation, [&](std::size_t k) {
-    return std::abs(gap_of(rods[k], P.position.data(), system.box)) / rods[k].length;
+  if (rods.empty()) return start;
+  if (!equality_clusters_.prepared_for(system.particles.size())) {
+    equality_clusters_.prepare(rods, system.particles.mass);
+  }
+  const std::vector<PreparedCluster>& clusters = equality_clusters_.all();
+  const Vec3* x = system.particles.position.data();
+  const int chunks = chunks_for_work(clusters.size(), rods.size());
+  if (chain_works_.size() < static_cast<std::size_t>(chunks)) chain_works_.resize(chunks);
+  std::vector<double> chunk_largest(static_cast<std::size_t>(chunks), start);
+  for_each_chunk(clusters.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+    double largest = start;
+    for (std::size_t index = begin; index < end; ++index) {
+      const PreparedCluster& prepared = clusters[index];
+      if (prepared.chain) {
+        largest = prepared.chain->largest_relative_deviation(
+            x, system.box, chain_works_[static_cast<std::size_t>(c)], largest);
+        continue;
+      }
+      for (const std::int32_t r : prepared.cluster.rows) {
+        largest = std::max(largest, std::abs(gap_of(rods[r], x, system.box)) / rods[r].length);
+      }
+    }
+    chunk_largest[static_cast<std::size_t>(c)] = largest;
   });
+  double largest = start;
+  for (const double l : chunk_largest) largest = std::max(largest, l);
+  return largest;
 }
 
 void ConstraintStatistics::add(const ConstraintStatistics& later) {

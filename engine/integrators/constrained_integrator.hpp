@@ -126,6 +126,8 @@ class ConstrainedIntegrator : public Integrator {
   // positions, already found: the candidates are not scanned again.
   void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full,
                        const double* candidates_smallest = nullptr);
+  // max |f| / length over the equality rows at the current positions, at least `start`.
+  double largest_rod_violation(const System& system, double start);
   // The implicit midpoint's fixed point, the one loop of every integrator that has one:
   // repeats `pass` (one pass, returning the largest change it made, sigma) until a pass
   // from the `first_checked`-th on changes less than the solver tolerance; at

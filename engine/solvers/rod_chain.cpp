@@ -195,29 +195,22 @@ bool RodChain::solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>
   return finite;
 }
 
-void RodChain::start_directions(const std::vector<Vec3>& q, const Box& box, std::vector<Vec3>& u,
-                                std::vector<double>& r) const {
-  DirectionsMemo& memo = memo_;
-  const bool same = memo.valid && memo.period.x == box.period().x &&
-                    memo.period.y == box.period().y && memo.period.z == box.period().z &&
-                    memo.inverse_period.x == box.inverse_period().x &&
-                    memo.inverse_period.y == box.inverse_period().y &&
-                    memo.inverse_period.z == box.inverse_period().z &&
-                    std::memcmp(memo.x.data(), q.data(), q.size() * sizeof(Vec3)) == 0;
-  if (same) {
-    u = memo.u;
-    r = memo.r;
-    return;
-  }
-  directions(q, box, u, r);
-  remember(q, box, u, r);
+bool RodChain::remembered_at(const std::vector<Vec3>& x, const Box& box) const {
+  const DirectionsMemo& memo = memo_;
+  return memo.valid && memo.period.x == box.period().x && memo.period.y == box.period().y &&
+         memo.period.z == box.period().z && memo.inverse_period.x == box.inverse_period().x &&
+         memo.inverse_period.y == box.inverse_period().y &&
+         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == x.size() &&
+         std::memcmp(memo.x.data(), x.data(), x.size() * sizeof(Vec3)) == 0;
 }
 
-void RodChain::remember(const std::vector<Vec3>& x, const Box& box, const std::vector<Vec3>& u,
-                        const std::vector<double>& r) const {
+void RodChain::start_directions(const std::vector<Vec3>& q, const Box& box) const {
+  if (!remembered_at(q, box)) remember_directions(q, box);
+}
+
+void RodChain::remember_directions(const std::vector<Vec3>& x, const Box& box) const {
+  directions(x, box, memo_.u, memo_.r);
   memo_.x = x;
-  memo_.u = u;
-  memo_.r = r;
   memo_.period = box.period();
   memo_.inverse_period = box.inverse_period();
   memo_.valid = true;
@@ -240,10 +233,12 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     ws.x0[p] = delta[g] + q[g];
   }
   // Directions of the impulses: the rods at the start of the step, fixed.
-  start_directions(ws.q, box, ws.uq, ws.rq);
+  start_directions(ws.q, box);
+  const std::vector<Vec3>& uq = memo_.u;
+  const std::vector<double>& rq = memo_.r;
   auto positions = [&](const Eigen::VectorXd& z, std::vector<Vec3>& x) {
     for (std::size_t p = 0; p < n; ++p) {
-      x[p] = ws.x0[p] + impulse_on(p, ws.uq, z) * (h * inverse_mass_[p]);
+      x[p] = ws.x0[p] + impulse_on(p, uq, z) * (h * inverse_mass_[p]);
     }
   };
 
@@ -281,7 +276,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     if (status.iterations >= max_iterations) return false;
     ++status.iterations;
     // d gap_k / d z_l = h grad g_k(x)^T M^-1 C_l(q).
-    if (!solve_coupled(ws.ux, ws.uq, h, ws.phi, ws.step, ws.pivots)) return false;
+    if (!solve_coupled(ws.ux, uq, h, ws.phi, ws.step, ws.pivots)) return false;
     const double merit = ws.phi.squaredNorm();
     double t = 1.0;
     for (int halvings = 0;; ++halvings) {
@@ -308,8 +303,8 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     }
   }
   status.converged = true;
-  for (std::size_t p = 0; p < n; ++p) impulse[particles_[p]] = impulse_on(p, ws.uq, ws.z);
-  for (std::size_t k = 0; k < m; ++k) virial += ws.z(static_cast<Eigen::Index>(k)) * ws.rq[k];
+  for (std::size_t p = 0; p < n; ++p) impulse[particles_[p]] = impulse_on(p, uq, ws.z);
+  for (std::size_t k = 0; k < m; ++k) virial += ws.z(static_cast<Eigen::Index>(k)) * rq[k];
   return true;
 }
 
@@ -324,23 +319,42 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
     ws.x[k] = x[g];
     ws.v[k] = p[g] * inverse_mass_[k];
   }
-  directions(ws.x, box, ws.ux, ws.rx);
-  // These positions start the next step unless the neighbour list wraps them meanwhile.
-  remember(ws.x, box, ws.ux, ws.rx);
+  // These positions start the next step unless the neighbour list wraps them meanwhile:
+  // their directions are made where the next solve finds them.
+  remember_directions(ws.x, box);
+  const std::vector<Vec3>& ux = memo_.u;
+  const std::vector<double>& rx = memo_.r;
   // (C^T M^-1 C) mu = -C^T M^-1 p, C^T v summed over each rod's particles in their order.
   ws.pt.resize(static_cast<Eigen::Index>(m));
   for (std::size_t k = 0; k < m; ++k) {
     double projected = 0.0;
-    projected += low_sign_[k] * dot(ws.ux[k], ws.v[low_[k]]);
-    projected += high_sign_[k] * dot(ws.ux[k], ws.v[high_[k]]);
+    projected += low_sign_[k] * dot(ux[k], ws.v[low_[k]]);
+    projected += high_sign_[k] * dot(ux[k], ws.v[high_[k]]);
     ws.pt(static_cast<Eigen::Index>(k)) = projected;
   }
   // Scale 1: multiplying by 1 leaves every entry as it is.
-  if (!solve_coupled(ws.ux, ws.ux, 1.0, ws.pt, ws.z, ws.pivots)) return false;
-  for (std::size_t k = 0; k < n; ++k) p[particles_[k]] += impulse_on(k, ws.ux, ws.z);
-  for (std::size_t k = 0; k < m; ++k)
-    virial_terms[k] = ws.z(static_cast<Eigen::Index>(k)) * ws.rx[k];
+  if (!solve_coupled(ux, ux, 1.0, ws.pt, ws.z, ws.pivots)) return false;
+  for (std::size_t k = 0; k < n; ++k) p[particles_[k]] += impulse_on(k, ux, ws.z);
+  for (std::size_t k = 0; k < m; ++k) virial_terms[k] = ws.z(static_cast<Eigen::Index>(k)) * rx[k];
   return true;
+}
+
+double RodChain::largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
+                                            double start) const {
+  const std::size_t n = particles_.size();
+  ws.x.resize(n);
+  for (std::size_t k = 0; k < n; ++k) ws.x[k] = x[particles_[k]];
+  const std::vector<double>* r = &memo_.r;
+  if (!remembered_at(ws.x, box)) {
+    directions(ws.x, box, ws.ux, ws.rx);
+    r = &ws.rx;
+  }
+  // gap_of's rod gap, norm(minimum_image(x_i - x_j)) - L: directions' length minus L.
+  double largest = start;
+  for (std::size_t k = 0; k < rows(); ++k) {
+    largest = std::max(largest, std::abs((*r)[k] - length_[k]) / length_[k]);
+  }
+  return largest;
 }
 
 }  // namespace deli

@@ -14,8 +14,8 @@ namespace deli {
 // solvers use Eigen reductions, so that those reductions see the same alignment and sum in
 // the same order.
 struct RodChainWorkspace {
-  std::vector<Vec3> q, x0, uq, x, ux, xt, uxt, v;
-  std::vector<double> rq, rx, rxt;
+  std::vector<Vec3> q, x0, x, ux, xt, uxt, v;
+  std::vector<double> rx, rxt;
   Eigen::VectorXd z, step, trial, phi, pt, pivots;
 };
 
@@ -53,6 +53,13 @@ class RodChain {
   [[nodiscard]] bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
                                      double* virial_terms) const;
 
+  // max_k |r_k - L_k| / L_k over the rods at positions x (indexed globally), at least
+  // `start`: the number a loop over the rows with gap_of would give, bit for bit. The lengths
+  // are those last computed at these positions (the momentum projection's, at the end of a
+  // step) when x is bit for bit where they were computed, else computed.
+  double largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
+                                    double start) const;
+
  private:
   RodChain() = default;
   // Directions and lengths of every rod at local positions x.
@@ -80,13 +87,14 @@ class RodChain {
   [[nodiscard]] bool solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
                                    double scale, const Eigen::VectorXd& minus_rhs,
                                    Eigen::VectorXd& x, Eigen::VectorXd& c) const;
-  // Directions and lengths at the start of the step's positions q: those of the last
-  // momentum projection (or solve) when q is bit for bit the positions it had, as it is
+  // Directions and lengths at the start of the step's positions q, in memo_: those of the
+  // last momentum projection (or solve) when q is bit for bit the positions it had, as it is
   // unless the neighbour list wrapped them in between; computed otherwise.
-  void start_directions(const std::vector<Vec3>& q, const Box& box, std::vector<Vec3>& u,
-                        std::vector<double>& r) const;
-  void remember(const std::vector<Vec3>& x, const Box& box, const std::vector<Vec3>& u,
-                const std::vector<double>& r) const;
+  void start_directions(const std::vector<Vec3>& q, const Box& box) const;
+  // Computes the directions and lengths at local positions x into memo_.
+  void remember_directions(const std::vector<Vec3>& x, const Box& box) const;
+  // Whether the memo holds the directions at local positions x in this box.
+  bool remembered_at(const std::vector<Vec3>& x, const Box& box) const;
 
   // The last directions computed at a step's end or start positions, with those positions
   // (local) and the box's periods: directions() is a function of these alone. Mutable: a

@@ -217,6 +217,32 @@ TEST(RodChain, RememberedImagesChangeNothing) {
   expect_equal_components(p_chain, p_generic);
 }
 
+// The constraint checks' largest |f| / L of a chain, from the lengths its last momentum
+// projection computed when the positions are those it saw, else computed: both are gap_of's
+// numbers (the generic check over the rows), bit for bit.
+TEST(RodChain, LargestDeviationIsGapOfs) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const Chain c = random_chain(40, box, 7);
+  std::vector<Vec3> x = c.q;  // rods off their length by about the displacement, 0.02
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] += c.delta[k];
+  auto by_gap_of = [&](const std::vector<Vec3>& at) {
+    double largest = 0.0;
+    for (const Constraint& rod : c.cluster.rows) {
+      largest = std::max(largest, std::abs(gap_of(rod, at.data(), box)) / rod.length);
+    }
+    return largest;
+  };
+  const std::unique_ptr<RodChain> chain = RodChain::make(c.cluster);
+  RodChainWorkspace work;
+  std::vector<Vec3> p = c.p;
+  std::vector<double> terms(chain->rows());
+  ASSERT_TRUE(chain->project_momenta(x.data(), p.data(), box, work, terms.data()));
+  ASSERT_GT(by_gap_of(x), 1e-3);
+  EXPECT_EQ(chain->largest_relative_deviation(x.data(), box, work, 0.0), by_gap_of(x));
+  EXPECT_EQ(chain->largest_relative_deviation(c.q.data(), box, work, 0.0), by_gap_of(c.q));
+  EXPECT_EQ(chain->largest_relative_deviation(x.data(), box, work, 5.0), 5.0);
+}
+
 TEST(RodChain, OnlyLinearChainsOfRods) {
   const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
   Chain c = random_chain(6, box, 4);
