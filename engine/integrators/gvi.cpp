@@ -156,10 +156,15 @@ void Gvi::start_step(System& system) {
 // Candidate rows: those within reach of the largest displacement seen this step, found once
 // and refreshed only if a later displacement outgrows the reach.
 const std::vector<Constraint>& Gvi::candidates_for(const System& system, const std::vector<Vec3>& x,
-                                                   double largest2_bound, bool exact) {
+                                                   double largest2_bound, bool exact,
+                                                   const std::vector<std::int32_t>* moved) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
   ws_.nearby_refreshed = false;
+  if (particle_reaches()) {
+    if (ws_.reach < 0.0 || !reaches_cover(x, moved)) collect_by_particle_reach(system, x);
+    return ws_.nearby;
+  }
   // 2 sqrt(s) + tol is monotone in s (each operation correctly rounded): a bound that shows
   // no refresh due shows what the exact largest would.
   if (largest2_bound >= 0.0 && 2.0 * std::sqrt(largest2_bound) + gap_tolerance <= ws_.reach) {
@@ -188,11 +193,70 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
       }
     } else {
       nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(),
-                           system.box, ws_.reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+                           system.box, ws_.reach, nullptr, gap_tolerance, ws_.nearby,
+                           ws_.nearby_gap_at_q);
     }
     ws_.nearby_refreshed = true;
   }
   return ws_.nearby;
+}
+
+bool Gvi::particle_reaches() const {
+  return contact_ != ContactTreatment::impact_time && !constraints_.linearized &&
+         (constraints_.hard_spheres || !constraints_.walls.empty());
+}
+
+// Whether every particle's displacement to x (or, given `moved`, that of each particle in it,
+// the others' being unchanged since the last check) is within its reach less half the gap
+// tolerance: then each pair's two displacements and the tolerance fit in the pair's reach.
+bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const {
+  const std::vector<Vec3>& q = ws_.q;
+  const double* limit2 = ws_.reach_limit2.data();
+  if (moved) {
+    for (const std::int32_t i : *moved) {
+      if (!(norm2(x[i] - q[i]) <= limit2[i])) return false;
+    }
+    return true;
+  }
+  const double worst =
+      ordered_max(q.size(), -1.0, [&](std::size_t i) { return norm2(x[i] - q[i]) - limit2[i]; });
+  // a - b > 0 exactly when a > b (gradual underflow).
+  return worst <= 0.0;
+}
+
+// Per particle, a reach of twice its displacement to x (at least kReachFloor times the
+// largest, and never less than before this step) plus the gap tolerance: a pair is a
+// candidate when its gap at q is within its two particles' reaches. Against one reach of
+// four times the step's largest displacement for every pair, most pairs of slow particles
+// drop out; a particle may then double its displacement (a reflection) before the rows
+// are collected again.
+void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3>& x) {
+  const std::vector<Vec3>& q = ws_.q;
+  const std::size_t n = q.size();
+  const double gap_tolerance = constraints_.tolerances.gap;
+  const bool first = ws_.reach < 0.0;
+  ws_.displacement_length.resize(n);
+  const double largest = std::sqrt(ordered_max(n, 0.0, [&](std::size_t i) {
+    const double moved2 = norm2(x[i] - q[i]);
+    ws_.displacement_length[i] = std::sqrt(moved2);
+    return moved2;
+  }));
+  ws_.largest_displacement = first ? largest : std::max(ws_.largest_displacement, largest);
+  const double floor = kReachFloor * ws_.largest_displacement;
+  if (first) ws_.particle_reach.assign(n, 0.0);
+  ws_.reach_limit2.resize(n);
+  const double widest = ordered_max(n, 0.0, [&, floor, gap_tolerance](std::size_t i) {
+    double& reach = ws_.particle_reach[i];
+    reach = std::max(reach, 2.0 * std::max(ws_.displacement_length[i], floor) + gap_tolerance);
+    const double limit = reach - 0.5 * gap_tolerance;
+    ws_.reach_limit2[i] = limit * limit;
+    return reach;
+  });
+  ws_.reach = 2.0 * widest;
+  nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(), system.box,
+                       ws_.reach, ws_.particle_reach.data(), gap_tolerance, ws_.nearby,
+                       ws_.nearby_gap_at_q);
+  ws_.nearby_refreshed = true;
 }
 
 // Extended active set and reflection. A reflection can send a particle into a contact the
@@ -218,7 +282,8 @@ void Gvi::find_active_set(System& system) {
   double largest2_bound = -1.0;
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
     const std::vector<Constraint>& candidates =
-        candidates_for(system, ws_.predicted, largest2_bound);
+        candidates_for(system, ws_.predicted, largest2_bound, false,
+                       round > 0 && local_predictions ? &ws_.changed_particles : nullptr);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     // Per candidate, whether it is in the active set already (the candidates are distinct
     // rows): made again by search when the candidates were refreshed.

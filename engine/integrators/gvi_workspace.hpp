@@ -30,6 +30,11 @@ struct GviWorkspace {
   double reach = -1.0;
   bool nearby_refreshed = false;  // by the last candidates call
   double largest2 = 0.0;          // its bound on max |x - q|^2 (exact when it refreshed)
+  // By particle reach (Gvi::collect_by_particle_reach): each particle's reach and the
+  // squared displacement it may reach before the rows are collected again; |x - q| of the
+  // last collection and the largest this step.
+  std::vector<double> particle_reach, reach_limit2, displacement_length;
+  double largest_displacement = 0.0;
 
   // Active and smooth sets; particles whose prediction changed in the last round.
   std::vector<Constraint> active, smooth;
