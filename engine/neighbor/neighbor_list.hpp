@@ -78,11 +78,12 @@ class NeighborList {
   std::vector<std::size_t> partner_offsets_;           // by particle, built with the above
   std::vector<std::int32_t> partners_;                 // each particle's excluded partners
 
-  // Per cell, the neighbouring cells to scan and their periodic shift codes; kept while
-  // the grid is unchanged (always, for a fixed periodic box).
+  // Per cell, the neighbouring cells to scan, as runs of consecutive cells [cell, end)
+  // with one periodic shift code each; kept while the grid is unchanged (always, for a
+  // fixed periodic box).
   Grid stencil_grid_;
   std::vector<std::size_t> stencil_offsets_;
-  std::vector<std::int32_t> stencil_cells_;
+  std::vector<std::int32_t> stencil_cells_, stencil_ends_;
   std::vector<std::uint8_t> stencil_codes_;
 
   // Each chunk's part of the list during a build (kept: their capacity is reused).
