@@ -90,14 +90,20 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     bool fresh = list_ == &list && list_builds_ == list.builds() &&
                  anchor_.size() == particles.size() && reach < margin_;
     if (fresh) {
+      // The squares first, the roots in a loop of their own, which vectorises.
       double largest2 = 0.0;
-      for (std::size_t i = 0; i < anchor_.size(); ++i) {
-        const double moved2 = norm2(q[i] - anchor_[i]);
-        moved_[i] = std::sqrt(moved2);
-        largest2 = std::max(largest2, moved2);
+      const std::size_t count = anchor_.size();
+      const Vec3* anchor = anchor_.data();
+      double* __restrict moved = moved_.data();
+      for (std::size_t i = 0; i < count; ++i) {
+        moved[i] = norm2(q[i] - anchor[i]);
+        largest2 = std::max(largest2, moved[i]);
       }
       if (particle_reach) {
-        for (std::size_t i = 0; i < anchor_.size(); ++i) moved_[i] += particle_reach[i];
+        const double* __restrict reach = particle_reach;
+        for (std::size_t i = 0; i < count; ++i) moved[i] = std::sqrt(moved[i]) + reach[i];
+      } else {
+        for (std::size_t i = 0; i < count; ++i) moved[i] = std::sqrt(moved[i]);
       }
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);

@@ -149,6 +149,7 @@ void Gvi::start_step(System& system) {
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.reach = -1.0;
+  ws_.x_cover_known = false;
   ws_.nearby.clear();
   ws_.nearby_gap_at_q.clear();
 }
@@ -162,7 +163,11 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
   const double gap_tolerance = constraints_.tolerances.gap;
   ws_.nearby_refreshed = false;
   if (particle_reaches()) {
-    if (ws_.reach < 0.0 || !reaches_cover(x, moved)) collect_by_particle_reach(system, x);
+    // Whether ws_.x is covered was found when it was made (displaced()).
+    const bool covered =
+        ws_.reach >= 0.0 &&
+        (&x == &ws_.x && ws_.x_cover_known ? ws_.x_covered : reaches_cover(x, moved));
+    if (!covered) collect_by_particle_reach(system, x);
     return ws_.nearby;
   }
   // 2 sqrt(s) + tol is monotone in s (each operation correctly rounded): a bound that shows
@@ -210,18 +215,27 @@ bool Gvi::particle_reaches() const {
 // the others' being unchanged since the last check) is within its reach less half the gap
 // tolerance: then each pair's two displacements and the tolerance fit in the pair's reach.
 bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const {
-  const std::vector<Vec3>& q = ws_.q;
+  const Vec3* at = x.data();
+  const Vec3* q = ws_.q.data();
   const double* limit2 = ws_.reach_limit2.data();
   if (moved) {
     for (const std::int32_t i : *moved) {
-      if (!(norm2(x[i] - q[i]) <= limit2[i])) return false;
+      if (!(norm2(at[i] - q[i]) <= limit2[i])) return false;
     }
     return true;
   }
-  const double worst =
-      ordered_max(q.size(), -1.0, [&](std::size_t i) { return norm2(x[i] - q[i]) - limit2[i]; });
-  // a - b > 0 exactly when a > b (gradual underflow).
-  return worst <= 0.0;
+  // Without a branch per particle (none is expected to fail): a count of failures.
+  const int chunks = chunks_for(x.size());
+  std::vector<std::size_t> outgrown(static_cast<std::size_t>(chunks), 0);
+  for_each_chunk(x.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+    std::size_t count = 0;
+    for (std::size_t i = begin; i < end; ++i) count += !(norm2(at[i] - q[i]) <= limit2[i]);
+    outgrown[static_cast<std::size_t>(c)] = count;
+  });
+  for (const std::size_t count : outgrown) {
+    if (count > 0) return false;
+  }
+  return true;
 }
 
 // Per particle, a reach of twice its displacement to x (at least kReachFloor times the
@@ -231,31 +245,44 @@ bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32
 // drop out; a particle may then double its displacement (a reflection) before the rows
 // are collected again.
 void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3>& x) {
-  const std::vector<Vec3>& q = ws_.q;
-  const std::size_t n = q.size();
+  const std::size_t n = ws_.q.size();
   const double gap_tolerance = constraints_.tolerances.gap;
   const bool first = ws_.reach < 0.0;
-  ws_.displacement_length.resize(n);
-  const double largest = std::sqrt(ordered_max(n, 0.0, [&](std::size_t i) {
-    const double moved2 = norm2(x[i] - q[i]);
-    ws_.displacement_length[i] = std::sqrt(moved2);
-    return moved2;
-  }));
-  ws_.largest_displacement = first ? largest : std::max(ws_.largest_displacement, largest);
-  const double floor = kReachFloor * ws_.largest_displacement;
-  if (first) ws_.particle_reach.assign(n, 0.0);
+  ws_.displacement2.resize(n);
   ws_.reach_limit2.resize(n);
-  const double widest = ordered_max(n, 0.0, [&, floor, gap_tolerance](std::size_t i) {
-    double& reach = ws_.particle_reach[i];
-    reach = std::max(reach, 2.0 * std::max(ws_.displacement_length[i], floor) + gap_tolerance);
-    const double limit = reach - 0.5 * gap_tolerance;
-    ws_.reach_limit2[i] = limit * limit;
-    return reach;
+  if (first) ws_.particle_reach.assign(n, 0.0);
+  const Vec3* at = x.data();
+  const Vec3* q = ws_.q.data();
+  double* moved2 = ws_.displacement2.data();
+  const double largest2 = ordered_max(n, 0.0, [&](std::size_t i) {
+    moved2[i] = norm2(at[i] - q[i]);
+    return moved2[i];
   });
-  ws_.reach = 2.0 * widest;
-  nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(), system.box,
-                       ws_.reach, ws_.particle_reach.data(), gap_tolerance, ws_.nearby,
-                       ws_.nearby_gap_at_q);
+  // The floor by its square: any floor serves (it only widens reaches), and the widest
+  // reach is the largest displacement's, taken the same way.
+  const double floor = kReachFloor * std::sqrt(largest2);
+  const double floor2 = floor * floor;
+  double* reach = ws_.particle_reach.data();
+  double* limit2 = ws_.reach_limit2.data();
+  // A plain loop per chunk, which vectorises (the roots above all).
+  for_each_chunk(n, chunks_for(n), [=](int, std::size_t begin, std::size_t end) {
+    double* __restrict out = reach;
+    double* __restrict out_limit2 = limit2;
+    const double* __restrict in = moved2;
+    for (std::size_t i = begin; i < end; ++i) {
+      const double grown = 2.0 * std::sqrt(std::max(in[i], floor2)) + gap_tolerance;
+      out[i] = std::max(out[i], grown);
+      const double limit = out[i] - 0.5 * gap_tolerance;
+      out_limit2[i] = limit * limit;
+    }
+  });
+  const double widest = 2.0 * std::sqrt(largest2) + gap_tolerance;
+  ws_.reach = first ? 2.0 * widest : std::max(ws_.reach, 2.0 * widest);
+  // The reaches only grow: x stays covered if it was, and is when they were made from it.
+  if (&x == &ws_.x) ws_.x_cover_known = ws_.x_covered = true;
+  if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
+  nearby_rows_.collect(constraints_, system.particles, q, engine_.neighbors(), system.box,
+                       ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
   ws_.nearby_refreshed = true;
 }
 
@@ -390,11 +417,42 @@ void Gvi::displaced(const Particles& P) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
-  ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
-    ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
-    return norm2(ws_.x[i] - ws_.q[i]);
-  });
   ws_.x_builds = engine_.neighbors().builds();
+  // With reaches per particle made this step: in the same pass, whether x stays within them.
+  const bool by_particle = particle_reaches() && ws_.reach >= 0.0;
+  ws_.x_cover_known = by_particle;
+  if (!by_particle) {
+    ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      return norm2(ws_.x[i] - ws_.q[i]);
+    });
+    return;
+  }
+  // ordered_max's chunks, each also counting the particles beyond their reach.
+  const int chunks = chunks_for(n);
+  std::vector<double>& largest2 = ws_.chunk_largest2;
+  std::vector<std::size_t>& outgrown = ws_.chunk_outgrown;
+  largest2.assign(static_cast<std::size_t>(chunks), 0.0);
+  outgrown.assign(static_cast<std::size_t>(chunks), 0);
+  const double* limit2 = ws_.reach_limit2.data();
+  for_each_chunk(n, chunks, [&, h](int c, std::size_t begin, std::size_t end) {
+    double largest = 0.0;
+    std::size_t beyond = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
+      largest = std::max(largest, moved2);
+      beyond += !(moved2 <= limit2[i]);
+    }
+    largest2[static_cast<std::size_t>(c)] = largest;
+    outgrown[static_cast<std::size_t>(c)] = beyond;
+  });
+  ws_.x_largest2 = 0.0;
+  ws_.x_covered = true;
+  for (int c = 0; c < chunks; ++c) {
+    ws_.x_largest2 = std::max(ws_.x_largest2, largest2[static_cast<std::size_t>(c)]);
+    ws_.x_covered = ws_.x_covered && outgrown[static_cast<std::size_t>(c)] == 0;
+  }
 }
 
 // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
@@ -580,7 +638,8 @@ void Gvi::check_constraints(const System& system, bool tally) {
   // wraps them.
   const bool at_x = engine_.neighbors().builds() == ws_.x_builds;
   if (at_x) {
-    candidates_for(system, system.particles.position, ws_.x_largest2, true);
+    // ws_.x: the same positions, whose cover by the reaches is known.
+    candidates_for(system, ws_.x, ws_.x_largest2, true);
   } else {
     candidates_for(system, system.particles.position);
   }
