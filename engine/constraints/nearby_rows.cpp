@@ -1,5 +1,6 @@
 #include "constraints/nearby_rows.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -90,20 +91,22 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     bool fresh = list_ == &list && list_builds_ == list.builds() &&
                  anchor_.size() == particles.size() && reach < margin_;
     if (fresh) {
-      // The squares first, the roots in a loop of their own, which vectorises.
+      // The squares first, then the roots as packets (std::sqrt, which may set errno, does
+      // not vectorise).
       double largest2 = 0.0;
       const std::size_t count = anchor_.size();
       const Vec3* anchor = anchor_.data();
-      double* __restrict moved = moved_.data();
+      double* moved = moved_.data();
       for (std::size_t i = 0; i < count; ++i) {
         moved[i] = norm2(q[i] - anchor[i]);
         largest2 = std::max(largest2, moved[i]);
       }
+      Eigen::Map<Eigen::ArrayXd> distance(moved, static_cast<Eigen::Index>(count));
       if (particle_reach) {
-        const double* __restrict reach = particle_reach;
-        for (std::size_t i = 0; i < count; ++i) moved[i] = std::sqrt(moved[i]) + reach[i];
+        distance = distance.sqrt() + Eigen::Map<const Eigen::ArrayXd>(
+                                         particle_reach, static_cast<Eigen::Index>(count));
       } else {
-        for (std::size_t i = 0; i < count; ++i) moved[i] = std::sqrt(moved[i]);
+        distance = distance.sqrt();
       }
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Core>
+
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -264,17 +266,13 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   const double floor2 = floor * floor;
   double* reach = ws_.particle_reach.data();
   double* limit2 = ws_.reach_limit2.data();
-  // A plain loop per chunk, which vectorises (the roots above all).
+  // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk.
   for_each_chunk(n, chunks_for(n), [=](int, std::size_t begin, std::size_t end) {
-    double* __restrict out = reach;
-    double* __restrict out_limit2 = limit2;
-    const double* __restrict in = moved2;
-    for (std::size_t i = begin; i < end; ++i) {
-      const double grown = 2.0 * std::sqrt(std::max(in[i], floor2)) + gap_tolerance;
-      out[i] = std::max(out[i], grown);
-      const double limit = out[i] - 0.5 * gap_tolerance;
-      out_limit2[i] = limit * limit;
-    }
+    const auto length = static_cast<Eigen::Index>(end - begin);
+    Eigen::Map<Eigen::ArrayXd> out(reach + begin, length), out_limit2(limit2 + begin, length);
+    const Eigen::Map<const Eigen::ArrayXd> in(moved2 + begin, length);
+    out = out.max(2.0 * in.max(floor2).sqrt() + gap_tolerance);
+    out_limit2 = (out - 0.5 * gap_tolerance).square();
   });
   const double widest = 2.0 * std::sqrt(largest2) + gap_tolerance;
   ws_.reach = first ? 2.0 * widest : std::max(ws_.reach, 2.0 * widest);
