@@ -1,10 +1,9 @@
 #include "integrators/gvi.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Core>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
@@ -120,24 +119,39 @@ void Gvi::start_step(System& system) {
   ws_.p.resize(n);
   // The free prediction first, even with the constrained predictor: it decides whether the
   // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  bool prediction_covered = false;  // known to be covered (else asked below)
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
     std::vector<Vec3>& d = ws_.displacement;
     d.resize(n);
     ws_.predicted.resize(n);
-    parallel_for(n, [&, h](std::size_t i) {
-      ws_.p[i] = P.velocity[i] * P.mass[i];
-      d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-      ws_.predicted[i] = P.position[i] + d[i];
+    // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
+    // test, particle by particle), counted per chunk.
+    const NeighborList& list = engine_.neighbors();
+    const bool listed = list.built_for(n);
+    const int chunks = chunks_for(n);
+    std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
+    beyond.assign(static_cast<std::size_t>(chunks), 0);
+    for_each_chunk(n, chunks, [&, h, listed](int c, std::size_t begin, std::size_t end) {
+      std::size_t count = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        ws_.p[i] = P.velocity[i] * P.mass[i];
+        d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+        ws_.predicted[i] = P.position[i] + d[i];
+        if (listed) count += !list.keeps_valid(i, ws_.predicted[i]);
+      }
+      beyond[static_cast<std::size_t>(c)] = count;
     });
+    prediction_covered =
+        listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
   } else {
     parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
     predict(system, ws_.p, ws_.predicted, false);
   }
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
-  if (pairs_matter && !engine_.neighbors_cover(ws_.predicted)) {
+  if (pairs_matter && !prediction_covered && !engine_.neighbors_cover(ws_.predicted)) {
     engine_.ensure_neighbors(system, true);
     predict(system, ws_.p, ws_.predicted, false);
     if (!engine_.neighbors_cover(ws_.predicted)) {

@@ -51,7 +51,7 @@ struct GviWorkspace {
   bool x_cover_known = false;               // whether x_covered holds for this step's x
   bool x_covered = false;                   // x within the particles' reaches (by particle reach)
   std::vector<double> chunk_largest2;       // displaced()'s per chunk
-  std::vector<std::size_t> chunk_outgrown;  // displaced()'s per chunk
+  std::vector<std::size_t> chunk_outgrown;  // displaced()'s and start_step()'s, per chunk
   std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
   double x_smallest_gap = 0.0;        // smallest candidate gap at x (feasibility guard's pass)
   bool x_smallest_gap_known = false;  // for the x of the last position update

@@ -384,19 +384,17 @@ void NeighborList::set_cell_order(bool on) {
 
 bool NeighborList::needs_rebuild(const std::vector<Vec3>& position) const {
   if (position_at_build_.size() != position.size()) return true;
-  const double limit2 = 0.25 * skin_ * skin_;
   // Written so that a NaN displacement asks for a rebuild too: the caller then finds the
   // non-finite position (a blown-up run) at no cost to the every-step check. Called twice a
   // step and nearly always passing: no allocation and no branch per particle (a count of
   // the particles beyond, per chunk, in a local array).
   const Vec3* now = position.data();
-  const Vec3* then = position_at_build_.data();
   constexpr int kMostChunks = 64;
   const int chunks = std::min(chunks_for(position.size()), kMostChunks);
   std::array<std::size_t, kMostChunks> beyond{};
   for_each_chunk(position.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
     std::size_t count = 0;
-    for (std::size_t i = begin; i < end; ++i) count += !(norm2(now[i] - then[i]) <= limit2);
+    for (std::size_t i = begin; i < end; ++i) count += !keeps_valid(i, now[i]);
     beyond[static_cast<std::size_t>(c)] = count;
   });
   for (int c = 0; c < chunks; ++c) {
