@@ -433,6 +433,7 @@ void Gvi::displaced(const Particles& P) {
   // With reaches per particle made this step: in the same pass, whether x stays within them.
   const bool by_particle = particle_reaches() && ws_.reach >= 0.0;
   ws_.x_cover_known = by_particle;
+  ws_.x_listed = false;
   if (!by_particle) {
     ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
       ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
@@ -446,24 +447,33 @@ void Gvi::displaced(const Particles& P) {
   std::vector<std::size_t>& outgrown = ws_.chunk_outgrown;
   largest2.assign(static_cast<std::size_t>(chunks), 0.0);
   outgrown.assign(static_cast<std::size_t>(chunks), 0);
+  // And whether the neighbour list stays valid at x (needs_rebuild's test per particle).
+  std::vector<std::size_t>& unlisted = ws_.chunk_unlisted;
+  unlisted.assign(static_cast<std::size_t>(chunks), 0);
+  const NeighborList& list = engine_.neighbors();
+  const bool built = list.built_for(n);
   const double* limit2 = ws_.reach_limit2.data();
-  for_each_chunk(n, chunks, [&, h](int c, std::size_t begin, std::size_t end) {
+  for_each_chunk(n, chunks, [&, h, built](int c, std::size_t begin, std::size_t end) {
     double largest = 0.0;
-    std::size_t beyond = 0;
+    std::size_t beyond = 0, beyond_list = 0;
     for (std::size_t i = begin; i < end; ++i) {
       ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
       const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
       largest = std::max(largest, moved2);
       beyond += !(moved2 <= limit2[i]);
+      if (built) beyond_list += !list.keeps_valid(i, ws_.x[i]);
     }
     largest2[static_cast<std::size_t>(c)] = largest;
     outgrown[static_cast<std::size_t>(c)] = beyond;
+    unlisted[static_cast<std::size_t>(c)] = beyond_list;
   });
   ws_.x_largest2 = 0.0;
   ws_.x_covered = true;
+  ws_.x_listed = built;
   for (int c = 0; c < chunks; ++c) {
     ws_.x_largest2 = std::max(ws_.x_largest2, largest2[static_cast<std::size_t>(c)]);
     ws_.x_covered = ws_.x_covered && outgrown[static_cast<std::size_t>(c)] == 0;
+    ws_.x_listed = ws_.x_listed && unlisted[static_cast<std::size_t>(c)] == 0;
   }
 }
 
@@ -605,7 +615,9 @@ void Gvi::update_momenta(System& system, bool tally) {
   });
   system.step += 1;
   system.time += h;
-  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed));
+  // The list's test at x may be known from displaced() (no rebuild since x was made).
+  const bool listed = ws_.x_listed && ws_.x_builds == engine_.neighbors().builds();
+  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed), listed);
   // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
   const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
   parallel_for(n, [&, h](std::size_t i) { p[i] += f[i] * (0.5 * h); });

@@ -50,6 +50,8 @@ struct GviWorkspace {
   double x_largest2 = 0.0;                  // max |x - q|^2
   bool x_cover_known = false;               // whether x_covered holds for this step's x
   bool x_covered = false;                   // x within the particles' reaches (by particle reach)
+  bool x_listed = false;                    // known: the neighbour list stays valid at x
+  std::vector<std::size_t> chunk_unlisted;  // displaced()'s per chunk
   std::vector<double> chunk_largest2;       // displaced()'s per chunk
   std::vector<std::size_t> chunk_outgrown;  // displaced()'s and start_step()'s, per chunk
   std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
