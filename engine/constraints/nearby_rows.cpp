@@ -1,5 +1,6 @@
 #include "constraints/nearby_rows.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -69,30 +70,52 @@ bool NearbyRows::bonded(std::int32_t a, std::int32_t b) const {
 }
 
 void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-                         const NeighborList& list, const Box& box, double reach, double exact_below,
+                         const NeighborList& list, const Box& box, double reach,
+                         const double* particle_reach, double exact_below,
                          std::vector<Constraint>& out, std::vector<double>& gap_at_q) {
   out.clear();
   gap_at_q.clear();
-  auto keep = [&](const Constraint& c) {
+  auto keep = [&](const Constraint& c, double row_reach) {
     const double gap = evaluate(c, q, box).gap;
-    if (gap <= reach) out.push_back(c), gap_at_q.push_back(gap);
+    if (gap <= row_reach) out.push_back(c), gap_at_q.push_back(gap);
+  };
+  // A row's reach: the pair's two particle reaches (a wall row's: twice its particle's),
+  // or the one reach for all.
+  auto pair_reach = [&](std::int32_t a, std::int32_t b) {
+    return particle_reach ? particle_reach[a] + particle_reach[b] : reach;
   };
   if (set.hard_spheres) {
-    for (const auto& [a, b] : set.always_checked_pairs) keep(sphere_pair(a, b, particles));
+    for (const auto& [a, b] : set.always_checked_pairs) {
+      keep(sphere_pair(a, b, particles), pair_reach(a, b));
+    }
     bool fresh = list_ == &list && list_builds_ == list.builds() &&
                  anchor_.size() == particles.size() && reach < margin_;
     if (fresh) {
+      // The squares first, then the roots as packets (std::sqrt, which may set errno, does
+      // not vectorise).
       double largest2 = 0.0;
-      for (std::size_t i = 0; i < anchor_.size(); ++i) {
-        const double moved2 = norm2(q[i] - anchor_[i]);
-        moved_[i] = std::sqrt(moved2);
-        largest2 = std::max(largest2, moved2);
+      const std::size_t count = anchor_.size();
+      const Vec3* anchor = anchor_.data();
+      double* moved = moved_.data();
+      for (std::size_t i = 0; i < count; ++i) {
+        moved[i] = norm2(q[i] - anchor[i]);
+        largest2 = std::max(largest2, moved[i]);
+      }
+      Eigen::Map<Eigen::ArrayXd> distance(moved, static_cast<Eigen::Index>(count));
+      if (particle_reach) {
+        distance = distance.sqrt() + Eigen::Map<const Eigen::ArrayXd>(
+                                         particle_reach, static_cast<Eigen::Index>(count));
+      } else {
+        distance = distance.sqrt();
       }
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);
       fresh = largest2 <= room * room;
     }
-    if (!fresh) make(set, particles, q, list, box);
+    if (!fresh) {
+      make(set, particles, q, list, box);
+      if (particle_reach) moved_.assign(particle_reach, particle_reach + particles.size());
+    }
     // The screen of nearby_inequalities, then its exact test (evaluate()'s sphere-pair gap,
     // the row built only when kept). The screen may take the separation through the list's
     // shift (no rounding to the nearest image): it differs from the minimum image by
@@ -105,8 +128,9 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     // displacements exceeds it by far more than rounding) is one the exact test drops too.
     // The others' indices are gathered first without a branch (about half the pairs pass,
     // unpredictably), then, again without a branch, those within the screen with their
-    // squared distances, which are then tested in order.
-    const double beyond = reach + 1e-9;
+    // squared distances, which are then tested in order. With particle reaches, `moved_`
+    // holds each particle's displacement plus its reach.
+    const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
     const double* moved = moved_.data();
     const std::size_t pair_count = bounds_.size();
     near_.resize(pair_count);
@@ -119,7 +143,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     }
     std::size_t within_count = 0;
     auto screen_pair = [&](std::int32_t k, double d2) {
-      const double within = pairs_[k].contact + reach;
+      const double within = pairs_[k].contact + pair_reach(pairs_[k].a, pairs_[k].b);
       near_[within_count] = k;
       near_d2_[within_count] = d2;
       within_count += !(d2 > within * within * screen + 1e-300) ? 1 : 0;
@@ -138,13 +162,14 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     for (std::size_t m = 0; m < within_count; ++m) {
       const Pair& pair = pairs_[near_[m]];
       const double d2 = near_d2_[m];
-      const double within = pair.contact + reach;
+      const double row_reach = pair_reach(pair.a, pair.b);
+      const double within = pair.contact + row_reach;
       const double near = pair.contact + exact_below;
       double gap = infinity;
       if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
           d2 <= near * near * screen + 1e-300) {
         gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
-        if (!(gap <= reach)) continue;
+        if (!(gap <= row_reach)) continue;
       }
       // sphere_pair(a, b)'s row, made in place (its contact is the pair's).
       Constraint& row = out.emplace_back();
@@ -158,11 +183,12 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
   for (const Wall& wall : set.walls) {
     for (std::size_t i = 0; i < particles.size(); ++i) {
       const auto index = static_cast<std::int32_t>(i);
+      const double row_reach = particle_reach ? 2.0 * particle_reach[i] : reach;
       if (wall.kind == ConstraintKind::plane) {
         // evaluate()'s plane gap, without building the row first.
-        if (dot(wall.normal, q[i] - wall.point) - particles.radius[i] > reach) continue;
+        if (dot(wall.normal, q[i] - wall.point) - particles.radius[i] > row_reach) continue;
       }
-      keep(set.wall_row(wall, index, particles.radius[i]));
+      keep(set.wall_row(wall, index, particles.radius[i]), row_reach);
     }
   }
 }

@@ -25,10 +25,12 @@ class NearbyRows {
   explicit NearbyRows(double margin = 0.5) : margin_(margin) {}
   // The rows into `out` and their gaps at q into `gap_at_q`: evaluate()'s, bit for bit,
   // where the gap may be at most `exact_below`; elsewhere it can be +infinity (a pair whose
-  // squared distance alone shows it beyond, by far more than rounding).
+  // squared distance alone shows it beyond, by far more than rounding). A row is kept when
+  // its gap is at most `reach`, or, given `particle_reach` (one per particle, each at most
+  // reach / 2), at most its two particles' reaches summed (a wall row: twice its particle's).
   void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-               const NeighborList& list, const Box& box, double reach, double exact_below,
-               std::vector<Constraint>& out, std::vector<double>& gap_at_q);
+               const NeighborList& list, const Box& box, double reach, const double* particle_reach,
+               double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q);
 
  private:
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
@@ -57,7 +59,7 @@ class NearbyRows {
   std::vector<PairBound> bounds_;
   bool shifted_ = false;
   std::vector<Vec3> anchor_;
-  std::vector<double> moved_;       // per particle, |q - anchor| at the last call
+  std::vector<double> moved_;       // per particle, |q - anchor| at the last call (+ its reach)
   std::vector<std::int32_t> near_;  // pairs that may be within reach, by index
   std::vector<double> near_d2_;     // their squared distances at q, after the second screen
   const NeighborList* list_ = nullptr;

@@ -52,7 +52,11 @@ void ForceEngine::restore_neighbors(System& system, const std::vector<Vec3>& bui
 }
 
 const ForceEvaluation& ForceEngine::compute(System& system, bool tally) {
-  ensure_neighbors(system);
+  return compute(system, tally, false);
+}
+
+const ForceEvaluation& ForceEngine::compute(System& system, bool tally, bool listed) {
+  if (!listed) ensure_neighbors(system);
   last_ = force_field_.compute(system, neighbors_, force_, tally);
   return last_;
 }

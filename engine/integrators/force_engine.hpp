@@ -21,6 +21,9 @@ class ForceEngine {
   // only time they are wrapped) and computes forces and energies.
   // Energies and virial only when `tally` (thermo steps).
   const ForceEvaluation& compute(System& system, bool tally = true);
+  // The same, `listed`: the caller has found (in a pass of its own, with NeighborList's
+  // per-particle test) that the list stays valid at the system's positions.
+  const ForceEvaluation& compute(System& system, bool tally, bool listed);
 
   // Forces (only) at positions x instead of the system's, through the current neighbour
   // list, which the caller has checked covers x.

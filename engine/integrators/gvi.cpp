@@ -1,5 +1,6 @@
 #include "integrators/gvi.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -118,24 +119,39 @@ void Gvi::start_step(System& system) {
   ws_.p.resize(n);
   // The free prediction first, even with the constrained predictor: it decides whether the
   // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  bool prediction_covered = false;  // known to be covered (else asked below)
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
     std::vector<Vec3>& d = ws_.displacement;
     d.resize(n);
     ws_.predicted.resize(n);
-    parallel_for(n, [&, h](std::size_t i) {
-      ws_.p[i] = P.velocity[i] * P.mass[i];
-      d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-      ws_.predicted[i] = P.position[i] + d[i];
+    // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
+    // test, particle by particle), counted per chunk.
+    const NeighborList& list = engine_.neighbors();
+    const bool listed = list.built_for(n);
+    const int chunks = chunks_for(n);
+    std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
+    beyond.assign(static_cast<std::size_t>(chunks), 0);
+    for_each_chunk(n, chunks, [&, h, listed](int c, std::size_t begin, std::size_t end) {
+      std::size_t count = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        ws_.p[i] = P.velocity[i] * P.mass[i];
+        d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+        ws_.predicted[i] = P.position[i] + d[i];
+        if (listed) count += !list.keeps_valid(i, ws_.predicted[i]);
+      }
+      beyond[static_cast<std::size_t>(c)] = count;
     });
+    prediction_covered =
+        listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
   } else {
     parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
     predict(system, ws_.p, ws_.predicted, false);
   }
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
-  if (pairs_matter && !engine_.neighbors_cover(ws_.predicted)) {
+  if (pairs_matter && !prediction_covered && !engine_.neighbors_cover(ws_.predicted)) {
     engine_.ensure_neighbors(system, true);
     predict(system, ws_.p, ws_.predicted, false);
     if (!engine_.neighbors_cover(ws_.predicted)) {
@@ -149,6 +165,7 @@ void Gvi::start_step(System& system) {
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.reach = -1.0;
+  ws_.x_cover_known = false;
   ws_.nearby.clear();
   ws_.nearby_gap_at_q.clear();
 }
@@ -156,10 +173,19 @@ void Gvi::start_step(System& system) {
 // Candidate rows: those within reach of the largest displacement seen this step, found once
 // and refreshed only if a later displacement outgrows the reach.
 const std::vector<Constraint>& Gvi::candidates_for(const System& system, const std::vector<Vec3>& x,
-                                                   double largest2_bound, bool exact) {
+                                                   double largest2_bound, bool exact,
+                                                   const std::vector<std::int32_t>* moved) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
   ws_.nearby_refreshed = false;
+  if (particle_reaches()) {
+    // Whether ws_.x is covered was found when it was made (displaced()).
+    const bool covered =
+        ws_.reach >= 0.0 &&
+        (&x == &ws_.x && ws_.x_cover_known ? ws_.x_covered : reaches_cover(x, moved));
+    if (!covered) collect_by_particle_reach(system, x);
+    return ws_.nearby;
+  }
   // 2 sqrt(s) + tol is monotone in s (each operation correctly rounded): a bound that shows
   // no refresh due shows what the exact largest would.
   if (largest2_bound >= 0.0 && 2.0 * std::sqrt(largest2_bound) + gap_tolerance <= ws_.reach) {
@@ -188,11 +214,88 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
       }
     } else {
       nearby_rows_.collect(constraints_, system.particles, q.data(), engine_.neighbors(),
-                           system.box, ws_.reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+                           system.box, ws_.reach, nullptr, gap_tolerance, ws_.nearby,
+                           ws_.nearby_gap_at_q);
     }
     ws_.nearby_refreshed = true;
   }
   return ws_.nearby;
+}
+
+bool Gvi::particle_reaches() const {
+  return contact_ != ContactTreatment::impact_time && !constraints_.linearized &&
+         (constraints_.hard_spheres || !constraints_.walls.empty());
+}
+
+// Whether every particle's displacement to x (or, given `moved`, that of each particle in it,
+// the others' being unchanged since the last check) is within its reach less half the gap
+// tolerance: then each pair's two displacements and the tolerance fit in the pair's reach.
+bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const {
+  const Vec3* at = x.data();
+  const Vec3* q = ws_.q.data();
+  const double* limit2 = ws_.reach_limit2.data();
+  if (moved) {
+    for (const std::int32_t i : *moved) {
+      if (!(norm2(at[i] - q[i]) <= limit2[i])) return false;
+    }
+    return true;
+  }
+  // Without a branch per particle (none is expected to fail): a count of failures.
+  const int chunks = chunks_for(x.size());
+  std::vector<std::size_t> outgrown(static_cast<std::size_t>(chunks), 0);
+  for_each_chunk(x.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+    std::size_t count = 0;
+    for (std::size_t i = begin; i < end; ++i) count += !(norm2(at[i] - q[i]) <= limit2[i]);
+    outgrown[static_cast<std::size_t>(c)] = count;
+  });
+  for (const std::size_t count : outgrown) {
+    if (count > 0) return false;
+  }
+  return true;
+}
+
+// Per particle, a reach of twice its displacement to x (at least kReachFloor times the
+// largest, and never less than before this step) plus the gap tolerance: a pair is a
+// candidate when its gap at q is within its two particles' reaches. Against one reach of
+// four times the step's largest displacement for every pair, most pairs of slow particles
+// drop out; a particle may then double its displacement (a reflection) before the rows
+// are collected again.
+void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3>& x) {
+  const std::size_t n = ws_.q.size();
+  const double gap_tolerance = constraints_.tolerances.gap;
+  const bool first = ws_.reach < 0.0;
+  ws_.displacement2.resize(n);
+  ws_.reach_limit2.resize(n);
+  if (first) ws_.particle_reach.assign(n, 0.0);
+  const Vec3* at = x.data();
+  const Vec3* q = ws_.q.data();
+  double* moved2 = ws_.displacement2.data();
+  const double largest2 = ordered_max(n, 0.0, [&](std::size_t i) {
+    moved2[i] = norm2(at[i] - q[i]);
+    return moved2[i];
+  });
+  // The floor by its square: any floor serves (it only widens reaches), and the widest
+  // reach is the largest displacement's, taken the same way.
+  const double floor = kReachFloor * std::sqrt(largest2);
+  const double floor2 = floor * floor;
+  double* reach = ws_.particle_reach.data();
+  double* limit2 = ws_.reach_limit2.data();
+  // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk.
+  for_each_chunk(n, chunks_for(n), [=](int, std::size_t begin, std::size_t end) {
+    const auto length = static_cast<Eigen::Index>(end - begin);
+    Eigen::Map<Eigen::ArrayXd> out(reach + begin, length), out_limit2(limit2 + begin, length);
+    const Eigen::Map<const Eigen::ArrayXd> in(moved2 + begin, length);
+    out = out.max(2.0 * in.max(floor2).sqrt() + gap_tolerance);
+    out_limit2 = (out - 0.5 * gap_tolerance).square();
+  });
+  const double widest = 2.0 * std::sqrt(largest2) + gap_tolerance;
+  ws_.reach = first ? 2.0 * widest : std::max(ws_.reach, 2.0 * widest);
+  // The reaches only grow: x stays covered if it was, and is when they were made from it.
+  if (&x == &ws_.x) ws_.x_cover_known = ws_.x_covered = true;
+  if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
+  nearby_rows_.collect(constraints_, system.particles, q, engine_.neighbors(), system.box,
+                       ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+  ws_.nearby_refreshed = true;
 }
 
 // Extended active set and reflection. A reflection can send a particle into a contact the
@@ -218,7 +321,8 @@ void Gvi::find_active_set(System& system) {
   double largest2_bound = -1.0;
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
     const std::vector<Constraint>& candidates =
-        candidates_for(system, ws_.predicted, largest2_bound);
+        candidates_for(system, ws_.predicted, largest2_bound, false,
+                       round > 0 && local_predictions ? &ws_.changed_particles : nullptr);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     // Per candidate, whether it is in the active set already (the candidates are distinct
     // rows): made again by search when the candidates were refreshed.
@@ -325,11 +429,52 @@ void Gvi::displaced(const Particles& P) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
-  ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
-    ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
-    return norm2(ws_.x[i] - ws_.q[i]);
-  });
   ws_.x_builds = engine_.neighbors().builds();
+  // With reaches per particle made this step: in the same pass, whether x stays within them.
+  const bool by_particle = particle_reaches() && ws_.reach >= 0.0;
+  ws_.x_cover_known = by_particle;
+  ws_.x_listed = false;
+  if (!by_particle) {
+    ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      return norm2(ws_.x[i] - ws_.q[i]);
+    });
+    return;
+  }
+  // ordered_max's chunks, each also counting the particles beyond their reach.
+  const int chunks = chunks_for(n);
+  std::vector<double>& largest2 = ws_.chunk_largest2;
+  std::vector<std::size_t>& outgrown = ws_.chunk_outgrown;
+  largest2.assign(static_cast<std::size_t>(chunks), 0.0);
+  outgrown.assign(static_cast<std::size_t>(chunks), 0);
+  // And whether the neighbour list stays valid at x (needs_rebuild's test per particle).
+  std::vector<std::size_t>& unlisted = ws_.chunk_unlisted;
+  unlisted.assign(static_cast<std::size_t>(chunks), 0);
+  const NeighborList& list = engine_.neighbors();
+  const bool built = list.built_for(n);
+  const double* limit2 = ws_.reach_limit2.data();
+  for_each_chunk(n, chunks, [&, h, built](int c, std::size_t begin, std::size_t end) {
+    double largest = 0.0;
+    std::size_t beyond = 0, beyond_list = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
+      largest = std::max(largest, moved2);
+      beyond += !(moved2 <= limit2[i]);
+      if (built) beyond_list += !list.keeps_valid(i, ws_.x[i]);
+    }
+    largest2[static_cast<std::size_t>(c)] = largest;
+    outgrown[static_cast<std::size_t>(c)] = beyond;
+    unlisted[static_cast<std::size_t>(c)] = beyond_list;
+  });
+  ws_.x_largest2 = 0.0;
+  ws_.x_covered = true;
+  ws_.x_listed = built;
+  for (int c = 0; c < chunks; ++c) {
+    ws_.x_largest2 = std::max(ws_.x_largest2, largest2[static_cast<std::size_t>(c)]);
+    ws_.x_covered = ws_.x_covered && outgrown[static_cast<std::size_t>(c)] == 0;
+    ws_.x_listed = ws_.x_listed && unlisted[static_cast<std::size_t>(c)] == 0;
+  }
 }
 
 // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
@@ -470,7 +615,9 @@ void Gvi::update_momenta(System& system, bool tally) {
   });
   system.step += 1;
   system.time += h;
-  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed));
+  // The list's test at x may be known from displaced() (no rebuild since x was made).
+  const bool listed = ws_.x_listed && ws_.x_builds == engine_.neighbors().builds();
+  engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed), listed);
   // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
   const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
   parallel_for(n, [&, h](std::size_t i) { p[i] += f[i] * (0.5 * h); });
@@ -515,7 +662,8 @@ void Gvi::check_constraints(const System& system, bool tally) {
   // wraps them.
   const bool at_x = engine_.neighbors().builds() == ws_.x_builds;
   if (at_x) {
-    candidates_for(system, system.particles.position, ws_.x_largest2, true);
+    // ws_.x: the same positions, whose cover by the reaches is known.
+    candidates_for(system, ws_.x, ws_.x_largest2, true);
   } else {
     candidates_for(system, system.particles.position);
   }

@@ -110,8 +110,16 @@ class Gvi final : public ConstrainedIntegrator {
   // The candidate rows for a step from q to x (refreshed when x outgrows their reach).
   // `largest2_bound`, when given, is at least max |x - q|^2 (the exact value if `exact`):
   // what decides a refresh without a pass over the particles when it shows none is due.
+  // `moved`, when given, holds the only particles whose x changed since the last call.
   const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
-                                                double largest2_bound = -1.0, bool exact = false);
+                                                double largest2_bound = -1.0, bool exact = false,
+                                                const std::vector<std::int32_t>* moved = nullptr);
+  // Candidates by a reach per particle (the paper's contact treatment without linearised
+  // rows) instead of one reach from the step's largest displacement.
+  bool particle_reaches() const;
+  bool reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const;
+  void collect_by_particle_reach(const System& system, const std::vector<Vec3>& x);
+  static constexpr double kReachFloor = 0.5;
   // After a reflection, without equality rows and with Verlet: the free prediction made again
   // for the reflected particles alone.
   double predict_reflected(const System& system);

@@ -57,7 +57,8 @@ void Gvi::drift_with_covering_rows(System& system, bool pairs_matter,
     }
     ws_.reach = 4.0 * span.longest + 2.0 * gap_tolerance;
     nearby_rows_.collect(constraints_, system.particles, ws_.q.data(), engine_.neighbors(),
-                         system.box, ws_.reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+                         system.box, ws_.reach, nullptr, gap_tolerance, ws_.nearby,
+                         ws_.nearby_gap_at_q);
   }
 }
 

@@ -30,6 +30,10 @@ struct GviWorkspace {
   double reach = -1.0;
   bool nearby_refreshed = false;  // by the last candidates call
   double largest2 = 0.0;          // its bound on max |x - q|^2 (exact when it refreshed)
+  // By particle reach (Gvi::collect_by_particle_reach): each particle's reach, the squared
+  // displacement it may reach before the rows are collected again, and |x - q|^2 of the
+  // last collection.
+  std::vector<double> particle_reach, reach_limit2, displacement2;
 
   // Active and smooth sets; particles whose prediction changed in the last round.
   std::vector<Constraint> active, smooth;
@@ -43,7 +47,13 @@ struct GviWorkspace {
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
   std::vector<Vec3> half, impulse, x, free, mid, f_mid;
-  double x_largest2 = 0.0;            // max |x - q|^2
+  double x_largest2 = 0.0;                  // max |x - q|^2
+  bool x_cover_known = false;               // whether x_covered holds for this step's x
+  bool x_covered = false;                   // x within the particles' reaches (by particle reach)
+  bool x_listed = false;                    // known: the neighbour list stays valid at x
+  std::vector<std::size_t> chunk_unlisted;  // displaced()'s per chunk
+  std::vector<double> chunk_largest2;       // displaced()'s per chunk
+  std::vector<std::size_t> chunk_outgrown;  // displaced()'s and start_step()'s, per chunk
   std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
   double x_smallest_gap = 0.0;        // smallest candidate gap at x (feasibility guard's pass)
   bool x_smallest_gap_known = false;  // for the x of the last position update

@@ -27,6 +27,12 @@ class NeighborList {
 
   void build(const std::vector<Vec3>& position, const Box& box);
   bool needs_rebuild(const std::vector<Vec3>& position) const;
+  // needs_rebuild's test one particle at a time, for a caller's pass over the particles:
+  // the list holds `count` particles' build positions, and particle i at x keeps it valid.
+  bool built_for(std::size_t count) const { return position_at_build_.size() == count; }
+  bool keeps_valid(std::size_t i, const Vec3& x) const {
+    return norm2(x - position_at_build_[i]) <= 0.25 * skin_ * skin_;
+  }
   // The positions of the last build: a restart rebuilds from them, so that the pair order,
   // and with it every rounding, repeats.
   const std::vector<Vec3>& positions_at_build() const { return position_at_build_; }
@@ -78,11 +84,12 @@ class NeighborList {
   std::vector<std::size_t> partner_offsets_;           // by particle, built with the above
   std::vector<std::int32_t> partners_;                 // each particle's excluded partners
 
-  // Per cell, the neighbouring cells to scan and their periodic shift codes; kept while
-  // the grid is unchanged (always, for a fixed periodic box).
+  // Per cell, the neighbouring cells to scan, as runs of consecutive cells [cell, end)
+  // with one periodic shift code each; kept while the grid is unchanged (always, for a
+  // fixed periodic box).
   Grid stencil_grid_;
   std::vector<std::size_t> stencil_offsets_;
-  std::vector<std::int32_t> stencil_cells_;
+  std::vector<std::int32_t> stencil_cells_, stencil_ends_;
   std::vector<std::uint8_t> stencil_codes_;
 
   // Each chunk's part of the list during a build (kept: their capacity is reused).

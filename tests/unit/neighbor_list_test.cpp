@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -104,7 +105,7 @@ TEST(NeighborList, ExcludedPairsNeverAppear) {
 }
 
 // After moves of less than skin/2 the list still holds every pair within the cutoff; a
-// move beyond skin/2 triggers a rebuild.
+// move beyond skin/2, or a NaN, triggers a rebuild.
 TEST(NeighborList, StaysValidWithinHalfSkin) {
   const double cutoff = 2.5, skin = 0.4;
   const Box box({0, 0, 0}, {8, 8, 8}, {true, true, true});
@@ -123,6 +124,14 @@ TEST(NeighborList, StaysValidWithinHalfSkin) {
   const PairSet have = listed(list);
   for (const auto& pair : within) EXPECT_TRUE(have.count(pair)) << pair.first << "," << pair.second;
   x[17] = at_build[17] + Vec3{0.201, 0, 0};
+  EXPECT_TRUE(list.needs_rebuild(x));
+  // The test per particle is the same one; a non-finite position asks for a rebuild too
+  // (where the caller catches a blown-up run).
+  EXPECT_TRUE(list.built_for(x.size()));
+  for (std::size_t i = 0; i < x.size(); ++i) EXPECT_EQ(list.keeps_valid(i, x[i]), i != 17) << i;
+  x[17] = at_build[17];
+  EXPECT_FALSE(list.needs_rebuild(x));
+  x[399].y = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(list.needs_rebuild(x));
 }
 

@@ -1,0 +1,94 @@
+// NearbyRows::collect against ConstraintSet::nearby_inequalities (the plain scan of the
+// neighbour list, one reach for all) filtered by the definition: with one reach, the same
+// rows in the same order; with a reach per particle, exactly the rows whose gap is within
+// their two particles' reaches summed (a wall row: twice its particle's), still in the
+// scan's order; gaps at q evaluate()'s wherever they may be within `exact_below`. Hard
+// spheres of diameter 1 in a periodic box with a plane wall, collected at the start
+// positions and again after every particle moved (the short list then serves unchanged).
+#include "constraints/nearby_rows.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "neighbor/neighbor_list.hpp"
+
+namespace deli {
+namespace {
+
+struct NearbyRowsFluid {
+  Box box{{0, 0, 0}, {7, 7, 7}, {true, true, true}};
+  Particles particles;
+  ConstraintSet set;
+  std::vector<double> reach;  // per particle
+};
+
+NearbyRowsFluid nearby_rows_fluid(std::size_t n, std::uint64_t seed) {
+  NearbyRowsFluid fluid;
+  fluid.particles.resize(n);
+  fluid.set.hard_spheres = true;
+  fluid.set.walls.push_back({ConstraintKind::plane, {0, 0, 0.5}, {0, 0, 1}});
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 7.0), speed(0.0, 0.05);
+  for (std::size_t i = 0; i < n; ++i) {
+    fluid.particles.position[i] = {u(rng), u(rng), u(rng)};
+    fluid.particles.radius[i] = 0.5;
+    fluid.reach.push_back(speed(rng));
+  }
+  return fluid;
+}
+
+// The plain scan's rows within their particle reaches, and the exact gaps of all of them.
+std::vector<Constraint> nearby_rows_reference(const NearbyRowsFluid& fluid, const Vec3* q,
+                                              const NeighborList& list, double widest,
+                                              const double* reach) {
+  std::vector<Constraint> kept;
+  for (const Constraint& c :
+       fluid.set.nearby_inequalities(fluid.particles, q, list, fluid.box, widest)) {
+    const double row_reach = !reach ? widest : c.j < 0 ? 2.0 * reach[c.i] : reach[c.i] + reach[c.j];
+    if (evaluate(c, q, fluid.box).gap <= row_reach) kept.push_back(c);
+  }
+  return kept;
+}
+
+void expect_nearby_rows(const NearbyRowsFluid& fluid, NearbyRows& rows, const Vec3* q,
+                        const NeighborList& list, bool per_particle) {
+  const double gap_tolerance = 1e-10;
+  const double widest = 0.1;  // at least twice every particle reach
+  const double* reach = per_particle ? fluid.reach.data() : nullptr;
+  std::vector<Constraint> out;
+  std::vector<double> gap_at_q;
+  rows.collect(fluid.set, fluid.particles, q, list, fluid.box, widest, reach, gap_tolerance, out,
+               gap_at_q);
+  const std::vector<Constraint> expected = nearby_rows_reference(fluid, q, list, widest, reach);
+  ASSERT_EQ(out.size(), expected.size());
+  ASSERT_EQ(gap_at_q.size(), out.size());
+  std::size_t pairs = 0;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    EXPECT_TRUE(same_row(out[k], expected[k])) << "row " << k;
+    const double gap = evaluate(expected[k], q, fluid.box).gap;
+    if (gap_at_q[k] <= gap_tolerance || gap <= gap_tolerance) EXPECT_EQ(gap_at_q[k], gap);
+    pairs += expected[k].j >= 0;
+  }
+  // Both kinds of rows are met.
+  EXPECT_GT(pairs, 10u);
+  EXPECT_LT(pairs, out.size());
+}
+
+TEST(NearbyRows, RowsWithinTheReachInTheScansOrder) {
+  for (const bool per_particle : {false, true}) {
+    NearbyRowsFluid fluid = nearby_rows_fluid(400, per_particle ? 3 : 4);
+    NeighborList list(1.0, 0.4);
+    list.build(fluid.particles.position, fluid.box);
+    NearbyRows rows;
+    std::vector<Vec3> q = fluid.particles.position;
+    expect_nearby_rows(fluid, rows, q.data(), list, per_particle);
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-0.05, 0.05);
+    for (Vec3& x : q) x += Vec3{u(rng), u(rng), u(rng)};
+    expect_nearby_rows(fluid, rows, q.data(), list, per_particle);
+  }
+}
+
+}  // namespace
+}  // namespace deli
