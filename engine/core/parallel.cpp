@@ -5,6 +5,18 @@
 
 namespace deli {
 
+namespace {
+std::size_t cheap_minimum = 16384;
+}  // namespace
+
+std::size_t cheap_loop_minimum() {
+  return cheap_minimum;
+}
+
+void set_cheap_loop_minimum(std::size_t n) {
+  cheap_minimum = n;
+}
+
 int thread_count() {
 #ifdef _OPENMP
   return std::max(1, omp_get_max_threads());

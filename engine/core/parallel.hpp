@@ -17,13 +17,29 @@ int thread_count();
 // n >= 1. Throws std::invalid_argument in a build without OpenMP when n > 1.
 void set_thread_count(int n);
 
-// Below this many items a loop runs on the calling thread alone: starting a parallel region
-// costs microseconds, more than a thousand cheap items.
+// Below this many items a loop of substantial items (a particle's pairs or cell scan) runs
+// on the calling thread alone: starting a parallel region costs microseconds.
 inline constexpr std::size_t kParallelMinimum = 1024;
 
-// How many chunks a loop over n items is cut into: the thread count, or 1 for short loops.
+// How many chunks a loop over n substantial items is cut into: the thread count, or 1 for
+// short loops.
 inline int chunks_for(std::size_t n) {
   return n < kParallelMinimum ? 1 : thread_count();
+}
+
+// Loops whose items are a few arithmetic operations each (a particle's kick, drift or
+// displacement test, a row's gap) are split only from this many items on (16384 unless set):
+// a parallel region's start and end cost as much as thousands of such items. Split from 1024
+// items, the hard-sphere fluid (4000 spheres, GVI, about twenty such loops a step) ran on 2
+// threads at 0.35x of one thread's speed (OMP_WAIT_POLICY=passive), 0.66x (active), on an
+// idle 2-core machine. The split, like every split here, depends on n alone.
+std::size_t cheap_loop_minimum();
+// For tests, which run the split paths of these loops on small systems.
+void set_cheap_loop_minimum(std::size_t n);
+
+// Chunks for a loop over n cheap items: the thread count, or 1 below cheap_loop_minimum().
+inline int chunks_for_cheap(std::size_t n) {
+  return n < cheap_loop_minimum() ? 1 : thread_count();
 }
 
 // Chunks for a loop over `items` items of uneven size holding `work` units in all (a
@@ -75,11 +91,11 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
   }
 }
 
-// body(i) for every i in [0, n), items independent of each other: the same result on any
-// number of threads.
+// body(i) for every i in [0, n), cheap items independent of each other: the same result on
+// any number of threads.
 template <class Body>
 void parallel_for(std::size_t n, Body&& body) {
-  for_each_chunk(n, chunks_for(n), [&](int, std::size_t begin, std::size_t end) {
+  for_each_chunk(n, chunks_for_cheap(n), [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) body(i);
   });
 }
@@ -89,7 +105,7 @@ void parallel_for(std::size_t n, Body&& body) {
 // the joins are made in order on the calling thread. One chunk: the serial loop itself.
 template <class Test, class Join>
 void filter_in_order(std::size_t n, std::vector<char>& passed, Test&& test, Join&& join) {
-  if (chunks_for(n) == 1) {
+  if (chunks_for_cheap(n) == 1) {
     for (std::size_t k = 0; k < n; ++k) {
       if (test(k)) join(k);
     }
@@ -108,7 +124,7 @@ void filter_in_order(std::size_t n, std::vector<char>& passed, Test&& test, Join
 // passes it over, so the result is the serial loop's on any number of threads.
 template <class Term>
 double ordered_max(std::size_t n, double start, Term&& term) {
-  const int chunks = chunks_for(n);
+  const int chunks = chunks_for_cheap(n);
   if (chunks == 1) {
     double m = start;
     for (std::size_t i = 0; i < n; ++i) m = std::max(m, term(i));
@@ -130,7 +146,7 @@ double ordered_max(std::size_t n, double start, Term&& term) {
 // sum bit for bit; more chunks regroup the additions (round-off, fixed per thread count).
 template <class T, class Term>
 T ordered_sum(std::size_t n, Term&& term) {
-  const int chunks = chunks_for(n);
+  const int chunks = chunks_for_cheap(n);
   std::vector<T> partial(static_cast<std::size_t>(chunks));
   for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
     T sum{};

@@ -612,7 +612,7 @@ void ConstrainedIntegrator::record_geometry(const System& system,
     // Per chunk of candidates, each bounded by its own running minimum: a row beyond that
     // bound is beyond the overall minimum too, and every gap below it is evaluated exactly,
     // so the minimum is the serial loop's on any number of threads.
-    const int chunks = chunks_for(candidates.size());
+    const int chunks = chunks_for_cheap(candidates.size());
     std::vector<double> chunk_gap(static_cast<std::size_t>(chunks), gap);
     for_each_chunk(candidates.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
       double smallest = chunk_gap[static_cast<std::size_t>(c)];

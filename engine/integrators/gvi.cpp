@@ -130,7 +130,7 @@ void Gvi::start_step(System& system) {
     // test, particle by particle), counted per chunk.
     const NeighborList& list = engine_.neighbors();
     const bool listed = list.built_for(n);
-    const int chunks = chunks_for(n);
+    const int chunks = chunks_for_cheap(n);
     std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
     beyond.assign(static_cast<std::size_t>(chunks), 0);
     for_each_chunk(n, chunks, [&, h, listed](int c, std::size_t begin, std::size_t end) {
@@ -241,7 +241,7 @@ bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32
     return true;
   }
   // Without a branch per particle (none is expected to fail): a count of failures.
-  const int chunks = chunks_for(x.size());
+  const int chunks = chunks_for_cheap(x.size());
   std::vector<std::size_t> outgrown(static_cast<std::size_t>(chunks), 0);
   for_each_chunk(x.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
     std::size_t count = 0;
@@ -281,7 +281,7 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   double* reach = ws_.particle_reach.data();
   double* limit2 = ws_.reach_limit2.data();
   // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk.
-  for_each_chunk(n, chunks_for(n), [=](int, std::size_t begin, std::size_t end) {
+  for_each_chunk(n, chunks_for_cheap(n), [=](int, std::size_t begin, std::size_t end) {
     const auto length = static_cast<Eigen::Index>(end - begin);
     Eigen::Map<Eigen::ArrayXd> out(reach + begin, length), out_limit2(limit2 + begin, length);
     const Eigen::Map<const Eigen::ArrayXd> in(moved2 + begin, length);
@@ -442,7 +442,7 @@ void Gvi::displaced(const Particles& P) {
     return;
   }
   // ordered_max's chunks, each also counting the particles beyond their reach.
-  const int chunks = chunks_for(n);
+  const int chunks = chunks_for_cheap(n);
   std::vector<double>& largest2 = ws_.chunk_largest2;
   std::vector<std::size_t>& outgrown = ws_.chunk_outgrown;
   largest2.assign(static_cast<std::size_t>(chunks), 0.0);
@@ -551,7 +551,7 @@ void Gvi::update_positions(System& system) {
       // the serial order of the overlapping rows on any number of threads.
       const std::vector<Constraint>& candidates =
           candidates_for(system, ws_.x, ws_.x_largest2, true);
-      const int chunks = chunks_for(candidates.size());
+      const int chunks = chunks_for_cheap(candidates.size());
       ws_.candidate_passed.resize(candidates.size());
       std::vector<double> chunk_smallest(static_cast<std::size_t>(chunks),
                                          std::numeric_limits<double>::infinity());

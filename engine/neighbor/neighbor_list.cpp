@@ -390,7 +390,7 @@ bool NeighborList::needs_rebuild(const std::vector<Vec3>& position) const {
   // the particles beyond, per chunk, in a local array).
   const Vec3* now = position.data();
   constexpr int kMostChunks = 64;
-  const int chunks = std::min(chunks_for(position.size()), kMostChunks);
+  const int chunks = std::min(chunks_for_cheap(position.size()), kMostChunks);
   std::array<std::size_t, kMostChunks> beyond{};
   for_each_chunk(position.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
     std::size_t count = 0;
