@@ -51,7 +51,8 @@ for name in ${@:-harmonic rigid slit spheres}; do
   fi
   steps=${STEPS:-$(sed -n 's/^steps = //p' "$input" | tail -1)}
   echo "== $name: ${inputs[$name]} ($steps steps)"
-  out=$(cd "$dir" && "$deli" run input.toml | sed -n '/^loop time/,$p')
+  # One thread, as the peers get: deli's default is every core.
+  out=$(cd "$dir" && "$deli" run input.toml --threads 1 | sed -n '/^loop time/,$p')
   if [[ ${TABLES:-0} == 1 ]]; then echo "$out"; else echo "$out" | head -1; fi
   d=$(echo "$out" | rate)
   case $name in
