@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "crosscheck/single_process_mpi.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/source_tree.hpp"
 #include "support/test_systems.hpp"
 
@@ -31,8 +32,8 @@ std::string write_hybrid_data() {
   text << in.rdbuf();
   std::string data = text.str();
   data.insert(data.find("Atoms # bond"), kHybridCoeffs);
-  const std::string path =
-      ::testing::TempDir() + "/deli_hybrid_bond_coeffs_" + std::to_string(::getpid()) + ".data";
+  const std::string path = deli::testing::process_temp_dir() + "/deli_hybrid_bond_coeffs_" +
+                           std::to_string(::getpid()) + ".data";
   std::ofstream(path, std::ios::binary) << data;
   return path;
 }

@@ -9,6 +9,7 @@
 
 #include "crosscheck/single_process_mpi.hpp"
 #include "input/lammps_data.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 #include "support/source_tree.hpp"
 #include "support/test_systems.hpp"
@@ -53,8 +54,8 @@ class LammpsWrittenData : public ::testing::TestWithParam<bool> {};
 TEST_P(LammpsWrittenData, RunsWithItsCoefficients) {
   const RunInput reference = load_run_input(kSource + "/inputs/lj_chains/melt.toml");
   const double deli_reference = testing::evaluate(reference).evaluation.potential;
-  const std::string data =
-      ::testing::TempDir() + "/written_by_lammps_" + (GetParam() ? "pair_ij" : "pair") + ".data";
+  const std::string data = deli::testing::process_temp_dir() + "/written_by_lammps_" +
+                           (GetParam() ? "pair_ij" : "pair") + ".data";
   const double lammps = lammps_write_data(reference.system, data, GetParam());
   {
     std::ifstream file(data);
@@ -110,7 +111,7 @@ INSTANTIATE_TEST_SUITE_P(PairAndPairIJ, LammpsWrittenData, ::testing::Values(fal
 // Coefficients of another style than the input names are refused, naming the section.
 TEST(LammpsWrittenDataStyles, CoefficientsOfAnotherStyleAreRefused) {
   const RunInput reference = load_run_input(kSource + "/inputs/lj_chains/melt.toml");
-  const std::string data = ::testing::TempDir() + "/written_by_lammps_fene.data";
+  const std::string data = deli::testing::process_temp_dir() + "/written_by_lammps_fene.data";
   lammps_write_data(reference.system, data, false);
   std::string text = input_for(data, "");
   text.replace(text.find("style = \"fene\""), 14, "style = \"harmonic\"");

@@ -8,6 +8,7 @@
 
 #include "crosscheck/single_process_mpi.hpp"
 #include "input/lammps_data.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/test_systems.hpp"
 
 namespace deli {
@@ -40,7 +41,7 @@ TEST(Mixing, DefaultIsLammpsGeometric) {
   testing::jiggle(input.system.particles, 0.1, 5);
   const double deli = testing::evaluate(input).evaluation.potential;
   const double lammps =
-      lammps_potential_energy(input.system, ::testing::TempDir() + "/mixture.data");
+      lammps_potential_energy(input.system, deli::testing::process_temp_dir() + "/mixture.data");
   std::printf("deli %.12g, LAMMPS %.12g\n", deli, lammps);
   EXPECT_NEAR(deli, lammps, 1e-10 * std::abs(lammps));
   // Lorentz-Berthelot stays selectable, and differs.

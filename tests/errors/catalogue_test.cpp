@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 
 namespace deli {
@@ -899,7 +900,7 @@ class Catalogue : public ::testing::TestWithParam<Case> {};
 
 TEST_P(Catalogue, ExitStatusAndMessage) {
   const Case& c = GetParam();
-  const std::string dir = ::testing::TempDir() + "/catalogue/" + c.name;
+  const std::string dir = deli::testing::process_temp_dir() + "/catalogue/" + c.name;
   ASSERT_EQ(testing::run_shell("rm -rf " + dir + " && mkdir -p " + dir + "/full").status, 0);
   if (c.tmpfs) {
     std::string why;

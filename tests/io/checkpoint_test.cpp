@@ -19,6 +19,7 @@
 #include "integrators/gvi.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 #include "support/short_runs.hpp"
 
@@ -34,8 +35,8 @@ void expect_restart_identical(const std::string& input_path, int first, int seco
   const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
   std::string name = std::string(test->test_suite_name()) + "_" + test->name();
   std::replace(name.begin(), name.end(), '/', '_');  // parameterised names hold '/'
-  const std::string file =
-      ::testing::TempDir() + "/restart_" + name + "_" + std::to_string(getpid()) + ".h5";
+  const std::string file = deli::testing::process_temp_dir() + "/restart_" + name + "_" +
+                           std::to_string(getpid()) + ".h5";
   RunInput straight = load_run_input(input_path);
   auto a = integrator_for(straight);
   run(straight.system, *a, first + second, 0, {});
@@ -99,8 +100,8 @@ INSTANTIATE_TEST_SUITE_P(ParticleDrop, BaselineRestart,
 // A thermostat's random numbers are a function of (seed, step, atom): the checkpoint
 // carries the seed and the bath's energy, the step gives the rest.
 std::string thermostatted_input(const std::string& integrator, const std::string& thermostat) {
-  const std::string path = ::testing::TempDir() + "/thermostatted_" + thermostat + "_" +
-                           std::to_string(getpid()) + ".toml";
+  const std::string path = deli::testing::process_temp_dir() + "/thermostatted_" + thermostat +
+                           "_" + std::to_string(getpid()) + ".toml";
   std::ofstream(path)
       << "[system]\n[system.chains]\ncount = 20\nlength = 5\ndensity = 0.6\nbond_length = 1.0\n"
          "min_distance = 0.95\nseed = 4\n[velocities]\ntemperature = 1.0\nseed = 3\n"
@@ -124,7 +125,8 @@ TEST(Checkpoint, CsvrVerletRestartIsBitwiseIdentical) {
 }
 
 TEST(Checkpoint, CheckpointWithoutThermostatIsRefusedByThermostattedInput) {
-  const std::string file = ::testing::TempDir() + "/nve_" + std::to_string(getpid()) + ".h5";
+  const std::string file =
+      deli::testing::process_temp_dir() + "/nve_" + std::to_string(getpid()) + ".h5";
   RunInput nve = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   auto a = integrator_for(nve);
   run(nve.system, *a, 5, 0, {});
@@ -144,7 +146,8 @@ TEST(Checkpoint, LinearizedConstraintRestartIsBitwiseIdentical) {
 }
 
 TEST(Checkpoint, DamagedCheckpointIsRefused) {
-  const std::string dir = ::testing::TempDir() + "/damaged_" + std::to_string(getpid());
+  const std::string dir =
+      deli::testing::process_temp_dir() + "/damaged_" + std::to_string(getpid());
   std::filesystem::create_directories(dir);
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   write_checkpoint(dir + "/good.h5", input.system, input.system.particles.position);
@@ -183,7 +186,8 @@ bool same_checkpoint(const Checkpoint& a, const Checkpoint& b) {
 // flips restarted with other values (issue 14).
 TEST(Checkpoint, EverySingleByteFlipIsRefusedOrHarmless) {
   // A folder of its own: ctest runs other cases in parallel.
-  const std::string dir = ::testing::TempDir() + "/byte_flips_" + std::to_string(getpid());
+  const std::string dir =
+      deli::testing::process_temp_dir() + "/byte_flips_" + std::to_string(getpid());
   std::filesystem::create_directories(dir);
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/paper/pogo_stick.toml");
   auto integrator = make_integrator(input);
@@ -252,7 +256,7 @@ std::string long_melt(const std::string& dir, const std::string& name, long long
 TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
   for (const std::string signal : {"INT", "TERM"}) {
     const std::string dir =
-        ::testing::TempDir() + "/signal_" + signal + "_" + std::to_string(getpid());
+        deli::testing::process_temp_dir() + "/signal_" + signal + "_" + std::to_string(getpid());
     std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
     const std::string input = long_melt(dir, "long", 100000000);
     const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + input + " > " +
@@ -277,7 +281,7 @@ TEST(Checkpoint, SigintAndSigtermLeaveACheckpointThatRestarts) {
 // open (h5py, MDAnalysis) and hold every frame flushed before the kill: at least every
 // frame whose thermo row reached the CSV (rows are written after their frames).
 TEST(Checkpoint, SigkillLeavesAReadableTrajectory) {
-  const std::string dir = ::testing::TempDir() + "/killed_" + std::to_string(getpid());
+  const std::string dir = deli::testing::process_temp_dir() + "/killed_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string input = dir + "/long.toml";
   std::ofstream(input)
@@ -328,7 +332,7 @@ std::string resting_point(const std::string& dir) {
 // The signal is checked inside the step: the run stops (status 3, the step named) instead of
 // ignoring SIGINT until the step ends, which it never does.
 TEST(Checkpoint, SignalStopsAStepThatDoesNotEnd) {
-  const std::string dir = ::testing::TempDir() + "/zeno_" + std::to_string(getpid());
+  const std::string dir = deli::testing::process_temp_dir() + "/zeno_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " + resting_point(dir) +
                               " > " + dir + "/run.log 2>&1 & pid=$!; " +
@@ -345,7 +349,8 @@ TEST(Checkpoint, SignalStopsAStepThatDoesNotEnd) {
 // while the process is stopped (SIGSTOP), so both are pending when it continues: sent to a
 // running process, the first could be honoured, step and checkpoint, before the second came.
 TEST(Checkpoint, SecondSignalStopsAtOnce) {
-  const std::string dir = ::testing::TempDir() + "/second_signal_" + std::to_string(getpid());
+  const std::string dir =
+      deli::testing::process_temp_dir() + "/second_signal_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
   const std::string command = "sh -c '" + std::string(DELI_BINARY) + " run " +
                               long_melt(dir, "long", 100000000) + " > " + dir +
@@ -361,7 +366,8 @@ TEST(Checkpoint, SecondSignalStopsAtOnce) {
 // Without a configured checkpoint the interrupt's checkpoint goes to the working directory
 // (the input's may be read-only), and the message says where.
 TEST(Checkpoint, InterruptCheckpointGoesToTheWorkingDirectory) {
-  const std::string dir = ::testing::TempDir() + "/interrupt_cwd_" + std::to_string(getpid());
+  const std::string dir =
+      deli::testing::process_temp_dir() + "/interrupt_cwd_" + std::to_string(getpid());
   std::system(("rm -rf " + dir + " && mkdir -p " + dir + "/input " + dir + "/work").c_str());
   const std::string input = dir + "/input/plain.toml";
   std::ofstream(input) << "[system]\ndata = \"" DELI_SOURCE_DIR

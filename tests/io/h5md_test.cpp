@@ -14,6 +14,7 @@
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/run_loop.hpp"
 #include "support/file_contents.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 #include "text/dump_writer.hpp"
 
@@ -47,7 +48,7 @@ class Expected final : public Observer {
 };
 
 TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   write_lammps_data(input.system, dir + "/melt.data", "bond", "h5md test");
   H5mdWriter writer({dir + "/melt.h5", 25, true, true, 4, true}, input.system, input.source_text,
@@ -68,7 +69,7 @@ TEST(H5md, MDAnalysisAndH5pyReadWhatDeliHeld) {
 // frame; an observable that first appears at a later frame keeps a step and time of its
 // own. A continuation cuts both back and extends them again.
 TEST(H5md, SharedAndOwnStepAndTimeAcrossAContinuation) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   System& system = input.system;
   const std::vector<Vec3> forces(system.particles.size());
@@ -111,7 +112,7 @@ TEST(H5md, SharedAndOwnStepAndTimeAcrossAContinuation) {
 
 // The plot tool turns the same kind of file into a PNG.
 TEST(H5md, PlotToolWritesAPng) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   H5mdWriter writer({dir + "/plot.h5", 10, false, false, 0}, input.system, input.source_text, "t");
   VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
@@ -128,7 +129,7 @@ TEST(H5md, PlotToolWritesAPng) {
 
 // `deli info` on the same kind of file names what is in it.
 TEST(H5md, InfoSummarisesTheFile) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   H5mdWriter writer({dir + "/info.h5", 10, true, false, 0}, input.system, input.source_text, "t");
   VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);
@@ -174,7 +175,8 @@ class Conformance : public ::testing::TestWithParam<ConformanceCase> {};
 TEST_P(Conformance, DeliRunWritesH5md11AndExtendedXyz) {
   const ConformanceCase& c = GetParam();
   std::string name = c.input.substr(c.input.rfind('/') + 1);
-  const std::string dir = ::testing::TempDir() + "/conformance_" + name.substr(0, name.find('.'));
+  const std::string dir =
+      deli::testing::process_temp_dir() + "/conformance_" + name.substr(0, name.find('.'));
   ASSERT_EQ(testing::run_shell("rm -rf " + dir + " && mkdir -p " + dir).status, 0);
   testing::ShellResult r =
       testing::run_shell(std::string(DELI_BINARY) + " run " + short_run(c.input, dir, 40));
@@ -224,7 +226,7 @@ namespace {
 // The LAMMPS dump layout, read back: frames, atom count, and coordinates to the 10 digits
 // written.
 TEST(Dump, LammpsCustomLayoutReadsBack) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   RunInput input = load_run_input(std::string(DELI_SOURCE_DIR) + "/inputs/lj_chains/melt.toml");
   DumpWriter dump(dir + "/melt.lammpstrj", DumpWriter::Format::lammps, 20);
   VelocityVerlet verlet(*input.force_field, input.skin, input.timestep);

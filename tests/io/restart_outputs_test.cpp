@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "support/file_contents.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 
 namespace deli {
@@ -38,7 +39,7 @@ std::string slit_input(const std::string& dir, const std::string& name, int step
 }
 
 TEST(Restart, OutputsContinueBitForBit) {
-  const std::string root = ::testing::TempDir() + "/restart_outputs";
+  const std::string root = deli::testing::process_temp_dir() + "/restart_outputs";
   std::string log;
   ASSERT_EQ(
       shell("rm -rf " + root + " && mkdir -p " + root + "/straight " + root + "/stopped", log), 0);
@@ -129,7 +130,7 @@ class RestartFromAnyStep : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
   const std::string name = GetParam().substr(GetParam().rfind('/') + 1);
-  const std::string root = ::testing::TempDir() + "/restart_any_" + name;
+  const std::string root = deli::testing::process_temp_dir() + "/restart_any_" + name;
   std::string log;
   ASSERT_EQ(
       shell("rm -rf " + root + " && mkdir -p " + root + "/straight " + root + "/stopped", log), 0);

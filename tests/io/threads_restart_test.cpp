@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "support/file_contents.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 #include "support/short_runs.hpp"
 
@@ -60,7 +61,8 @@ std::vector<std::vector<double>> numbers(const std::string& csv) {
 }
 
 TEST(ThreadsRun, TwoThreadsRepeatAndRestartBitForBit) {
-  const std::string root = ::testing::TempDir() + "/threads_restart_" + std::to_string(getpid());
+  const std::string root =
+      deli::testing::process_temp_dir() + "/threads_restart_" + std::to_string(getpid());
   // Under the sanitizers (support/short_runs.hpp) 40 steps, stopped at 30: the same code
   // (threaded loops, checkpoint, restart) on a third of the steps.
   const int steps = testing::steps_or_prefix(120, 40), stop = testing::steps_or_prefix(90, 30);

@@ -13,6 +13,7 @@
 #include "simulation/thermo.hpp"
 #include "support/atoms_input.hpp"
 #include "support/energy_trend.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/short_runs.hpp"
 #include "support/statistic.hpp"
 
@@ -335,7 +336,7 @@ TEST(Gvi, HardSphereGasKeepsLinearMomentum) {
       "[velocities]\ntemperature = 1.0\nseed = 3\n[forcefield.pair]\nstyle = \"none\"\n"
       "[constraints]\nhard_spheres = { diameter = 1.0 }\n[neighbor]\nskin = 0.5\n" +
           with_timestep(0.005),
-      ::testing::TempDir() + "/gas.toml");
+      deli::testing::process_temp_dir() + "/gas.toml");
   // A small drift to see it preserved, not just zero.
   for (Vec3& v : input.system.particles.velocity) v += Vec3{0.1, -0.05, 0.02};
   GviRun run(std::move(input));

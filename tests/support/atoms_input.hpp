@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "input/run_input.hpp"
+#include "support/process_temp_dir.hpp"
 
 namespace deli::testing {
 
@@ -19,7 +20,7 @@ struct Atom {
 inline RunInput input_with_atoms(const std::string& name, const std::vector<Atom>& atoms,
                                  const std::string& boundary, Vec3 lo, Vec3 hi,
                                  const std::string& rest) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   int types = 1;
   for (const Atom& a : atoms) types = std::max(types, a.type);
   {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "support/file_contents.hpp"
+#include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
 
 namespace {
@@ -51,7 +52,7 @@ TEST(Cli, UnknownCommand) {
 // A short run of a real input: thermo table on stdout, CSV written, no progress line
 // when the output is not a terminal.
 TEST(Cli, RunsAnInputAndWritesThermo) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   const std::string input = dir + "/short.toml";
   std::ofstream(input) << "[system]\ndata = \"" DELI_SOURCE_DIR
                           "/inputs/lj_liquid/lj_4000.data\"\n"
@@ -86,7 +87,7 @@ namespace {
 // `deli info` carry the same count. Before the count, deli reported 0.741 (3N - 3, and
 // the projection onto the rods removed their share after the draw).
 TEST(Cli, ConstrainedRunStartsAtItsTemperatureWithItsDegreesOfFreedom) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   const std::string input = dir + "/rigid4.toml";
   std::ofstream(input) << "[system]\n[system.chains]\ncount = 25\nlength = 4\ndensity = 0.5\n"
                           "bond_length = 1.0\nmin_distance = 0.95\nseed = 3\n"
@@ -125,7 +126,7 @@ TEST(Cli, ExitStatusTellsTheKindOfOutcome) {
   EXPECT_EQ(run_deli("").status, 2);                       // usage
   EXPECT_EQ(run_deli("rnu").status, 2);                    // unknown command
   EXPECT_EQ(run_deli("run /nonexistent.toml").status, 1);  // input error
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = deli::testing::process_temp_dir();
   std::ofstream(dir + "/blowup.toml")
       << "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]\n"
          "[velocities]\ntemperature = 1.0\nseed = 1\n[forcefield.pair]\nstyle = \"lj/cut\"\n"
@@ -140,7 +141,7 @@ TEST(Cli, ExitStatusTellsTheKindOfOutcome) {
 // every 7 steps, the run ends at 10), the final state as a data file that deli reads back,
 // and a log holding what the terminal showed.
 TEST(Cli, RunEndsWithCheckpointFinalDataAndLog) {
-  const std::string dir = ::testing::TempDir() + "/run_end";
+  const std::string dir = deli::testing::process_temp_dir() + "/run_end";
   ASSERT_EQ(deli::testing::run_shell("rm -rf " + dir + " && mkdir -p " + dir).status, 0);
   const std::string system =
       "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.8442\ncells = [3, 3, 3]\n"
