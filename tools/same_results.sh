@@ -31,8 +31,14 @@ for spec in "${cases[@]}"; do
     awk -v cap="$steps" '
       /^\[/ { section = $0 }
       section == "[run]" && /^steps *=/ && cap != "" { split($0, f, "="); if (f[2] + 0 > cap) $0 = "steps = " cap }
-      section == "[output]" && /^thermo *=/ { sub(/file *= *"[^"]*"/, "file = \"thermo.csv\"") }
-      { print }' "$top/$input" > "$dir/input.toml"
+      section == "[output]" && /^thermo *=/ {
+        if ($0 ~ /file *=/) sub(/file *= *"[^"]*"/, "file = \"thermo.csv\"")
+        else sub(/} *$/, ", file = \"thermo.csv\" }")
+        has_thermo = 1
+      }
+      { print }
+      # No thermo table at all: one every 100 steps, so that there is something to compare.
+      END { if (!has_thermo) print "[output.thermo]\nevery = 100\nfile = \"thermo.csv\"" }' "$top/$input" > "$dir/input.toml"
     deli=$a
     [[ $side == b ]] && deli=$b
     (cd "$dir" && "$deli" run input.toml > run.log 2>&1) || echo "$name: run $side failed"
