@@ -169,9 +169,13 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   // their periodic images inside it, remembering by how many periods each was moved.
   std::vector<Vec3>& inside = inside_;
   std::vector<std::array<int, 3>>& moved = moved_;
-  inside.assign(position.begin(), position.end());
-  moved.assign(static_cast<std::size_t>(n), {0, 0, 0});
-  for (std::int32_t i = 0; i < n; ++i) box.wrap(inside[i], moved[i]);
+  inside.resize(static_cast<std::size_t>(n));
+  moved.resize(static_cast<std::size_t>(n));
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
+    inside[i] = position[i];
+    moved[i] = {0, 0, 0};
+    box.wrap(inside[i], moved[i]);
+  });
 
   const Grid grid = make_grid(inside, box);
   if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
@@ -182,7 +186,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   std::vector<std::size_t>& cell_start = cell_start_;
   cell_of.resize(static_cast<std::size_t>(n));
   cell_start.assign(static_cast<std::size_t>(cells) + 1, 0);
-  for (std::int32_t i = 0; i < n; ++i) {
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
     int k[3];
     for (int a = 0; a < 3; ++a) {
       // Non-negative by construction (wrapped, or above the open-axis minimum): truncation
@@ -191,8 +195,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
                         0, grid.count[a] - 1);
     }
     cell_of[i] = (k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0];
-    ++cell_start[cell_of[i] + 1];
-  }
+  });
+  for (std::int32_t i = 0; i < n; ++i) ++cell_start[cell_of[i] + 1];
   std::partial_sum(cell_start.begin(), cell_start.end(), cell_start.begin());
   // Particles by slot (cell order), with their wrapped positions, periods moved and cells.
   std::vector<std::int32_t>& member = member_;
