@@ -73,12 +73,12 @@ void ForceEngine::forces_at(System& system, const std::vector<Vec3>& x,
 std::optional<double> ForceEngine::verlet_shadow_energy(const System& system, double h) const {
   if (!last_.tallied) return std::nullopt;
   const Particles& p = system.particles;
-  double kinetic = 0, force_term = 0, curvature = 0;
+  double curvature = 0;
   if (!force_field_.pair_curvature(system, neighbors_, p.velocity, curvature)) return std::nullopt;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    kinetic += 0.5 * p.mass[i] * norm2(p.velocity[i]);
-    force_term += norm2(force_[i]) / p.mass[i];
-  }
+  const double kinetic = ordered_sum<double>(
+      p.size(), [&](std::size_t i) { return 0.5 * p.mass[i] * norm2(p.velocity[i]); });
+  const double force_term =
+      ordered_sum<double>(p.size(), [&](std::size_t i) { return norm2(force_[i]) / p.mass[i]; });
   return kinetic + last_.potential - h * h / 24.0 * force_term + h * h / 12.0 * curvature;
 }
 

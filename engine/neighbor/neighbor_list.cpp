@@ -167,18 +167,26 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
 
   // Particles may sit up to half a skin outside the box between builds: bin and measure
   // their periodic images inside it, remembering by how many periods each was moved.
-  std::vector<Vec3> inside(position);
-  std::vector<std::array<int, 3>> moved(static_cast<std::size_t>(n), {0, 0, 0});
-  for (std::int32_t i = 0; i < n; ++i) box.wrap(inside[i], moved[i]);
+  std::vector<Vec3>& inside = inside_;
+  std::vector<std::array<int, 3>>& moved = moved_;
+  inside.resize(static_cast<std::size_t>(n));
+  moved.resize(static_cast<std::size_t>(n));
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
+    inside[i] = position[i];
+    moved[i] = {0, 0, 0};
+    box.wrap(inside[i], moved[i]);
+  });
 
   const Grid grid = make_grid(inside, box);
   if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
   const int cells = grid.count[0] * grid.count[1] * grid.count[2];
 
   // Counting sort of particles into cells; within a cell, ascending index.
-  std::vector<std::int32_t> cell_of(static_cast<std::size_t>(n));
-  std::vector<std::size_t> cell_start(static_cast<std::size_t>(cells) + 1, 0);
-  for (std::int32_t i = 0; i < n; ++i) {
+  std::vector<std::int32_t>& cell_of = cell_of_;
+  std::vector<std::size_t>& cell_start = cell_start_;
+  cell_of.resize(static_cast<std::size_t>(n));
+  cell_start.assign(static_cast<std::size_t>(cells) + 1, 0);
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
     int k[3];
     for (int a = 0; a < 3; ++a) {
       // Non-negative by construction (wrapped, or above the open-axis minimum): truncation
@@ -187,17 +195,23 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
                         0, grid.count[a] - 1);
     }
     cell_of[i] = (k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0];
-    ++cell_start[cell_of[i] + 1];
-  }
+  });
+  for (std::int32_t i = 0; i < n; ++i) ++cell_start[cell_of[i] + 1];
   std::partial_sum(cell_start.begin(), cell_start.end(), cell_start.begin());
   // Particles by slot (cell order), with their wrapped positions, periods moved and cells.
-  std::vector<std::int32_t> member(static_cast<std::size_t>(n));
-  std::vector<Vec3> member_position(static_cast<std::size_t>(n));
-  std::vector<std::array<int, 3>> member_moved(static_cast<std::size_t>(n));
-  std::vector<std::int32_t> member_cell(static_cast<std::size_t>(n));
-  std::vector<std::size_t> slot_of(static_cast<std::size_t>(n));
+  std::vector<std::int32_t>& member = member_;
+  std::vector<Vec3>& member_position = member_position_;
+  std::vector<std::array<int, 3>>& member_moved = member_moved_;
+  std::vector<std::int32_t>& member_cell = member_cell_;
+  std::vector<std::size_t>& slot_of = slot_of_;
+  member.resize(static_cast<std::size_t>(n));
+  member_position.resize(static_cast<std::size_t>(n));
+  member_moved.resize(static_cast<std::size_t>(n));
+  member_cell.resize(static_cast<std::size_t>(n));
+  slot_of.resize(static_cast<std::size_t>(n));
   {
-    std::vector<std::size_t> fill(cell_start.begin(), cell_start.end() - 1);
+    std::vector<std::size_t>& fill = cell_fill_;
+    fill.assign(cell_start.begin(), cell_start.end() - 1);
     for (std::int32_t i = 0; i < n; ++i) {
       const std::size_t s = fill[cell_of[i]]++;
       slot_of[i] = s;
@@ -235,6 +249,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   const int chunks = chunks_for(static_cast<std::size_t>(n));
   chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
   chunk_codes_.resize(static_cast<std::size_t>(chunks));
+  chunk_hit_slots_.resize(static_cast<std::size_t>(chunks));
+  chunk_hit_codes_.resize(static_cast<std::size_t>(chunks));
   std::vector<char> chunk_coded(static_cast<std::size_t>(chunks), 1);
   // Each chunk's lists are moved to its thread's stack for the scan and back after it.
   // Appended to in place, the vector objects (adjacent in chunk_neighbors_, several to a
@@ -258,8 +274,10 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     // Candidates within reach, as member slots and shift codes. The scan appends
     // every candidate and advances only for hits: no branch on the distance test,
     // which the predictor would lose about a third of the time.
-    std::vector<std::int32_t> hit_slot(static_cast<std::size_t>(n) + 1);
-    std::vector<std::uint8_t> hit_code(static_cast<std::size_t>(n) + 1);
+    std::vector<std::int32_t> hit_slot = std::move(chunk_hit_slots_[k]);
+    std::vector<std::uint8_t> hit_code = std::move(chunk_hit_codes_[k]);
+    hit_slot.resize(static_cast<std::size_t>(n) + 1);
+    hit_code.resize(static_cast<std::size_t>(n) + 1);
     for (std::size_t slot = begin; slot < end; ++slot) {
       const std::int32_t i = member[slot];
       const Vec3 xi = at[slot];
@@ -309,6 +327,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     chunk_coded[k] = coded;
     chunk_neighbors_[k] = std::move(out);
     chunk_codes_[k] = std::move(out_codes);
+    chunk_hit_slots_[k] = std::move(hit_slot);
+    chunk_hit_codes_[k] = std::move(hit_code);
   };
   for_each_chunk(static_cast<std::size_t>(n), chunks, list_chunk);
   std::vector<std::size_t> chunk_start(static_cast<std::size_t>(chunks) + 1, 0);
@@ -350,15 +370,19 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   }
   neighbors_.resize(pairs);
   image_codes_.resize(coded ? pairs : 0);
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
-    const std::size_t s = slot_of[i];
-    const auto from = static_cast<std::ptrdiff_t>(slot_offsets_[s]);
-    const auto to = static_cast<std::ptrdiff_t>(slot_offsets_[s + 1]);
-    std::copy(slot_neighbors_.begin() + from, slot_neighbors_.begin() + to,
-              neighbors_.begin() + static_cast<std::ptrdiff_t>(offsets_[i]));
-    if (coded) {
-      std::copy(slot_codes_.begin() + from, slot_codes_.begin() + to,
-                image_codes_.begin() + static_cast<std::ptrdiff_t>(offsets_[i]));
+  // A particle's partners (some 40 on a liquid) are a substantial item: split as the scan,
+  // not from cheap_loop_minimum() on (the rigid melt's 4000 particles moved on one thread).
+  for_each_chunk(static_cast<std::size_t>(n), chunks, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t s = slot_of[i];
+      const auto from = static_cast<std::ptrdiff_t>(slot_offsets_[s]);
+      const auto to = static_cast<std::ptrdiff_t>(slot_offsets_[s + 1]);
+      std::copy(slot_neighbors_.begin() + from, slot_neighbors_.begin() + to,
+                neighbors_.begin() + static_cast<std::ptrdiff_t>(offsets_[i]));
+      if (coded) {
+        std::copy(slot_codes_.begin() + from, slot_codes_.begin() + to,
+                  image_codes_.begin() + static_cast<std::ptrdiff_t>(offsets_[i]));
+      }
     }
   });
   if (cell_order_) {

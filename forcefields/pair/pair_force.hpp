@@ -52,12 +52,31 @@ class PairForce final : public ForceTerm {
     return true;
   }
 
+  // On several threads each chunk of particles sums its listed pairs' terms, the chunk sums
+  // are added in chunk order, then the scaled pairs: a sum regrouped as the force loop's
+  // energy is (fixed per thread count); one chunk is the serial sum bit for bit. Serial, it
+  // was the whole of the LJ liquid 32000's output phase (a thermo step's shadow energy).
   bool pair_curvature(const System& system, const NeighborList& neighbors,
                       const std::vector<Vec3>& velocity, double& sum) const override {
-    for_each_hessian(system, neighbors, {},
-                     [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
-                       sum += block_curvature(block, velocity[i], velocity[j]);
-                     });
+    auto add_to = [&](double& to) {
+      return [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
+        to += block_curvature(block, velocity[i], velocity[j]);
+      };
+    };
+    const std::size_t n = neighbors.offsets().empty() ? 0 : neighbors.offsets().size() - 1;
+    const int chunks = chunks_for(n);
+    if (chunks == 1) {
+      for_each_hessian(system, neighbors, {}, add_to(sum));
+      return true;
+    }
+    std::vector<double> partial(static_cast<std::size_t>(chunks), 0.0);
+    for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      double chunk_sum = 0.0;
+      for_each_listed_hessian(system, neighbors, {}, begin, end, add_to(chunk_sum));
+      partial[static_cast<std::size_t>(c)] = chunk_sum;
+    });
+    for (const double p : partial) sum += p;
+    for_each_scaled_hessian(system, {}, add_to(sum));
     return true;
   }
 
@@ -97,32 +116,48 @@ class PairForce final : public ForceTerm {
   template <class Visit>
   void for_each_hessian(const System& system, const NeighborList& neighbors,
                         const std::vector<char>& mask, Visit&& visit) const {
-    const std::vector<Vec3>& x = system.particles.position;
-    const std::vector<int>& type = system.particles.type;
-    auto add = [&](std::int32_t i, std::int32_t j, double factor) {
-      const Vec3 d = system.box.minimum_image(x[i] - x[j]);
-      const double r2 = norm2(d);
-      const Params& p = table_[static_cast<std::size_t>(type[i] * type_count_ + type[j])];
-      if (r2 >= p.cutoff2) return;
-      double f_over_r, e;
-      Evaluator::evaluate(p, r2, f_over_r, e);
-      const Eigen::Matrix3d block =
-          factor * pair_hessian_block(d, r2, f_over_r, Evaluator::second_derivative(p, r2));
-      visit(i, j, block);
-    };
+    const std::size_t n = neighbors.offsets().empty() ? 0 : neighbors.offsets().size() - 1;
+    for_each_listed_hessian(system, neighbors, mask, 0, n, visit);
+    for_each_scaled_hessian(system, mask, visit);
+  }
+  // The listed pairs of particles begin..end-1, in list order.
+  template <class Visit>
+  void for_each_listed_hessian(const System& system, const NeighborList& neighbors,
+                               const std::vector<char>& mask, std::size_t begin, std::size_t end,
+                               Visit&& visit) const {
     const auto& list = neighbors.neighbors();
     const auto& offsets = neighbors.offsets();
-    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+    for (std::size_t i = begin; i < end; ++i) {
       for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
         const std::int32_t j = list[k];
         if (!mask.empty() && !mask[i] && !mask[j]) continue;
-        add(static_cast<std::int32_t>(i), j, 1.0);
+        visit_hessian(system, static_cast<std::int32_t>(i), j, 1.0, visit);
       }
     }
+  }
+  template <class Visit>
+  void for_each_scaled_hessian(const System& system, const std::vector<char>& mask,
+                               Visit&& visit) const {
     for (const ScaledPair& s : scaled_pairs_) {
       if (!mask.empty() && !mask[s.i] && !mask[s.j]) continue;
-      add(s.i, s.j, s.factor);
+      visit_hessian(system, s.i, s.j, s.factor, visit);
     }
+  }
+  // visit(i, j, block) with the pair's block scaled by `factor`, when the pair is in reach.
+  template <class Visit>
+  void visit_hessian(const System& system, std::int32_t i, std::int32_t j, double factor,
+                     Visit&& visit) const {
+    const std::vector<Vec3>& x = system.particles.position;
+    const std::vector<int>& type = system.particles.type;
+    const Vec3 d = system.box.minimum_image(x[i] - x[j]);
+    const double r2 = norm2(d);
+    const Params& p = table_[static_cast<std::size_t>(type[i] * type_count_ + type[j])];
+    if (r2 >= p.cutoff2) return;
+    double f_over_r, e;
+    Evaluator::evaluate(p, r2, f_over_r, e);
+    const Eigen::Matrix3d block =
+        factor * pair_hessian_block(d, r2, f_over_r, Evaluator::second_derivative(p, r2));
+    visit(i, j, block);
   }
 
   // The particles' positions and types and their listed partners, in the list's order:

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
@@ -203,6 +204,72 @@ TEST(Threads, NeighbourListIsTheSameListOnAnyThreadCount) {
   EXPECT_EQ(serial.offsets(), threaded.offsets());
   EXPECT_EQ(serial.image_codes(), threaded.image_codes());
   EXPECT_FALSE(serial.image_codes().empty());
+}
+
+// A list object rebuilt keeps its scratch arrays between builds: its list after other
+// positions, and after more and then fewer particles, is the list a fresh object builds.
+TEST(Threads, ARebuiltNeighbourListIsAFreshlyBuiltOne) {
+  const RunInput input =
+      load_run_input(DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000_harmonic.toml");
+  std::vector<Vec3> moved = input.system.particles.position;
+  std::vector<Vec3> fewer(moved.begin(), moved.begin() + 1500);
+  Particles jiggled = input.system.particles;
+  testing::jiggle(jiggled, 0.1, 13);
+  for (const int threads : {1, 2}) {
+    if (threads == 2 && !kThreaded) continue;
+    const ThreadCount count(threads);
+    NeighborList reused(2.5, 0.3);
+    for (const std::vector<Vec3>* positions : {&moved, &jiggled.position, &fewer}) {
+      reused.build(*positions, input.system.box);
+      NeighborList fresh(2.5, 0.3);
+      fresh.build(*positions, input.system.box);
+      EXPECT_EQ(reused.neighbors(), fresh.neighbors()) << positions->size() << " particles";
+      EXPECT_EQ(reused.offsets(), fresh.offsets());
+      EXPECT_EQ(reused.image_codes(), fresh.image_codes());
+    }
+  }
+}
+
+// v^T H v of the pair forces: on one thread the sum over pair_hessians' blocks in their
+// order, summed here (to round-off only: the pair styles' files are compiled for the native
+// instruction set and this file not, and Eigen's 3x3 products round with the packet
+// width); on two threads the same bits on every call, and the one-thread sum to round-off
+// (a regrouped sum of about 10^5 terms).
+TEST(Threads, PairCurvatureOnTwoThreadsRepeatsAndAgreesWithOneToRoundOff) {
+  const RunInput input = chain_melt();
+  NeighborList list(input.force_field->neighbor_cutoff(), 0.3);
+  list.build(input.system.particles.position, input.system.box);
+  std::vector<Vec3> velocity(input.system.particles.size());
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> gauss;
+  for (Vec3& v : velocity) v = Vec3{gauss(rng), gauss(rng), gauss(rng)};
+
+  std::vector<PairHessian> blocks;
+  ASSERT_TRUE(input.force_field->pair_hessians(input.system, list, {}, blocks));
+  double from_blocks = 0.0;
+  for (const PairHessian& b : blocks) {
+    from_blocks += block_curvature(b.block, velocity[b.a], velocity[b.b]);
+  }
+  auto curvature = [&] {
+    double sum = 0.0;
+    EXPECT_TRUE(input.force_field->pair_curvature(input.system, list, velocity, sum));
+    return sum;
+  };
+  double one = 0.0;
+  {
+    const ThreadCount threads(1);
+    one = curvature();
+  }
+  double magnitude = 0.0;
+  for (const PairHessian& b : blocks) {
+    magnitude += std::abs(block_curvature(b.block, velocity[b.a], velocity[b.b]));
+  }
+  EXPECT_NEAR(one, from_blocks, 1e-13 * magnitude);
+  if (!kThreaded) return;
+  const ThreadCount threads(2);
+  const double two = curvature();
+  EXPECT_EQ(curvature(), two);
+  EXPECT_NEAR(two, one, 1e-13 * magnitude);
 }
 
 TEST(Threads, OrderedSumOnOneChunkIsTheSerialSum) {
