@@ -170,6 +170,34 @@ TEST(ContactTreatment, ImpactTimeShadowRemainderKeepsModifiedEnergyOverBounce) {
   EXPECT_LT(std::abs(with), 0.05 * std::abs(alone));
 }
 
+// The option belongs to impact_time, and its virtual Verlet steps have no rods: asked for
+// otherwise, the input is refused with the reason (README, "Contact treatment").
+TEST(ContactTreatment, ShadowRemainderStepsRefusedWithPaperOrRods) {
+  const std::string base =
+      "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.5\ncells = [2, 2, 2]\n"
+      "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 1.5\n"
+      "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 0.8 }]\n"
+      "[constraints]\nhard_spheres = { diameter = 0.8 }\n";
+  const std::string integrator = "[integrator]\ntype = \"gvi\"\ntimestep = 0.001\n";
+  const std::string remainder = "shadow_remainder_steps = 10\n[run]\nsteps = 0\n";
+  const std::string impact_time = "contact = \"impact_time\"\n";
+  const auto message = [](const std::string& toml) -> std::string {
+    try {
+      RunInput input = testing::input_from(toml);
+      Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(message(base + integrator + remainder).find("belongs to contact = \"impact_time\""),
+            std::string::npos);
+  const std::string rod = "rods = [{ atoms = [1, 2], length = 1.0 }]\n";
+  EXPECT_NE(message(base + rod + integrator + impact_time + remainder).find("no rods"),
+            std::string::npos);
+  EXPECT_EQ(message(base + integrator + impact_time + remainder), "");
+}
+
 // The constraint virial averaged over t in [0, span] with step h: the estimator of the
 // contacts' share of the pressure on one trajectory.
 double mean_virial(RunInput input, ContactTreatment contact, double h, double span) {
