@@ -4,7 +4,9 @@
 # "Contact treatment"): h 0.0025, 0.005, 0.01; 5 starts (the data file's velocities, then
 # temperature 0.13 with seeds 1001-1004); TIME time units each, thermo every 0.5.
 # Usage: bench/contact_energy/run.sh [OUTDIR]   (variants: VARIANTS="old new paper", where
-# `old` runs the binary OLD and `new`/`paper` the binary NEW); then
+# `old` runs the binary OLD and `new`/`paper`/`remainder` the binary NEW; `remainder`: impact_time
+# with shadow_remainder_steps = ${REMAINDER_STEPS:-10}, beads only; STEP_THERMO=1 writes thermo
+# every step, for attribute.py); then
 # /usr/bin/python3 bench/contact_energy/analyse.py OUTDIR
 HERE=$(cd "$(dirname "$0")" && pwd)
 OLD=${OLD:-}; NEW=${NEW:-$HERE/../../build/deli}; D=${1:-/tmp/contact_energy}; T=${TIME:-1000}
@@ -12,6 +14,8 @@ mkdir -p "$D"
 cmds=$D/commands.txt; : > "$cmds"
 for sys in ${SYSTEMS:-beads chain}; do for h in ${HS:-0.0025 0.005 0.01}; do for seed in 0 1 2 3 4; do for v in ${VARIANTS:-new}; do
   n=${sys}_${v}_${h}_s${seed}; steps=$(/usr/bin/python3 -c "print(round($T/$h))"); every=$(/usr/bin/python3 -c "print(round(0.5/$h))")
+  [ -n "${STEP_THERMO:-}" ] && every=1
+  [ "$v" = remainder ] && [ "$sys" = chain ] && continue
   contact=impact_time; [ "$v" = paper ] && contact=paper
   bin=$NEW; [ "$v" = old ] && bin=$OLD
   {
@@ -28,6 +32,7 @@ for sys in ${SYSTEMS:-beads chain}; do for h in ${HS:-0.0025 0.005 0.01}; do for
     echo '[forcefield.pair]'; echo 'style = "lj/cut"'; echo 'cutoff = 3.0'
     echo 'coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 0.6 }]'
     echo "[integrator]"; echo 'type = "gvi"'; echo "timestep = $h"; echo "contact = \"$contact\""
+    [ "$v" = remainder ] && echo "shadow_remainder_steps = ${REMAINDER_STEPS:-10}"
     echo "[run]"; echo "steps = $steps"; echo "[output]"; echo "thermo = { every = $every, file = \"$D/$n.csv\" }"
   } > "$D/$n.toml"
   echo "cd $D && OMP_NUM_THREADS=1 nice -n 19 $bin run $n.toml > $n.log 2>&1" >> "$cmds"

@@ -22,7 +22,8 @@ Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOpti
       lagrangian_(options.lagrangian),
       reflections_(options.reflections),
       constrained_predictor_(options.constrained_predictor),
-      contact_(options.contact) {
+      contact_(options.contact),
+      shadow_remainder_steps_(options.shadow_remainder_steps) {
   if (contact_ == ContactTreatment::impact_time) refuse_impact_times_unless_supported();
 }
 

@@ -52,6 +52,10 @@ struct GviOptions {
   ReflectionEnergy energy = ReflectionEnergy::hamiltonian;
   Feasibility feasibility = Feasibility::restore;
   ContactTreatment contact = ContactTreatment::paper;
+  // impact_time on hard spheres and walls (no rods): with K > 0 the restoration on a contact
+  // step also gives back the modified energy's rest beyond h^2, read from K virtual Verlet
+  // steps either side of the step (shadow_remainder.hpp); 0: S alone.
+  int shadow_remainder_steps = 0;
 };
 
 class Gvi final : public ConstrainedIntegrator {
@@ -87,6 +91,8 @@ class Gvi final : public ConstrainedIntegrator {
   void refuse_impact_times_unless_supported() const;
   void step_with_impact_times(System& system, bool tally);
   void step_with_impact_times_and_rods(System& system, bool tally);  // gvi_impact_time_rods.cpp
+  void restore_shadow_remainder(System& system, const std::vector<Constraint>& touched,
+                                double target, double shadow_target);
   // What an impact-time drift reached: its longest particle path, its end positions and the
   // contact configurations it passed through.
   struct DriftSpan {
@@ -145,6 +151,7 @@ class Gvi final : public ConstrainedIntegrator {
   bool reflections_;
   bool constrained_predictor_;
   ContactTreatment contact_;
+  int shadow_remainder_steps_;
   ImpactTimeDrift drift_;
 };
 

@@ -9,6 +9,7 @@
 #include "core/phase_timer.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/shadow_correction.hpp"
+#include "integrators/shadow_remainder.hpp"
 
 namespace deli {
 
@@ -22,6 +23,11 @@ void Gvi::refuse_impact_times_unless_supported() const {
     throw InputError(
         "[integrator] contact = \"impact_time\" is a Verlet splitting of GVI: use type = "
         "\"gvi\", lagrangian = \"verlet\"");
+  }
+  if (shadow_remainder_steps_ > 0 && !constraints_.equalities.empty()) {
+    throw InputError(
+        "[integrator] shadow_remainder_steps is for hard spheres and walls alone: its virtual "
+        "Verlet steps have no rods; remove it (rods and strings restore S alone)");
   }
 }
 
@@ -60,6 +66,27 @@ void Gvi::drift_with_covering_rows(System& system, bool pairs_matter,
                          system.box, ws_.reach, nullptr, gap_tolerance, ws_.nearby,
                          ws_.nearby_gap_at_q);
   }
+}
+
+// S given back on a contact step still loses R(start) - R(end) of the modified energy
+// (shadow_remainder.hpp): the target becomes S(start) + R(start) - R(end), R read over the
+// touched rows' particles, before the step (back in time from its start) and after it.
+void Gvi::restore_shadow_remainder(System& system, const std::vector<Constraint>& touched,
+                                   double target, double shadow_target) {
+  const std::size_t n = system.particles.size();
+  std::vector<char> moving(n, 0);
+  for (const Constraint& c : touched) {
+    moving[static_cast<std::size_t>(c.i)] = 1;
+    if (c.j >= 0) moving[static_cast<std::size_t>(c.j)] = 1;
+  }
+  const int steps = shadow_remainder_steps_;
+  const auto before =
+      shadow_remainder(engine_, system, ws_.q, ws_.p_start, moving, dt_, -dt_, steps);
+  const auto after =
+      shadow_remainder(engine_, system, system.particles.position, ws_.p, moving, dt_, dt_, steps);
+  engine_.compute(system, true);
+  if (!before || !after) return;
+  restore_energy(system, touched, target, ws_.p, shadow_target + *before - *after);
 }
 
 void Gvi::step_with_impact_times(System& system, bool tally) {
@@ -135,6 +162,9 @@ void Gvi::step_with_impact_times(System& system, bool tally) {
   const std::vector<Vec3>& f_end = engine_.force();
   for (std::size_t i = 0; i < n; ++i) ws_.p[i] += f_end[i] * (0.5 * h);
   if (!touched.empty()) restore_energy(system, touched, target, ws_.p, shadow_target);
+  if (!touched.empty() && shadow_target && shadow_remainder_steps_ > 0) {
+    restore_shadow_remainder(system, touched, target, *shadow_target);
+  }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = ws_.p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;
   previous_positions_ = ws_.q;

@@ -67,6 +67,16 @@ void read_integrator(TomlTable& root, RunInput& input) {
           integrator->choice("contact", {"paper", "impact_time"}, "paper") == "impact_time"
               ? ContactTreatment::impact_time
               : ContactTreatment::paper;
+      if (integrator->has("shadow_remainder_steps")) {
+        if (input.gvi.contact != ContactTreatment::impact_time) {
+          integrator->fail("belongs to contact = \"impact_time\"", "shadow_remainder_steps");
+        }
+        const std::int64_t steps = integrator->integer("shadow_remainder_steps", 0);
+        if (steps < 0 || steps > 1000) {
+          integrator->fail("must be 0 (off) to 1000", "shadow_remainder_steps");
+        }
+        input.gvi.shadow_remainder_steps = static_cast<int>(steps);
+      }
       // The impact-time step reflects at contact itself: the paper's options have no say.
       for (const char* key : {"predictor", "feasibility", "reflection"}) {
         if (input.gvi.contact == ContactTreatment::impact_time && integrator->has(key)) {
