@@ -13,7 +13,7 @@ namespace deli {
 // equality rows `equality_rows` at x (W = M^-1 diagonal). When those rows are pair rows
 // that form chains (each particle in at most two rows, and then in consecutive ones, as a
 // linear chain's rods numbered along it), F^T W F is tridiagonal: built from the rods'
-// directions and solved by the Thomas algorithm in O(rows) instead of a dense product and
+// directions and solved by elimination without pivoting in O(rows) instead of a dense product and
 // decomposition. Returns false, leaving N and Y untouched, for rows that do not form
 // chains or a pivot that vanishes (dependent rows): the caller then takes the dense
 // pseudo-inverse.

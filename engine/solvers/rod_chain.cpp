@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 
+#include "solvers/tridiagonal.hpp"
+
 namespace deli {
 
 std::unique_ptr<RodChain> RodChain::make(const LocalCluster& cluster) {
@@ -142,10 +144,10 @@ double RodChain::held_bound(const std::vector<double>& d2, double tolerance) con
   return bound;
 }
 
-// The Thomas algorithm of solve_tridiagonal with each band entry made as
-// ClusterRows::coupling_bands makes it (starting at zero, its particles' terms
-// (k.sign * l.sign * w) * a_k . b_l in particle order), then scaled, as it is needed: the
-// same operations in the same order, without storing the bands.
+// solve_tridiagonal's elimination with each band entry made as ClusterRows::coupling_bands
+// makes it (starting at zero, its particles' terms (k.sign * l.sign * w) * a_k . b_l in
+// particle order), then scaled, as it is needed: the same operations in the same order,
+// without storing the bands.
 bool RodChain::solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>& b, double scale,
                              const Eigen::VectorXd& minus_rhs, Eigen::VectorXd& x,
                              Eigen::VectorXd& c) const {
@@ -160,7 +162,7 @@ bool RodChain::solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>
     entry += 1.0 * w[high_[k]] * d;
     return entry * scale;
   };
-  // A(k, k+1) and A(k+1, k).
+  // A(k, k+1) and A(k, k-1).
   auto upper = [&](Eigen::Index k) {
     double entry = 0.0;
     entry += shared_sign_[k] * w[shared_[k]] * dot(a[k], b[k + 1]);
@@ -171,28 +173,8 @@ bool RodChain::solve_coupled(const std::vector<Vec3>& a, const std::vector<Vec3>
     entry += shared_sign_[k - 1] * w[shared_[k - 1]] * dot(a[k], b[k - 1]);
     return entry * scale;
   };
-  auto vanishes = [](double pivot, double diagonal_entry) {
-    return !(std::abs(pivot) > 1e-12 * std::abs(diagonal_entry));
-  };
-  double d = diagonal(0);
-  double pivot = d;
-  if (vanishes(pivot, d)) return false;
-  c(0) = m > 1 ? upper(0) / pivot : 0.0;
-  x(0) = -minus_rhs(0) / pivot;
-  for (Eigen::Index k = 1; k < m; ++k) {
-    const double l = lower(k);
-    d = diagonal(k);
-    pivot = d - l * c(k - 1);
-    if (vanishes(pivot, d)) return false;
-    c(k) = k + 1 < m ? upper(k) / pivot : 0.0;
-    x(k) = (-minus_rhs(k) - l * x(k - 1)) / pivot;
-  }
-  bool finite = std::isfinite(x(m - 1));
-  for (Eigen::Index k = m - 2; k >= 0; --k) {
-    x(k) -= c(k) * x(k + 1);
-    finite = finite && std::isfinite(x(k));
-  }
-  return finite;
+  auto rhs = [&](Eigen::Index k) { return -minus_rhs(k); };
+  return solve_tridiagonal_twisted(m, lower, diagonal, upper, rhs, x.data(), c.data());
 }
 
 bool RodChain::remembered_at(const std::vector<Vec3>& x, const Box& box) const {

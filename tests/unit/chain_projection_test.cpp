@@ -1,6 +1,6 @@
 // The O(rows) projection of inequality normals off chains of rods (F^T W F tridiagonal,
-// Thomas algorithm) against a second method, the dense pseudo-inverse the reflection took
-// before (N - F (F^T W F)^+ F^T W N by Eigen's complete orthogonal decomposition): the same
+// elimination without pivoting) against a second method, the dense pseudo-inverse the reflection
+// took before (N - F (F^T W F)^+ F^T W N by Eigen's complete orthogonal decomposition): the same
 // numbers to round-off. Rows that do not form chains are refused and left to that dense path.
 #include "solvers/chain_projection.hpp"
 

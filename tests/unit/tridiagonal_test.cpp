@@ -1,6 +1,6 @@
-// The O(n) tridiagonal solve (Thomas algorithm) against a second method, Eigen's dense LU with
-// partial pivoting, on the Newton matrices of random rod chains: to round-off. A vanishing
-// pivot (dependent rows) is reported, not divided by.
+// The O(n) tridiagonal solve (elimination from both ends, no pivoting) against a second method,
+// Eigen's dense LU with partial pivoting, on the Newton matrices of random rod chains: to
+// round-off. A vanishing pivot (dependent rows) is reported, not divided by.
 #include "solvers/tridiagonal.hpp"
 
 #include <gtest/gtest.h>
