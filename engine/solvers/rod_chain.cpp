@@ -98,8 +98,10 @@ void RodChain::differences(const std::vector<Vec3>& x, const Box& box, std::vect
     e.y -= period.y * image[k].y;
     e.z -= period.z * image[k].z;
     // Also false for NaN. Bitwise: no branch per rod.
-    images_hold &=
-        (std::abs(e.x) <= limit.x) & (std::abs(e.y) <= limit.y) & (std::abs(e.z) <= limit.z);
+    const int within = static_cast<int>(std::abs(e.x) <= limit.x) &
+                       static_cast<int>(std::abs(e.y) <= limit.y) &
+                       static_cast<int>(std::abs(e.z) <= limit.z);
+    images_hold &= within != 0;
     d[k] = e;
     d2[k] = norm2(e);
   }
