@@ -26,8 +26,9 @@ flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-o
 # libraries file by file, so a name clash between two files is still found there.
 # -no-pie: each of the ~570 test processes otherwise applies about 600000 relative
 # relocations to its own executable at start-up (the sanitizers' metadata is full of
-# pointers), half of its 0.24 s of CPU before main: 233-239 against 181-204 ms measured
-# (`perf stat`, a test binary listing no test). Run every time, so that an existing
+# pointers; perf put half of a start-up's samples in the relocations and their page
+# faults). Measured (`perf stat`, a test binary listing no test): 233-239 ms of CPU with PIE,
+# 181-204 ms without. Run every time, so that an existing
 # build-asan/ takes these settings too (a quick no-op when they have not changed).
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_UNITY_BUILD=ON \
   -DCMAKE_CXX_FLAGS_SANITIZE="$flags" -DCMAKE_C_FLAGS_SANITIZE="$flags" \
