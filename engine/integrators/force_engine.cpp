@@ -79,7 +79,7 @@ std::optional<double> ForceEngine::verlet_shadow_energy(const System& system, do
       p.size(), [&](std::size_t i) { return 0.5 * p.mass[i] * norm2(p.velocity[i]); });
   const double force_term =
       ordered_sum<double>(p.size(), [&](std::size_t i) { return norm2(force_[i]) / p.mass[i]; });
-  return kinetic + last_.potential - h * h / 24.0 * force_term + h * h / 12.0 * curvature;
+  return verlet_modified_energy(kinetic, last_.potential, force_term, curvature, h);
 }
 
 std::vector<std::array<std::int32_t, 2>> special_exclusions(const SpecialPairs& special,

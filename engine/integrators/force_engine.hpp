@@ -55,4 +55,11 @@ class ForceEngine {
 std::vector<std::array<std::int32_t, 2>> special_exclusions(const SpecialPairs& special,
                                                             const std::array<double, 3>& factors);
 
+// Verlet's modified energy to O(h^2), H - h^2/24 F.M^-1.F + h^2/12 v.V''.v, from its parts
+// (force_term = F.M^-1.F, curvature = v.V''.v), summed in this one order everywhere.
+inline double verlet_modified_energy(double kinetic, double potential, double force_term,
+                                     double curvature, double h) {
+  return kinetic + potential - h * h / 24.0 * force_term + h * h / 12.0 * curvature;
+}
+
 }  // namespace deli

@@ -19,7 +19,7 @@ std::optional<double> moving_shadow_energy(const ForceEngine& engine, const Syst
   if (!engine.force_field().pair_curvature(system, engine.neighbors(), velocity, curvature)) {
     return std::nullopt;
   }
-  return kinetic + engine.last().potential - h * h / 24.0 * force_term + h * h / 12.0 * curvature;
+  return verlet_modified_energy(kinetic, engine.last().potential, force_term, curvature, h);
 }
 
 std::optional<double> shadow_remainder(ForceEngine& engine, const System& system,
