@@ -26,16 +26,23 @@ class Box {
   const Vec3& period() const { return period_; }
   const Vec3& inverse_period() const { return inverse_period_; }
 
-  // Exact for any separation (std::nearbyint would be a library call per pair without
-  // SSE4.1; the integer conversion is a single instruction).
+  // Exact for any finite separation (std::nearbyint would be a library call per pair
+  // without SSE4.1; the integer conversion is a single instruction). A non-finite
+  // separation stays non-finite, for the caller's checks to report.
   Vec3 minimum_image(Vec3 d) const {
     d.x -= period_.x * round_to_integer(d.x * inverse_period_.x);
     d.y -= period_.y * round_to_integer(d.y * inverse_period_.y);
     d.z -= period_.z * round_to_integer(d.z * inverse_period_.z);
     return d;
   }
+  // Half away from zero. From 2^52 up every double is an integer already (and x + 0.5 could
+  // round up to the next one); NaN, infinities and magnitudes from 2^63 up would make the
+  // conversion undefined: all of them are returned as they are. Selects, not branches: this
+  // runs per axis per pair in the candidate scans.
   static double round_to_integer(double x) {
-    return static_cast<double>(static_cast<long long>(x + (x >= 0.0 ? 0.5 : -0.5)));
+    const bool convertible = std::abs(x) < 0x1p52;  // false for NaN
+    const auto whole = static_cast<long long>(convertible ? x + std::copysign(0.5, x) : 0.0);
+    return convertible ? static_cast<double>(whole) : x;
   }
 
   // Maps x into [lo, hi) along periodic axes and counts the crossings in image.
