@@ -32,10 +32,6 @@ class NearbyRows {
                const NeighborList& list, const Box& box, double reach, const double* particle_reach,
                double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q);
 
-  // Pairs are screened on several threads from this many on (fewer: the parallel region's
-  // start costs more than the screen saves). The rows and gaps are the same on any number.
-  static constexpr std::size_t kSplitFromPairs = 4096;
-
  private:
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
             const NeighborList& list, const Box& box);
