@@ -5,25 +5,54 @@
 #include <cmath>
 #include <limits>
 
+#include "core/parallel.hpp"
+
 namespace deli {
 
 void NearbyRows::make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                       const NeighborList& list, const Box& box) {
-  pairs_.clear();
-  bounds_.clear();
-  const auto& offsets = list.offsets();
-  const auto& neighbors = list.neighbors();
-  const std::vector<double>& radius = particles.radius;
-  const std::vector<std::uint8_t>& codes = list.image_codes();
-  shifted_ = !codes.empty();
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
   if (bonded_pairs) index_bonded_pairs(set, particles.size());
-  for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+  shifted_ = !list.image_codes().empty();
+  // By chunks of the list's particles, each into its own pairs, joined in chunk order: the
+  // serial scan's pairs in its order on any number of threads (chunk 0 writes in place).
+  const std::size_t listed = list.offsets().empty() ? 0 : list.offsets().size() - 1;
+  const int chunks = chunks_for(listed);
+  chunk_pairs_.resize(static_cast<std::size_t>(chunks));
+  chunk_bounds_.resize(static_cast<std::size_t>(chunks));
+  for_each_chunk(listed, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    std::vector<Pair>& pairs = c == 0 ? pairs_ : chunk_pairs_[static_cast<std::size_t>(c)];
+    std::vector<PairBound>& bounds = c == 0 ? bounds_ : chunk_bounds_[static_cast<std::size_t>(c)];
+    pairs.clear();
+    bounds.clear();
+    scan_list(list, q, box, particles.radius.data(), bonded_pairs, begin, end, pairs, bounds);
+  });
+  for (int c = 1; c < chunks; ++c) {
+    const auto k = static_cast<std::size_t>(c);
+    pairs_.insert(pairs_.end(), chunk_pairs_[k].begin(), chunk_pairs_[k].end());
+    bounds_.insert(bounds_.end(), chunk_bounds_[k].begin(), chunk_bounds_[k].end());
+  }
+  anchor_.assign(q, q + particles.size());
+  moved_.assign(particles.size(), 0.0);
+  list_ = &list;
+  list_builds_ = list.builds();
+}
+
+void NearbyRows::scan_list(const NeighborList& list, const Vec3* q, const Box& box,
+                           const double* radius, bool bonded_pairs, std::size_t first,
+                           std::size_t last, std::vector<Pair>& pairs,
+                           std::vector<PairBound>& bounds) const {
+  const auto& offsets = list.offsets();
+  const auto& neighbors = list.neighbors();
+  const std::vector<std::uint8_t>& codes = list.image_codes();
+  const bool shifted = shifted_;
+  const double margin = margin_;
+  for (std::size_t i = first; i < last; ++i) {
     for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
       const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
       const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
       Vec3 shift;
-      if (shifted_) {
+      if (shifted) {
         // The list's shift is for q_i - q_j: negated when i is the pair's second particle.
         shift = list.image_shifts()[codes[k]];
         if (a != static_cast<std::int32_t>(i)) shift = -shift;
@@ -31,19 +60,15 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
       // Through the list's shift, as collect() measures (the minimum image up to rounding).
       // Generous by far more than rounding: no pair within contact + margin is dropped.
       const double d2 =
-          shifted_ ? norm2(q[a] - q[b] - shift) : norm2(box.minimum_image(q[a] - q[b]));
+          shifted ? norm2(q[a] - q[b] - shift) : norm2(box.minimum_image(q[a] - q[b]));
       const double contact = radius[a] + radius[b];
-      const double within = contact + margin_;
+      const double within = contact + margin;
       if (d2 > within * within * (1.0 + 1e-6) + 1e-300) continue;
       if (bonded_pairs && bonded(a, b)) continue;
-      pairs_.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
-      bounds_.push_back({a, b, pairs_.back().anchor_gap});
+      pairs.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
+      bounds.push_back({a, b, pairs.back().anchor_gap});
     }
   }
-  anchor_.assign(q, q + particles.size());
-  moved_.assign(particles.size(), 0.0);
-  list_ = &list;
-  list_builds_ = list.builds();
 }
 
 void NearbyRows::index_bonded_pairs(const ConstraintSet& set, std::size_t particle_count) {
@@ -116,68 +141,29 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       make(set, particles, q, list, box);
       if (particle_reach) moved_.assign(particle_reach, particle_reach + particles.size());
     }
-    // The screen of nearby_inequalities, then its exact test (evaluate()'s sphere-pair gap,
-    // the row built only when kept). The screen may take the separation through the list's
-    // shift (no rounding to the nearest image): it differs from the minimum image by
-    // rounding at most, far inside the screen's margin. A pair inside contact + reach by
-    // far more than rounding is kept without its square root, and its gap is needed only
-    // if it may be at most `exact_below`.
-    const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
-    const double infinity = std::numeric_limits<double>::infinity();
-    // A pair whose gap at q is certainly beyond the reach (its anchor gap less both
-    // displacements exceeds it by far more than rounding) is one the exact test drops too.
-    // The others' indices are gathered first without a branch (about half the pairs pass,
-    // unpredictably), then, again without a branch, those within the screen with their
-    // squared distances, which are then tested in order. With particle reaches, `moved_`
-    // holds each particle's displacement plus its reach.
+    // With particle reaches, `moved_` holds each particle's displacement plus its reach.
     const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
-    const double* moved = moved_.data();
     const std::size_t pair_count = bounds_.size();
     near_.resize(pair_count);
     near_d2_.resize(pair_count);
-    std::size_t count = 0;
-    for (std::size_t k = 0; k < pair_count; ++k) {
-      const PairBound& bound = bounds_[k];
-      near_[count] = static_cast<std::int32_t>(k);
-      count += !(bound.anchor_gap - moved[bound.a] - moved[bound.b] > beyond) ? 1 : 0;
-    }
-    std::size_t within_count = 0;
-    auto screen_pair = [&](std::int32_t k, double d2) {
-      const double within = pairs_[k].contact + pair_reach(pairs_[k].a, pairs_[k].b);
-      near_[within_count] = k;
-      near_d2_[within_count] = d2;
-      within_count += !(d2 > within * within * screen + 1e-300) ? 1 : 0;
-    };
-    if (shifted_) {
-      for (std::size_t m = 0; m < count; ++m) {
-        const Pair& pair = pairs_[near_[m]];
-        screen_pair(near_[m], norm2(q[pair.a] - q[pair.b] - pair.shift));
-      }
-    } else {
-      for (std::size_t m = 0; m < count; ++m) {
-        const Pair& pair = pairs_[near_[m]];
-        screen_pair(near_[m], norm2(box.minimum_image(q[pair.a] - q[pair.b])));
-      }
-    }
-    for (std::size_t m = 0; m < within_count; ++m) {
-      const Pair& pair = pairs_[near_[m]];
-      const double d2 = near_d2_[m];
-      const double row_reach = pair_reach(pair.a, pair.b);
-      const double within = pair.contact + row_reach;
-      const double near = pair.contact + exact_below;
-      double gap = infinity;
-      if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
-          d2 <= near * near * screen + 1e-300) {
-        gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
-        if (!(gap <= row_reach)) continue;
-      }
-      // sphere_pair(a, b)'s row, made in place (its contact is the pair's).
-      Constraint& row = out.emplace_back();
-      row.kind = ConstraintKind::sphere_pair;
-      row.i = pair.a;
-      row.j = pair.b;
-      row.length = pair.contact;
-      gap_at_q.push_back(gap);
+    // By chunks of the pairs, each screened into its own rows, joined in chunk order: the
+    // serial screen's rows in its order on any number of threads (chunk 0 appends in place).
+    // A pair's screen is a few operations (the hard-sphere fluid's 12700 pairs took 80 us a
+    // call on one thread), so split as cheap items: on 2 threads of the loaded 2-core machine
+    // the split call took 460 us (the sleeping partner's wake-up), see bench/README.md.
+    const int chunks = chunks_for_cheap(pair_count);
+    chunk_rows_.resize(static_cast<std::size_t>(chunks));
+    chunk_gaps_.resize(static_cast<std::size_t>(chunks));
+    for_each_chunk(pair_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      std::vector<Constraint>& rows = c == 0 ? out : chunk_rows_[static_cast<std::size_t>(c)];
+      std::vector<double>& gaps = c == 0 ? gap_at_q : chunk_gaps_[static_cast<std::size_t>(c)];
+      if (c != 0) rows.clear(), gaps.clear();
+      screen_pairs(q, box, reach, particle_reach, exact_below, beyond, begin, end, rows, gaps);
+    });
+    for (int c = 1; c < chunks; ++c) {
+      const auto k = static_cast<std::size_t>(c);
+      out.insert(out.end(), chunk_rows_[k].begin(), chunk_rows_[k].end());
+      gap_at_q.insert(gap_at_q.end(), chunk_gaps_[k].begin(), chunk_gaps_[k].end());
     }
   }
   for (const Wall& wall : set.walls) {
@@ -190,6 +176,79 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       }
       keep(set.wall_row(wall, index, particles.radius[i]), row_reach);
     }
+  }
+}
+
+// The screen of nearby_inequalities over pairs [first, last), then its exact test
+// (evaluate()'s sphere-pair gap, the row built only when kept), appending the kept rows and
+// their gaps. The screen may take the separation through the list's shift (no rounding to
+// the nearest image): it differs from the minimum image by rounding at most, far inside the
+// screen's margin. A pair inside contact + reach by far more than rounding is kept without
+// its square root, and its gap is needed only if it may be at most `exact_below`.
+void NearbyRows::screen_pairs(const Vec3* q, const Box& box, double reach,
+                              const double* particle_reach, double exact_below, double beyond,
+                              std::size_t first, std::size_t last, std::vector<Constraint>& out,
+                              std::vector<double>& gap_at_q) {
+  const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
+  const double infinity = std::numeric_limits<double>::infinity();
+  // A row's reach: the pair's two particle reaches, or the one reach for all.
+  auto pair_reach = [particle_reach, reach](std::int32_t a, std::int32_t b) {
+    return particle_reach ? particle_reach[a] + particle_reach[b] : reach;
+  };
+  // A pair whose gap at q is certainly beyond the reach (its anchor gap less both
+  // displacements exceeds it by far more than rounding) is one the exact test drops too.
+  // The others' indices are gathered first without a branch (about half the pairs pass,
+  // unpredictably), then, again without a branch, those within the screen with their
+  // squared distances, which are then tested in order. This chunk's indices go to its own
+  // stretch of near_ / near_d2_, [first, last).
+  const double* moved = moved_.data();
+  const PairBound* bounds = bounds_.data();
+  const Pair* pairs = pairs_.data();
+  std::int32_t* near = near_.data() + first;
+  double* near_d2 = near_d2_.data() + first;
+  std::size_t count = 0;
+  for (std::size_t k = first; k < last; ++k) {
+    const PairBound& bound = bounds[k];
+    near[count] = static_cast<std::int32_t>(k);
+    count += !(bound.anchor_gap - moved[bound.a] - moved[bound.b] > beyond) ? 1 : 0;
+  }
+  std::size_t within_count = 0;
+  auto screen_pair = [&](std::int32_t k, double d2) {
+    const double within = pairs[k].contact + pair_reach(pairs[k].a, pairs[k].b);
+    near[within_count] = k;
+    near_d2[within_count] = d2;
+    within_count += !(d2 > within * within * screen + 1e-300) ? 1 : 0;
+  };
+  if (shifted_) {
+    for (std::size_t m = 0; m < count; ++m) {
+      const Pair& pair = pairs[near[m]];
+      screen_pair(near[m], norm2(q[pair.a] - q[pair.b] - pair.shift));
+    }
+  } else {
+    for (std::size_t m = 0; m < count; ++m) {
+      const Pair& pair = pairs[near[m]];
+      screen_pair(near[m], norm2(box.minimum_image(q[pair.a] - q[pair.b])));
+    }
+  }
+  for (std::size_t m = 0; m < within_count; ++m) {
+    const Pair& pair = pairs[near[m]];
+    const double d2 = near_d2[m];
+    const double row_reach = pair_reach(pair.a, pair.b);
+    const double within = pair.contact + row_reach;
+    const double near_gap = pair.contact + exact_below;
+    double gap = infinity;
+    if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
+        d2 <= near_gap * near_gap * screen + 1e-300) {
+      gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
+      if (!(gap <= row_reach)) continue;
+    }
+    // sphere_pair(a, b)'s row, made in place (its contact is the pair's).
+    Constraint& row = out.emplace_back();
+    row.kind = ConstraintKind::sphere_pair;
+    row.i = pair.a;
+    row.j = pair.b;
+    row.length = pair.contact;
+    gap_at_q.push_back(gap);
   }
 }
 

@@ -57,6 +57,18 @@ class NearbyRows {
     double anchor_gap;
   };
   std::vector<PairBound> bounds_;
+  // The list's pairs of particles [first, last) within contact + margin at q, appended.
+  void scan_list(const NeighborList& list, const Vec3* q, const Box& box, const double* radius,
+                 bool bonded_pairs, std::size_t first, std::size_t last, std::vector<Pair>& pairs,
+                 std::vector<PairBound>& bounds) const;
+  void screen_pairs(const Vec3* q, const Box& box, double reach, const double* particle_reach,
+                    double exact_below, double beyond, std::size_t first, std::size_t last,
+                    std::vector<Constraint>& out, std::vector<double>& gap_at_q);
+  // Chunks 1.. of make()'s scan and of collect()'s screen (chunk 0 writes in place).
+  std::vector<std::vector<Pair>> chunk_pairs_;
+  std::vector<std::vector<PairBound>> chunk_bounds_;
+  std::vector<std::vector<Constraint>> chunk_rows_;
+  std::vector<std::vector<double>> chunk_gaps_;
   bool shifted_ = false;
   std::vector<Vec3> anchor_;
   std::vector<double> moved_;       // per particle, |q - anchor| at the last call (+ its reach)

@@ -11,6 +11,7 @@
 
 #include <random>
 
+#include "core/parallel.hpp"
 #include "neighbor/neighbor_list.hpp"
 
 namespace deli {
@@ -87,6 +88,54 @@ TEST(NearbyRows, RowsWithinTheReachInTheScansOrder) {
     std::uniform_real_distribution<double> u(-0.05, 0.05);
     for (Vec3& x : q) x += Vec3{u(rng), u(rng), u(rng)};
     expect_nearby_rows(fluid, rows, q.data(), list, per_particle);
+  }
+}
+
+// On two threads the list's scan (1024 particles and more) and the screen (cheap items: here
+// split from 1024 pairs on) run in chunks joined in chunk order: the same rows, in the same
+// order, with the same gaps bit for bit as on one thread, and those of the plain scan.
+TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+  const NearbyRowsFluid fluid = nearby_rows_fluid(1200, 5);
+  NeighborList list(1.0, 0.4);
+  list.build(fluid.particles.position, fluid.box);
+  std::vector<Vec3> q = fluid.particles.position;
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  std::vector<Vec3> moved = q;
+  for (Vec3& x : moved) x += Vec3{u(rng), u(rng), u(rng)};
+  struct Collected {
+    std::vector<Constraint> rows;
+    std::vector<double> gaps;
+  };
+  auto collect = [&](int threads) {
+    const int before = thread_count();
+    const std::size_t cheap_before = cheap_loop_minimum();
+    set_thread_count(threads);
+    set_cheap_loop_minimum(kParallelMinimum);
+    NearbyRows rows;
+    std::vector<Collected> out(2);
+    for (std::size_t pass = 0; pass < 2; ++pass) {
+      const Vec3* at = pass == 0 ? q.data() : moved.data();
+      rows.collect(fluid.set, fluid.particles, at, list, fluid.box, 0.1, fluid.reach.data(), 1e-10,
+                   out[pass].rows, out[pass].gaps);
+      if (threads == 2) expect_nearby_rows(fluid, rows, at, list, true);
+    }
+    set_thread_count(before);
+    set_cheap_loop_minimum(cheap_before);
+    return out;
+  };
+  const std::vector<Collected> one = collect(1), two = collect(2);
+  for (std::size_t pass = 0; pass < 2; ++pass) {
+    // Enough rows that both chunks keep some (the screened pairs are several times more).
+    EXPECT_GT(one[pass].rows.size(), kParallelMinimum);
+    ASSERT_EQ(one[pass].rows.size(), two[pass].rows.size());
+    for (std::size_t k = 0; k < one[pass].rows.size(); ++k) {
+      EXPECT_TRUE(same_row(one[pass].rows[k], two[pass].rows[k])) << "row " << k;
+      EXPECT_EQ(one[pass].gaps[k], two[pass].gaps[k]) << "row " << k;
+    }
   }
 }
 
