@@ -95,25 +95,24 @@ void Gvi::restore_shadow_remainder(System& system, const std::vector<Constraint>
   }
   // The virtual steps' solves are not the run's: its statistics and virial stay as they were.
   const ConstraintStatistics counted = stats_;
-  const RodStages stages{rods,
-                         [&](const std::vector<Vec3>& x, std::vector<Vec3>& momenta, double step,
-                             std::vector<Vec3>& to) {
-                           // solve_positions scales its impulses by dt_ (x = x + delta + dt_ M^-1
-                           // J): over the step the momentum impulse is J dt_ / step.
-                           std::vector<Vec3> delta(n), impulse(n);
-                           for (std::size_t i = 0; i < n; ++i)
-                             delta[i] = momenta[i] * (step / system.particles.mass[i]);
-                           solve_positions(system, rods, ws_.all_equality, x, delta, impulse);
-                           to.resize(n);
-                           for (std::size_t i = 0; i < n; ++i) {
-                             to[i] =
-                                 x[i] + delta[i] + impulse[i] * (dt_ / system.particles.mass[i]);
-                             momenta[i] += impulse[i] * (dt_ / step);
-                           }
-                         },
-                         [&](const std::vector<Vec3>& x, std::vector<Vec3>& momenta) {
-                           project_momenta(system, rods, x, momenta);
-                         }};
+  // RATTLE's stages on the rods. solve_positions scales its impulses by dt_
+  // (x = x + delta + dt_ M^-1 J): over a virtual step the momentum impulse is J dt_ / step.
+  auto drift_on_rods = [&](const std::vector<Vec3>& x, std::vector<Vec3>& momenta, double step,
+                           std::vector<Vec3>& to) {
+    const std::vector<double>& mass = system.particles.mass;
+    std::vector<Vec3> delta(n), impulse(n);
+    for (std::size_t i = 0; i < n; ++i) delta[i] = momenta[i] * (step / mass[i]);
+    solve_positions(system, rods, ws_.all_equality, x, delta, impulse);
+    to.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      to[i] = x[i] + delta[i] + impulse[i] * (dt_ / mass[i]);
+      momenta[i] += impulse[i] * (dt_ / step);
+    }
+  };
+  auto project_on_rods = [&](const std::vector<Vec3>& x, std::vector<Vec3>& momenta) {
+    project_momenta(system, rods, x, momenta);
+  };
+  const RodStages stages{rods, drift_on_rods, project_on_rods};
   const RodStages* rod_stages = rods.empty() ? nullptr : &stages;
   const int steps = shadow_remainder_steps_;
   const auto before =
