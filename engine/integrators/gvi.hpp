@@ -8,6 +8,7 @@
 #include "integrators/constrained_integrator.hpp"
 #include "integrators/gvi_workspace.hpp"
 #include "integrators/impact_time_drift.hpp"
+#include "integrators/shadow_correction.hpp"
 
 namespace deli {
 
@@ -52,9 +53,9 @@ struct GviOptions {
   ReflectionEnergy energy = ReflectionEnergy::hamiltonian;
   Feasibility feasibility = Feasibility::restore;
   ContactTreatment contact = ContactTreatment::paper;
-  // impact_time on hard spheres and walls (no rods): with K > 0 the restoration on a contact
-  // step also gives back the modified energy's rest beyond h^2, read from K virtual Verlet
-  // steps either side of the step (shadow_remainder.hpp); 0: S alone.
+  // impact_time (hard spheres, walls, rods; not strings): with K > 0 the restoration on a
+  // contact step also gives back the modified energy's rest beyond h^2, read from K virtual
+  // Verlet (with rods RATTLE) steps either side of the step (shadow_remainder.hpp); 0: S alone.
   int shadow_remainder_steps = 0;
 };
 
@@ -67,6 +68,9 @@ class Gvi final : public ConstrainedIntegrator {
   void step(System& system, bool tally = true) override;
   std::optional<double> shadow_energy(const System& system) const override {
     if (lagrangian_ != Lagrangian::verlet) return std::nullopt;
+    if (!constraints_.equalities.empty()) {
+      return verlet_shadow_energy_on_rods(engine_, system, dt_, constraints_.equalities);
+    }
     return engine_.verlet_shadow_energy(system, dt_);
   }
 
@@ -92,7 +96,7 @@ class Gvi final : public ConstrainedIntegrator {
   void step_with_impact_times(System& system, bool tally);
   void step_with_impact_times_and_rods(System& system, bool tally);  // gvi_impact_time_rods.cpp
   void restore_shadow_remainder(System& system, const std::vector<Constraint>& touched,
-                                double target, double shadow_target);
+                                double target, double shadow_target, std::vector<Vec3>& p);
   // What an impact-time drift reached: its longest particle path, its end positions and the
   // contact configurations it passed through.
   struct DriftSpan {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
 #include "integrators/gvi.hpp"
@@ -24,10 +25,14 @@ void Gvi::refuse_impact_times_unless_supported() const {
         "[integrator] contact = \"impact_time\" is a Verlet splitting of GVI: use type = "
         "\"gvi\", lagrangian = \"verlet\"");
   }
-  if (shadow_remainder_steps_ > 0 && !constraints_.equalities.empty()) {
+  const auto string =
+      std::find_if(constraints_.equalities.begin(), constraints_.equalities.end(),
+                   [](const Constraint& c) { return c.kind != ConstraintKind::rod; });
+  if (shadow_remainder_steps_ > 0 && string != constraints_.equalities.end()) {
     throw InputError(
-        "[integrator] shadow_remainder_steps is for hard spheres and walls alone: its virtual "
-        "Verlet steps have no rods; remove it (rods and strings restore S alone)");
+        "[integrator] shadow_remainder_steps: the modified energy has no string terms (atom " +
+        std::to_string(string->i + 1) +
+        " is held on a string); remove the key (strings restore S alone)");
   }
 }
 
@@ -70,23 +75,54 @@ void Gvi::drift_with_covering_rows(System& system, bool pairs_matter,
 
 // S given back on a contact step still loses R(start) - R(end) of the modified energy
 // (shadow_remainder.hpp): the target becomes S(start) + R(start) - R(end), R read over the
-// touched rows' particles, before the step (back in time from its start) and after it.
+// touched rows' particles and the rod clusters they belong to, before the step (back in time
+// from its start) and after it; p are the momenta at the step's end.
 void Gvi::restore_shadow_remainder(System& system, const std::vector<Constraint>& touched,
-                                   double target, double shadow_target) {
+                                   double target, double shadow_target, std::vector<Vec3>& p) {
   const std::size_t n = system.particles.size();
+  const std::vector<Constraint>& rods = constraints_.equalities;
   std::vector<char> moving(n, 0);
   for (const Constraint& c : touched) {
     moving[static_cast<std::size_t>(c.i)] = 1;
     if (c.j >= 0) moving[static_cast<std::size_t>(c.j)] = 1;
   }
+  for (const Cluster& cluster : rods.empty() ? std::vector<Cluster>{} : find_clusters(rods, n)) {
+    bool touching = false;
+    for (std::int32_t i : cluster.particles)
+      touching = touching || moving[static_cast<std::size_t>(i)];
+    if (!touching) continue;
+    for (std::int32_t i : cluster.particles) moving[static_cast<std::size_t>(i)] = 1;
+  }
+  // The virtual steps' solves are not the run's: its statistics and virial stay as they were.
+  const ConstraintStatistics counted = stats_;
+  // RATTLE's stages on the rods. solve_positions scales its impulses by dt_
+  // (x = x + delta + dt_ M^-1 J): over a virtual step the momentum impulse is J dt_ / step.
+  auto drift_on_rods = [&](const std::vector<Vec3>& x, std::vector<Vec3>& momenta, double step,
+                           std::vector<Vec3>& to) {
+    const std::vector<double>& mass = system.particles.mass;
+    std::vector<Vec3> delta(n), impulse(n);
+    for (std::size_t i = 0; i < n; ++i) delta[i] = momenta[i] * (step / mass[i]);
+    solve_positions(system, rods, ws_.all_equality, x, delta, impulse);
+    to.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      to[i] = x[i] + delta[i] + impulse[i] * (dt_ / mass[i]);
+      momenta[i] += impulse[i] * (dt_ / step);
+    }
+  };
+  auto project_on_rods = [&](const std::vector<Vec3>& x, std::vector<Vec3>& momenta) {
+    project_momenta(system, rods, x, momenta);
+  };
+  const RodStages stages{rods, drift_on_rods, project_on_rods};
+  const RodStages* rod_stages = rods.empty() ? nullptr : &stages;
   const int steps = shadow_remainder_steps_;
   const auto before =
-      shadow_remainder(engine_, system, ws_.q, ws_.p_start, moving, dt_, -dt_, steps);
-  const auto after =
-      shadow_remainder(engine_, system, system.particles.position, ws_.p, moving, dt_, dt_, steps);
+      shadow_remainder(engine_, system, ws_.q, ws_.p_start, moving, dt_, -dt_, steps, rod_stages);
+  const auto after = shadow_remainder(engine_, system, system.particles.position, p, moving, dt_,
+                                      dt_, steps, rod_stages);
+  stats_ = counted;
   engine_.compute(system, true);
   if (!before || !after) return;
-  restore_energy(system, touched, target, ws_.p, shadow_target + *before - *after);
+  restore_energy(system, touched, target, p, shadow_target + *before - *after);
 }
 
 void Gvi::step_with_impact_times(System& system, bool tally) {
@@ -163,7 +199,7 @@ void Gvi::step_with_impact_times(System& system, bool tally) {
   for (std::size_t i = 0; i < n; ++i) ws_.p[i] += f_end[i] * (0.5 * h);
   if (!touched.empty()) restore_energy(system, touched, target, ws_.p, shadow_target);
   if (!touched.empty() && shadow_target && shadow_remainder_steps_ > 0) {
-    restore_shadow_remainder(system, touched, target, *shadow_target);
+    restore_shadow_remainder(system, touched, target, *shadow_target, ws_.p);
   }
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = ws_.p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;

@@ -320,6 +320,9 @@ void Gvi::step_with_impact_times_and_rods(System& system, bool tally) {
   for (std::size_t i = 0; i < n; ++i) p[i] += f_end[i] * (0.5 * h);
   step_virial_ += project_momenta(system, rods, P.position, p);
   if (!touched.empty()) restore_energy(system, touched, target, p, shadow_target);
+  if (!touched.empty() && shadow_target && shadow_remainder_steps_ > 0) {
+    restore_shadow_remainder(system, touched, target, *shadow_target, p);
+  }
   ws_.p = p;
   for (std::size_t i = 0; i < n; ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
   ++stats_.steps;

@@ -8,6 +8,9 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include "core/parallel.hpp"
 
 namespace deli {
 
@@ -124,26 +127,99 @@ std::optional<ShadowCorrection> shadow_correction_along(const ForceEngine& engin
   return s;
 }
 
-std::optional<ShadowCorrection> shadow_correction_on_rods(
-    const ForceEngine& engine, const System& system, double h, const std::vector<Vec3>& p,
-    const std::vector<Vec3>& d, const std::vector<Constraint>& rods,
+std::optional<RodShadowTerms> projected_rod_terms(
+    const ForceEngine& engine, const System& system, const std::vector<Constraint>& rods,
     const std::function<void(std::vector<Vec3>&)>& project) {
-  if (rods.empty()) return shadow_correction_along(engine, system, h, p, d);
   // The projection is linear; it runs on the force scaled to order one (by a power of two,
   // exactly), so that its velocity tolerance means the same as for momenta however steep the
   // force.
   double largest = 0;
   for (const Vec3& f : engine.force()) largest = std::max(largest, norm(f));
-  if (!(largest > 0)) return shadow_correction_along(engine, system, h, p, d);
+  if (!(largest > 0)) {
+    RodShadowTerms terms;
+    terms.projected_force = engine.force();
+    terms.multiplier.assign(rods.size(), 0.0);
+    return terms;
+  }
   int exponent = 0;
   std::frexp(largest, &exponent);
   std::vector<Vec3> projected = engine.force();
   for (Vec3& f : projected) f = f * std::ldexp(1.0, -exponent);
   project(projected);
   for (Vec3& f : projected) f = f * std::ldexp(1.0, exponent);
-  const auto terms = rod_shadow_terms(system, rods, engine.force(), std::move(projected));
+  return rod_shadow_terms(system, rods, engine.force(), std::move(projected));
+}
+
+std::optional<ShadowCorrection> shadow_correction_on_rods(
+    const ForceEngine& engine, const System& system, double h, const std::vector<Vec3>& p,
+    const std::vector<Vec3>& d, const std::vector<Constraint>& rods,
+    const std::function<void(std::vector<Vec3>&)>& project) {
+  if (rods.empty()) return shadow_correction_along(engine, system, h, p, d);
+  double largest = 0;
+  for (const Vec3& f : engine.force()) largest = std::max(largest, norm(f));
+  if (!(largest > 0)) return shadow_correction_along(engine, system, h, p, d);
+  const auto terms = projected_rod_terms(engine, system, rods, project);
   if (!terms) return std::nullopt;
   return shadow_correction_along(engine, system, h, p, d, &rods, &*terms);
+}
+
+std::optional<double> verlet_shadow_energy_on_rods(const ForceEngine& engine, const System& system,
+                                                   double h, const std::vector<Constraint>& rods) {
+  if (!engine.last().tallied) return std::nullopt;
+  const Particles& P = system.particles;
+  const std::vector<Vec3>& force = engine.force();
+  const auto m = static_cast<Eigen::Index>(rods.size());
+  std::vector<Vec3> grad(rods.size());
+  std::vector<std::vector<std::size_t>> rods_of(P.size());
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    const Constraint& c = rods[k];
+    if (c.kind != ConstraintKind::rod) return std::nullopt;
+    grad[k] = system.box.minimum_image(P.position[c.i] - P.position[c.j]);
+    rods_of[static_cast<std::size_t>(c.i)].push_back(k);
+    rods_of[static_cast<std::size_t>(c.j)].push_back(k);
+  }
+  // Row k of G M^-1 G^T: grad_k (1/m_i + 1/m_j) grad_k on the diagonal, +-grad_k / m_s grad_l
+  // with a rod l sharing particle s.
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::VectorXd rhs(m);
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    const Constraint& a = rods[k];
+    const auto ai = static_cast<std::size_t>(a.i), aj = static_cast<std::size_t>(a.j);
+    rhs(static_cast<Eigen::Index>(k)) =
+        dot(grad[k], force[ai] * (1.0 / P.mass[ai]) - force[aj] * (1.0 / P.mass[aj]));
+    for (const auto& [s, sign_a] : {std::pair{ai, 1.0}, std::pair{aj, -1.0}}) {
+      for (std::size_t l : rods_of[s]) {
+        const Constraint& b = rods[l];
+        const double sign_b = static_cast<std::size_t>(b.i) == s ? 1.0 : -1.0;
+        entries.emplace_back(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(l),
+                             sign_a * sign_b / P.mass[s] * dot(grad[k], grad[l]));
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> normal(m, m);
+  normal.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) return std::nullopt;
+  const Eigen::VectorXd mu = solver.solve(rhs);
+  std::vector<Vec3> projected = force;
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    const Vec3 along = grad[k] * mu(static_cast<Eigen::Index>(k));
+    projected[static_cast<std::size_t>(rods[k].i)] -= along;
+    projected[static_cast<std::size_t>(rods[k].j)] += along;
+  }
+  double curvature = 0;
+  if (!engine.force_field().pair_curvature(system, engine.neighbors(), P.velocity, curvature)) {
+    return std::nullopt;
+  }
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    const Constraint& c = rods[k];
+    curvature += mu(static_cast<Eigen::Index>(k)) * norm2(P.velocity[c.i] - P.velocity[c.j]);
+  }
+  const double kinetic = ordered_sum<double>(
+      P.size(), [&](std::size_t i) { return 0.5 * P.mass[i] * norm2(P.velocity[i]); });
+  const double force_term =
+      ordered_sum<double>(P.size(), [&](std::size_t i) { return norm2(projected[i]) / P.mass[i]; });
+  return verlet_modified_energy(kinetic, engine.last().potential, force_term, curvature, h);
 }
 
 }  // namespace deli

@@ -37,6 +37,18 @@ std::optional<ShadowCorrection> shadow_correction_along(
     const ForceEngine& engine, const System& system, double h, const std::vector<Vec3>& p,
     const std::vector<Vec3>& d, const std::vector<Constraint>* rods = nullptr,
     const RodShadowTerms* rod_terms = nullptr);
+// The rod terms at the engine's last evaluation: its force projected by `project` (as
+// shadow_correction_on_rods does) and the multipliers; with no force, the force itself and
+// zero multipliers. None where a row is not a rod.
+std::optional<RodShadowTerms> projected_rod_terms(
+    const ForceEngine& engine, const System& system, const std::vector<Constraint>& rods,
+    const std::function<void(std::vector<Vec3>&)>& project);
+// Verlet's (RATTLE's) modified energy S with the rod terms at the engine's last evaluation
+// (energies tallied) and the system's velocities: the force projected M^-1-orthogonally onto
+// the rods' tangent space by a direct solve, (G M^-1 G^T) mu = G M^-1 F. The thermo's
+// shadow_energy with rods. None where a row is not a rod or S has no closed form.
+std::optional<double> verlet_shadow_energy_on_rods(const ForceEngine& engine, const System& system,
+                                                   double h, const std::vector<Constraint>& rods);
 // shadow_correction_along with the rod terms of `rods` when there are any; `project` projects
 // a force onto the rods' tangent space at the system's positions, as momenta.
 std::optional<ShadowCorrection> shadow_correction_on_rods(
