@@ -3,8 +3,9 @@
 # (shortened) with each and compares their thermo CSVs (17 significant digits) byte for
 # byte (when one binary has columns the other lacks: the shared columns, and it names the
 # others). Usage: tools/same_results.sh DELI_A DELI_B [input.toml[:steps] ...]
-# Default inputs: the default rigid slit, every paper input, the hard-sphere fluid and the
-# rigid-rod chain melt.
+# IGNORE="col1 col2" leaves those columns out of the comparison (a column a change means to
+# alter). Default inputs: the default rigid slit, every paper input, the hard-sphere fluid
+# and the rigid-rod chain melt.
 set -uo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 a=$(realpath "$1") b=$(realpath "$2")
@@ -45,17 +46,19 @@ for spec in "${cases[@]}"; do
   done
   if cmp -s "$work/a/$name/thermo.csv" "$work/b/$name/thermo.csv"; then
     echo "$name: identical ($(wc -l < "$work/a/$name/thermo.csv") thermo rows)"
-  elif /usr/bin/python3 - "$work/a/$name/thermo.csv" "$work/b/$name/thermo.csv" <<'PY'
-# A binary that adds (or drops) statistics columns: the columns both have, byte for byte.
+  elif /usr/bin/python3 - "$work/a/$name/thermo.csv" "$work/b/$name/thermo.csv" "${IGNORE:-}" <<'PY'
+# A binary that adds (or drops) statistics columns, or columns named in IGNORE (one that is
+# meant to change): the other columns both have, byte for byte.
 import csv, sys
 a, b = (list(csv.reader(open(f))) for f in sys.argv[1:3])
+ignored = set(sys.argv[3].replace(",", " ").split())
 if not a or not b or len(a) != len(b):
     sys.exit(1)
-shared = [c for c in a[0] if c in b[0]]
+shared = [c for c in a[0] if c in b[0] and c not in ignored]
 ia, ib = [a[0].index(c) for c in shared], [b[0].index(c) for c in shared]
 if any([ra[i] for i in ia] != [rb[i] for i in ib] for ra, rb in zip(a[1:], b[1:])):
     sys.exit(1)
-only = sorted(set(a[0]) ^ set(b[0]))
+only = sorted((set(a[0]) ^ set(b[0])) | (ignored & set(a[0]) & set(b[0])))
 print(f"identical in the {len(shared)} shared columns; not compared: {', '.join(only)}", end="")
 PY
   then

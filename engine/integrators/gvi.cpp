@@ -590,11 +590,13 @@ void Gvi::update_positions(System& system) {
 }
 
 // H at the start of the step (the list is valid at q, so this evaluation neither rebuilds
-// nor wraps).
+// nor wraps). Evaluated here even when the last step's end tallied the potential at these
+// positions: that tally may have summed over the list before a rebuild, in another order,
+// and only thermo steps tally, so reusing it made the trajectory depend on the thermo
+// interval (in the last bits, then chaotically).
 double Gvi::start_energy(System& system) {
   const Particles& P = system.particles;
-  const double potential =
-      engine_.last().tallied ? engine_.last().potential : engine_.compute(system, true).potential;
+  const double potential = engine_.compute(system, true).potential;
   double energy = potential;
   for (std::size_t i = 0; i < P.size(); ++i) energy += 0.5 * norm2(ws_.p_start[i]) / P.mass[i];
   return energy;
