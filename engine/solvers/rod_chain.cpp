@@ -295,10 +295,8 @@ bool RodChain::begin_positions(const Vec3* q, const Vec3* delta, double h, const
                           ws, status);
 }
 
-RodChain::LineSearch RodChain::line_search(double h, const Box& box, double tolerance,
-                                           int halvings_allowed, RodChainWorkspace& ws,
-                                           SolverStatus& status) const {
-  (void)h;
+RodChain::LineSearch RodChain::line_search(const Box& box, double tolerance, int halvings_allowed,
+                                           RodChainWorkspace& ws, SolverStatus& status) const {
   const std::size_t m = rows();
   const double merit = ws.phi.squaredNorm();
   double t = 1.0;
@@ -350,7 +348,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
     ++status.iterations;
     // d gap_k / d z_l = h grad g_k(x)^T M^-1 C_l(q).
     if (!solve_coupled(ws.ux.data(), memo_.u.data(), h, ws.phi, ws.step, ws)) return false;
-    const LineSearch outcome = line_search(h, box, tolerance, line_search_limit, ws, status);
+    const LineSearch outcome = line_search(box, tolerance, line_search_limit, ws, status);
     // No decrease: the generic path reports.
     if (outcome == LineSearch::failed) return false;
     held = outcome == LineSearch::held;
@@ -402,7 +400,7 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       if (!active[l]) continue;
       // A vanishing pivot or a halving: solve_positions redoes the chain.
       const LineSearch outcome =
-          lanes.solved[l] ? chains[l]->line_search(h, box, tolerance, 0, lanes.lane[l], status[l])
+          lanes.solved[l] ? chains[l]->line_search(box, tolerance, 0, lanes.lane[l], status[l])
                           : LineSearch::failed;
       if (outcome == LineSearch::failed) {
         active[l] = false;

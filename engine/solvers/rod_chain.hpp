@@ -115,8 +115,8 @@ class RodChain {
                         SolverStatus& status) const;
   // After the Newton step ws.step: the line search (at most `halvings` halvings).
   enum class LineSearch { held, descended, failed };
-  LineSearch line_search(double h, const Box& box, double tolerance, int halvings,
-                         RodChainWorkspace& ws, SolverStatus& status) const;
+  LineSearch line_search(const Box& box, double tolerance, int halvings, RodChainWorkspace& ws,
+                         SolverStatus& status) const;
   // The impulses C(q) z and the virial of a converged solve.
   void finish_positions(RodChainWorkspace& ws, Vec3* impulse, double& virial) const;
   // Gathers the velocities at positions x, remembers x's directions and makes RATTLE's
