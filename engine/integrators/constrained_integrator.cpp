@@ -242,12 +242,73 @@ double ConstrainedIntegrator::solve_positions(
                                            q_local.data(), system.box));
     }
   };
+  // The chain solve_cluster would give to the chain kernel (not reused from an earlier
+  // call), or null.
+  auto chain_to_solve = [&](std::size_t index) -> const RodChain* {
+    const PreparedCluster* prepared = prepared_cluster(rows, index);
+    if (!prepared || !prepared->chain) return nullptr;
+    const Cluster& cluster = prepared->cluster;
+    if (delta_changed && equality_rows) {
+      bool changed = false;
+      for (std::int32_t i : cluster.particles) changed = changed || (*delta_changed)[i];
+      if (!changed) return nullptr;
+    }
+    for (std::int32_t r : cluster.rows) {
+      if (!equality[r]) return nullptr;
+    }
+    const auto own = static_cast<std::size_t>(prepared - equality_clusters_.all().data());
+    if (solved_equalities && own < equality_chain_solved_.size() && equality_chain_solved_[own] &&
+        same_vectors(cluster.particles, delta, solved_equalities->delta)) {
+      return nullptr;
+    }
+    return prepared->chain.get();
+  };
   const int chunks = chunks_for_work(cluster_count, rows.size());
   if (chain_works_.size() < static_cast<std::size_t>(chunks)) chain_works_.resize(chunks);
+  if (chain_lanes_.size() < static_cast<std::size_t>(chunks)) chain_lanes_.resize(chunks);
   try {
     for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
-      for (std::size_t index = begin; index < end; ++index) {
-        solve_cluster(index, chain_works_[static_cast<std::size_t>(c)]);
+      RodChainWorkspace& work = chain_works_[static_cast<std::size_t>(c)];
+      RodChainLanes& lanes = chain_lanes_[static_cast<std::size_t>(c)];
+      constexpr std::size_t width = RodChainLanes::width;
+      std::size_t index = begin;
+      while (index < end) {
+        // Up to `width` consecutive chains of one length, solved together; what they leave
+        // unsolved (and every other cluster) is solved alone, in index order.
+        const RodChain* chains[width];
+        std::size_t indices[width];
+        std::size_t count = 0;
+        for (; index < end && count < width; ++index) {
+          const RodChain* chain = chain_to_solve(index);
+          if (!chain || (count > 0 && chain->rows() != chains[0]->rows())) break;
+          chains[count] = chain;
+          indices[count++] = index;
+        }
+        if (count <= 1) {
+          if (count == 0) ++index;
+          solve_cluster(count == 0 ? index - 1 : indices[0], work);
+          continue;
+        }
+        double chain_virial[width];
+        SolverStatus status[width];
+        bool solved[width];
+        RodChain::solve_positions_lanes(chains, count, q.data(), delta.data(), dt_, system.box,
+                                        constraints_.tolerances.solver, constraints_.limits.newton,
+                                        lanes, impulse.data(), chain_virial, status, solved);
+        for (std::size_t l = 0; l < count; ++l) {
+          const std::size_t at = indices[l];
+          if (!solved[l]) {
+            solve_cluster(at, work);
+            continue;
+          }
+          virial_terms_.add(at, chain_virial[l]);
+          cluster_iterations_[at] = status[l].iterations;
+          if (equality_rows) {
+            equality_iterations_[at] = status[l].iterations;
+            equality_chain_virial_[at] = chain_virial[l];
+            equality_chain_solved_[at] = 1;
+          }
+        }
       }
     });
   } catch (const UnconvergedCluster& failure) {
@@ -310,13 +371,46 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
     }
     scatter(p_local, cluster.particles, p);
   };
+  auto chain_of = [&](std::size_t index) -> const RodChain* {
+    const PreparedCluster* prepared = prepared_cluster(rows, index);
+    return prepared ? prepared->chain.get() : nullptr;
+  };
   const int chunks = chunks_for_work(cluster_count, rows.size());
   if (chain_works_.size() < static_cast<std::size_t>(chunks)) chain_works_.resize(chunks);
+  if (chain_lanes_.size() < static_cast<std::size_t>(chunks)) chain_lanes_.resize(chunks);
   // A failure is thrown once every chunk has ended: the lowest chunk's, whose loop stopped at
   // the first failing cluster a serial loop meets.
   for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
-    for (std::size_t index = begin; index < end; ++index) {
-      project_cluster(index, chain_works_[static_cast<std::size_t>(c)]);
+    RodChainWorkspace& work = chain_works_[static_cast<std::size_t>(c)];
+    RodChainLanes& lanes = chain_lanes_[static_cast<std::size_t>(c)];
+    constexpr std::size_t width = RodChainLanes::width;
+    std::size_t index = begin;
+    while (index < end) {
+      // As in solve_positions: consecutive chains of one length together.
+      const RodChain* chains[width];
+      std::size_t indices[width];
+      std::size_t count = 0;
+      for (; index < end && count < width; ++index) {
+        const RodChain* chain = chain_of(index);
+        if (!chain || (count > 0 && chain->rows() != chains[0]->rows())) break;
+        chains[count] = chain;
+        indices[count++] = index;
+      }
+      if (count <= 1) {
+        if (count == 0) ++index;
+        project_cluster(count == 0 ? index - 1 : indices[0], work);
+        continue;
+      }
+      bool solved[width];
+      RodChain::project_momenta_lanes(chains, count, x.data(), p.data(), system.box, lanes, solved);
+      const std::size_t m = chains[0]->rows();
+      for (std::size_t l = 0; l < count; ++l) {
+        if (!solved[l]) {
+          project_cluster(indices[l], work);
+          continue;
+        }
+        std::copy_n(lanes.virial_terms.data() + l * m, m, virial_terms_.take(indices[l], m));
+      }
     }
   });
   double virial = 0.0;

@@ -170,6 +170,9 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<Cluster> found_clusters_;
   // Per chunk of a threaded cluster loop: its chains' scratch space.
   std::vector<RodChainWorkspace> chain_works_;
+  // Per chunk: scratch space of the lockstep chain kernels (consecutive chains of equal
+  // length solved together, one per vector lane).
+  std::vector<RodChainLanes> chain_lanes_;
   // Per cluster of the last cluster loop: its virial terms, its solve's iterations.
   OrderedTerms virial_terms_;
   std::vector<int> cluster_iterations_;

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include "constraints/constraint_set.hpp"
@@ -259,6 +260,85 @@ TEST(RodChain, OnlyLinearChainsOfRods) {
   closing.j = 5;
   loop.rows.push_back(closing);
   EXPECT_EQ(RodChain::make(loop), nullptr);
+}
+
+// The lockstep kernels (one chain per vector lane) against the chain kernel run alone, bit
+// for bit, on eight chains of 40 beads at once: unequal masses, rods written either way
+// round, chains across the periodic boundary, one chain held from the start (no step), and
+// one with a displacement so large that its Newton needs a line-search halving, which the
+// lockstep kernel leaves to the caller (the chain kernel alone then solves it).
+TEST(RodChain, LanesGiveTheChainKernelsNumbers) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const double h = 0.005, tolerance = 1e-12;
+  const SolverLimits limits;
+  constexpr std::size_t count = RodChainLanes::width, beads = 40;
+  std::vector<Vec3> q, delta, p;
+  std::vector<std::unique_ptr<RodChain>> alone, lanes_chains;
+  for (std::size_t c = 0; c < count; ++c) {
+    Chain chain = random_chain(beads, box, 20 + c);
+    for (std::int32_t& particle : chain.cluster.particles) {
+      particle += static_cast<std::int32_t>(c * beads);
+    }
+    // Chain 5 (seed 25) at 14 times the displacement needs a halving (found by trying).
+    const double scale = c == 5 ? 14.0 : (c == 6 ? 0.0 : 1.0);
+    for (std::size_t k = 0; k < beads; ++k) {
+      q.push_back(chain.q[k]);
+      delta.push_back(chain.delta[k] * scale);
+      p.push_back(chain.p[k]);
+    }
+    alone.push_back(RodChain::make(chain.cluster));
+    lanes_chains.push_back(RodChain::make(chain.cluster));
+    ASSERT_NE(alone.back(), nullptr);
+  }
+  std::vector<const RodChain*> chains;
+  for (const auto& chain : lanes_chains) chains.push_back(chain.get());
+
+  std::vector<Vec3> impulse_alone(q.size()), impulse_lanes(q.size());
+  RodChainWorkspace work;
+  RodChainLanes lanes;
+  double virial[count];
+  SolverStatus status[count];
+  bool solved[count];
+  RodChain::solve_positions_lanes(chains.data(), count, q.data(), delta.data(), h, box, tolerance,
+                                  limits.newton, lanes, impulse_lanes.data(), virial, status,
+                                  solved);
+  for (std::size_t c = 0; c < count; ++c) {
+    double virial_alone = 0.0;
+    SolverStatus status_alone;
+    ASSERT_TRUE(alone[c]->solve_positions(q.data(), delta.data(), h, box, tolerance, limits.newton,
+                                          limits.line_search, work, impulse_alone.data(),
+                                          virial_alone, status_alone));
+    // Only the chain that needs a halving is left unsolved.
+    EXPECT_EQ(solved[c], c != 5) << "chain " << c;
+    if (!solved[c]) {
+      double redone = 0.0;
+      ASSERT_TRUE(chains[c]->solve_positions(q.data(), delta.data(), h, box, tolerance,
+                                             limits.newton, limits.line_search, work,
+                                             impulse_lanes.data(), redone, status[c]));
+      virial[c] = redone;
+    }
+    EXPECT_EQ(virial[c], virial_alone) << "chain " << c;
+    EXPECT_EQ(status[c].iterations, status_alone.iterations) << "chain " << c;
+    EXPECT_EQ(status[c].residual, status_alone.residual) << "chain " << c;
+  }
+  EXPECT_EQ(status[6].iterations, 0);
+  expect_equal_components(impulse_lanes, impulse_alone);
+
+  // Momentum projection at the end positions.
+  std::vector<Vec3> x(q.size());
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = q[k] + delta[k] + impulse_alone[k] * h;
+  std::vector<Vec3> p_alone = p, p_lanes = p;
+  RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
+                                  solved);
+  for (std::size_t c = 0; c < count; ++c) {
+    ASSERT_TRUE(solved[c]);
+    std::vector<double> terms(alone[c]->rows());
+    ASSERT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+      EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
+    }
+  }
+  expect_equal_components(p_lanes, p_alone);
 }
 
 }  // namespace

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace deli::rod_passes {
+
+// The per-rod and per-bead passes of RodChain on structure-of-arrays data in chain order:
+// bead b at path position b, rod k between beads k and k+1; a vector of m entries per
+// component is stored as x[0..m), y[m..2m), z[2m..3m). Each lane does the operations the
+// scalar code did for its rod or bead, in the same order, so the loops vectorise without
+// changing a bit (no fused multiply-add: -ffp-contract=off; IEEE sqrt and division are
+// correctly rounded in vector form too). Their file alone is built for the build machine's
+// CPU (DELI_NATIVE) and without errno from sqrt, so it includes no Eigen and no templates
+// the rest of the engine would share.
+
+// Differences d_k = x_i - x_j - period image_k of the rods (forward[k] > 0: i is bead k,
+// else bead k+1; a double, so that the choice is a vector comparison) and their squared lengths d2;
+// true when every |d_k| is within `limit` per axis (the images hold). x: 3(m+1) entries, image and
+// d: 3m.
+bool differences(std::size_t m, const double* x, const double* forward, const double* image,
+                 const double* period, const double* limit, double* d, double* d2);
+
+// d2 -> r = sqrt(d2) and d -> d / r (0 where r is not positive), in place.
+void normalize(std::size_t m, double* d, double* r);
+
+// Per rod: the bound RodChain::held_bound takes the maximum of, and whether it may be used
+// (0 or 1).
+void held_bounds(std::size_t m, const double* d2, const double* length,
+                 const double* inverse_length, double tolerance, double* bound,
+                 std::uint8_t* usable);
+
+// Impulse on every bead from the rods' directions u and multipliers z: 0 + u_a (s_a z_a)
+// (+ u_b (s_b z_b)) over its rods a < b with their signs (first_sign, second_sign per bead).
+// With hw (h times the bead's inverse mass), x0 + impulse hw instead. out: 3(m+1) entries.
+void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
+              const double* second_sign, double* out);
+void positions(std::size_t m, const double* x0, const double* u, const double* z,
+               const double* first_sign, const double* second_sign, const double* hw, double* out);
+
+// The band entries of the Newton (RATTLE) matrix as ClusterRows::coupling_bands makes them:
+// diagonal 0 + w_low d + w_high d with d = a_k . b_k, upper 0 + coupling_k a_k . b_{k+1},
+// lower 0 + coupling_{k-1} a_k . b_{k-1}, each times scale; rhs = -minus_rhs.
+void bands(std::size_t m, const double* a, const double* b, const double* w_low,
+           const double* w_high, const double* coupling, double scale, const double* minus_rhs,
+           double* lower, double* diagonal, double* upper, double* rhs);
+
+// RATTLE's right-hand side: 0 + s_low u_k . v_low + s_high u_k . v_high per rod (low_first[k] > 0:
+// the lower numbered bead is bead k, else bead k+1). v: 3(m+1) entries.
+void projections(std::size_t m, const double* u, const double* v, const double* low_first,
+                 const double* low_sign, const double* high_sign, double* out);
+
+// Chains solved in lockstep, one per lane: a tridiagonal elimination is a chain of
+// dependent divisions, so `lanes` chains of the same number of rods share each vector step.
+constexpr std::size_t lanes = 8;
+
+// solve_tridiagonal_twisted (tridiagonal.hpp) for `lanes` systems of n rows at once, every
+// lane by the same operations in the same order: bands, rhs, x and c (scratch) hold entry
+// (k, lane) at k * lanes + lane. solved[lane]: 1 where the template would return true.
+void eliminate_lanes(std::size_t n, const double* lower, const double* diagonal,
+                     const double* upper, const double* rhs, double* x, double* c,
+                     std::uint8_t* solved);
+
+}  // namespace deli::rod_passes
