@@ -119,14 +119,17 @@ void Gvi::start_step(System& system) {
   const std::size_t n = P.size();
   ws_.p.resize(n);
   // The free prediction first, even with the constrained predictor: it decides whether the
-  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers,
+  // and the start positions q copied in the same pass.
   bool prediction_covered = false;  // known to be covered (else asked below)
+  bool q_copied = false;            // ws_.q holds P.position
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
     std::vector<Vec3>& d = ws_.displacement;
     d.resize(n);
     ws_.predicted.resize(n);
+    ws_.q.resize(n);
     // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
     // test, particle by particle), counted per chunk.
     const NeighborList& list = engine_.neighbors();
@@ -137,6 +140,7 @@ void Gvi::start_step(System& system) {
     for_each_chunk(n, chunks, [&, h, listed](int c, std::size_t begin, std::size_t end) {
       std::size_t count = 0;
       for (std::size_t i = begin; i < end; ++i) {
+        ws_.q[i] = P.position[i];
         ws_.p[i] = P.velocity[i] * P.mass[i];
         d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
         ws_.predicted[i] = P.position[i] + d[i];
@@ -146,6 +150,7 @@ void Gvi::start_step(System& system) {
     });
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
+    q_copied = true;
   } else {
     parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
     predict(system, ws_.p, ws_.predicted, false);
@@ -153,7 +158,8 @@ void Gvi::start_step(System& system) {
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
   if (pairs_matter && !prediction_covered && !engine_.neighbors_cover(ws_.predicted)) {
-    engine_.ensure_neighbors(system, true);
+    engine_.ensure_neighbors(system, true);  // may wrap P.position
+    q_copied = false;
     predict(system, ws_.p, ws_.predicted, false);
     if (!engine_.neighbors_cover(ws_.predicted)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
@@ -161,8 +167,11 @@ void Gvi::start_step(System& system) {
                             "step; increase [neighbor] skin or reduce the timestep");
     }
   }
-  ws_.q = P.position;
-  ws_.p_start = ws_.p;
+  if (!q_copied) ws_.q = P.position;
+  // Read only by the energy restoration and the impact-time step.
+  if (feasibility_ == Feasibility::restore || contact_ == ContactTreatment::impact_time) {
+    ws_.p_start = ws_.p;
+  }
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.reach = -1.0;
