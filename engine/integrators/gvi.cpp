@@ -14,6 +14,14 @@
 
 namespace deli {
 
+namespace {
+// Particle i's impulse from the held rows' position solve: +0 (what the solve's zeroed
+// vector holds) when no row was held, which leaves `impulse` empty.
+Vec3 held_impulse(const GviWorkspace& ws, std::size_t i) {
+  return ws.impulse.empty() ? Vec3{} : ws.impulse[i];
+}
+}  // namespace
+
 Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOptions& options,
          const Particles& particles)
     : ConstrainedIntegrator(force_field, std::move(constraints), options.timestep, options.skin,
@@ -446,7 +454,7 @@ void Gvi::displaced(const Particles& P) {
   ws_.x_listed = false;
   if (!by_particle) {
     ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
-      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
       return norm2(ws_.x[i] - ws_.q[i]);
     });
     return;
@@ -467,7 +475,7 @@ void Gvi::displaced(const Particles& P) {
     double largest = 0.0;
     std::size_t beyond = 0, beyond_list = 0;
     for (std::size_t i = begin; i < end; ++i) {
-      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
       const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
       largest = std::max(largest, moved2);
       beyond += !(moved2 <= limit2[i]);
@@ -512,14 +520,16 @@ void Gvi::solve_held_positions(System& system) {
                          ws_.kicked_displacement.size() == n && ws_.prediction_kick.size() == n;
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
-    ws_.impulse.assign(n, Vec3{});
-    if (!rows.empty()) {
-      ws_.free.resize(n);
-      parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
-      ws_.position_virial =
-          solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse, nullptr,
-                          predicted ? &prediction : nullptr);
+    // No rows held (a hard-sphere fluid's usual step): every impulse is zero, not stored.
+    if (rows.empty()) {
+      ws_.impulse.clear();
+      return;
     }
+    ws_.impulse.assign(n, Vec3{});
+    ws_.free.resize(n);
+    parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
+    ws_.position_virial = solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse,
+                                          nullptr, predicted ? &prediction : nullptr);
   };
   if (lagrangian_ == Lagrangian::verlet) {
     solve();
@@ -621,7 +631,7 @@ void Gvi::update_momenta(System& system, bool tally) {
       feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
   parallel_for(n, [&](std::size_t i) {
     P.position[i] = ws_.x[i];
-    p[i] = ws_.half[i] + ws_.impulse[i];
+    p[i] = ws_.half[i] + held_impulse(ws_, i);
   });
   system.step += 1;
   system.time += h;
