@@ -43,10 +43,6 @@ Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool wit
 }
 
 namespace {
-// reflect()'s vectors and matrices, kept between calls: a hard-sphere fluid reflects a few
-// small clusters every step, and their shapes repeat, so each keeps its storage (Eigen
-// reallocates only when a size changes). The arithmetic is the same expressions into kept
-// objects; nothing is carried from one call to the next.
 // One solve's matrices, kept per number of rows in the solve (the set changes within a
 // call); row counts above kRowCountsKeptApart (large clusters, rare) share one.
 constexpr std::size_t kRowCountsKeptApart = 16;
@@ -55,6 +51,10 @@ struct SolveScratch {
   Eigen::VectorXd c, lambda;
 };
 
+// reflect()'s vectors and matrices, kept between calls: a hard-sphere fluid reflects a few
+// small clusters every step, and their shapes repeat, so each keeps its storage (Eigen
+// reallocates only when a size changes). The arithmetic is the same expressions into kept
+// objects; nothing is carried from one call to the next.
 struct ReflectionScratch {
   std::vector<int> eq_rows, in_rows, set, rows;
   std::vector<char> reflected, ever_in_set;
