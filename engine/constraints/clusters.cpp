@@ -44,18 +44,24 @@ std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
       if (cluster_of_root[p] == named) touched.push_back(static_cast<std::int32_t>(p));
     }
   }
-  std::vector<Cluster> clusters;
-  std::vector<std::int32_t> row_count;
+  // Each cluster's particle and row counts first, so that every list is allocated once.
+  thread_local std::vector<std::int32_t> member_count, row_count, cluster_of_row;
+  member_count.clear();
   for (const std::int32_t p : touched) {
     const std::int32_t top = union_find_root(parent, p);
     if (cluster_of_root[top] < 0) {
-      cluster_of_root[top] = static_cast<std::int32_t>(clusters.size());
-      clusters.emplace_back();
-      row_count.push_back(0);
+      cluster_of_root[top] = static_cast<std::int32_t>(member_count.size());
+      member_count.push_back(0);
     }
-    clusters[cluster_of_root[top]].particles.push_back(p);
+    ++member_count[cluster_of_root[top]];
   }
-  std::vector<std::int32_t> cluster_of_row(rows.size());
+  std::vector<Cluster> clusters(member_count.size());
+  for (std::size_t k = 0; k < clusters.size(); ++k) clusters[k].particles.reserve(member_count[k]);
+  for (const std::int32_t p : touched) {
+    clusters[cluster_of_root[union_find_root(parent, p)]].particles.push_back(p);
+  }
+  row_count.assign(clusters.size(), 0);
+  cluster_of_row.resize(rows.size());
   for (std::size_t r = 0; r < rows.size(); ++r) {
     cluster_of_row[r] = cluster_of_root[union_find_root(parent, rows[r].i)];
     ++row_count[cluster_of_row[r]];
@@ -72,6 +78,9 @@ LocalCluster localize(const Cluster& cluster, const std::vector<Constraint>& row
                       const std::vector<double>& mass) {
   LocalCluster local;
   local.particles = cluster.particles;
+  local.inverse_mass.reserve(cluster.particles.size());
+  local.rows.reserve(cluster.rows.size());
+  local.global_rows.reserve(cluster.rows.size());
   for (std::int32_t p : cluster.particles) local.inverse_mass.push_back(1.0 / mass[p]);
   auto local_index = [&](std::int32_t global) {
     if (global < 0) return std::int32_t{-1};

@@ -14,6 +14,14 @@
 
 namespace deli {
 
+namespace {
+// Particle i's impulse from the held rows' position solve: +0 (what the solve's zeroed
+// vector holds) when no row was held, which leaves `impulse` empty.
+Vec3 held_impulse(const GviWorkspace& ws, std::size_t i) {
+  return ws.impulse.empty() ? Vec3{} : ws.impulse[i];
+}
+}  // namespace
+
 Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOptions& options,
          const Particles& particles)
     : ConstrainedIntegrator(force_field, std::move(constraints), options.timestep, options.skin,
@@ -119,14 +127,17 @@ void Gvi::start_step(System& system) {
   const std::size_t n = P.size();
   ws_.p.resize(n);
   // The free prediction first, even with the constrained predictor: it decides whether the
-  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers.
+  // neighbour list still covers the step. Verlet: in the momenta's pass, predict's numbers,
+  // and the start positions q copied in the same pass.
   bool prediction_covered = false;  // known to be covered (else asked below)
+  bool q_copied = false;            // ws_.q holds P.position
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
     std::vector<Vec3>& d = ws_.displacement;
     d.resize(n);
     ws_.predicted.resize(n);
+    ws_.q.resize(n);
     // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
     // test, particle by particle), counted per chunk.
     const NeighborList& list = engine_.neighbors();
@@ -137,6 +148,7 @@ void Gvi::start_step(System& system) {
     for_each_chunk(n, chunks, [&, h, listed](int c, std::size_t begin, std::size_t end) {
       std::size_t count = 0;
       for (std::size_t i = begin; i < end; ++i) {
+        ws_.q[i] = P.position[i];
         ws_.p[i] = P.velocity[i] * P.mass[i];
         d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
         ws_.predicted[i] = P.position[i] + d[i];
@@ -146,6 +158,7 @@ void Gvi::start_step(System& system) {
     });
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
+    q_copied = true;
   } else {
     parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
     predict(system, ws_.p, ws_.predicted, false);
@@ -153,7 +166,8 @@ void Gvi::start_step(System& system) {
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
   if (pairs_matter && !prediction_covered && !engine_.neighbors_cover(ws_.predicted)) {
-    engine_.ensure_neighbors(system, true);
+    engine_.ensure_neighbors(system, true);  // may wrap P.position
+    q_copied = false;
     predict(system, ws_.p, ws_.predicted, false);
     if (!engine_.neighbors_cover(ws_.predicted)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
@@ -161,8 +175,11 @@ void Gvi::start_step(System& system) {
                             "step; increase [neighbor] skin or reduce the timestep");
     }
   }
-  ws_.q = P.position;
-  ws_.p_start = ws_.p;
+  if (!q_copied) ws_.q = P.position;
+  // Read only by the energy restoration and the impact-time step.
+  if (feasibility_ == Feasibility::restore || contact_ == ContactTreatment::impact_time) {
+    ws_.p_start = ws_.p;
+  }
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.reach = -1.0;
@@ -437,7 +454,7 @@ void Gvi::displaced(const Particles& P) {
   ws_.x_listed = false;
   if (!by_particle) {
     ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
-      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
       return norm2(ws_.x[i] - ws_.q[i]);
     });
     return;
@@ -458,7 +475,7 @@ void Gvi::displaced(const Particles& P) {
     double largest = 0.0;
     std::size_t beyond = 0, beyond_list = 0;
     for (std::size_t i = begin; i < end; ++i) {
-      ws_.x[i] = ws_.q[i] + (ws_.half[i] + ws_.impulse[i]) * (h / P.mass[i]);
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
       const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
       largest = std::max(largest, moved2);
       beyond += !(moved2 <= limit2[i]);
@@ -503,14 +520,16 @@ void Gvi::solve_held_positions(System& system) {
                          ws_.kicked_displacement.size() == n && ws_.prediction_kick.size() == n;
   const SolvedEqualities prediction{ws_.kicked_displacement, ws_.prediction_kick};
   auto solve = [&] {
-    ws_.impulse.assign(n, Vec3{});
-    if (!rows.empty()) {
-      ws_.free.resize(n);
-      parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
-      ws_.position_virial =
-          solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse, nullptr,
-                          predicted ? &prediction : nullptr);
+    // No rows held (a hard-sphere fluid's usual step): every impulse is zero, not stored.
+    if (rows.empty()) {
+      ws_.impulse.clear();
+      return;
     }
+    ws_.impulse.assign(n, Vec3{});
+    ws_.free.resize(n);
+    parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
+    ws_.position_virial = solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse,
+                                          nullptr, predicted ? &prediction : nullptr);
   };
   if (lagrangian_ == Lagrangian::verlet) {
     solve();
@@ -614,7 +633,7 @@ void Gvi::update_momenta(System& system, bool tally) {
       feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
   parallel_for(n, [&](std::size_t i) {
     P.position[i] = ws_.x[i];
-    p[i] = ws_.half[i] + ws_.impulse[i];
+    p[i] = ws_.half[i] + held_impulse(ws_, i);
   });
   system.step += 1;
   system.time += h;

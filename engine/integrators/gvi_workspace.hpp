@@ -14,7 +14,7 @@ struct GviWorkspace {
   // Prediction.
   std::vector<Vec3> p;                                 // momenta being updated (reflections, kicks)
   std::vector<Vec3> q;                                 // positions at the start of the step
-  std::vector<Vec3> p_start;                           // momenta at the start of the step
+  std::vector<Vec3> p_start;                           // start momenta, where read (start_step)
   std::vector<Vec3> predicted;                         // where the step would end unconstrained
   std::vector<Vec3> displacement;                      // the unconstrained step's displacement
   std::vector<Vec3> prediction_kick;                   // the constrained predictor's impulses

@@ -42,22 +42,65 @@ Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool wit
   return out;
 }
 
+namespace {
+// One solve's matrices, kept per number of rows in the solve (the set changes within a
+// call); row counts above kRowCountsKeptApart (large clusters, rare) share one.
+constexpr std::size_t kRowCountsKeptApart = 16;
+struct SolveScratch {
+  Eigen::MatrixXd NV, KN, Q;
+  Eigen::VectorXd c, lambda;
+};
+
+// reflect()'s vectors and matrices, kept between calls: a hard-sphere fluid reflects a few
+// small clusters every step, and their shapes repeat, so each keeps its storage (Eigen
+// reallocates only when a size changes). The arithmetic is the same expressions into kept
+// objects; nothing is carried from one call to the next.
+struct ReflectionScratch {
+  std::vector<int> eq_rows, in_rows, set, rows;
+  std::vector<char> reflected, ever_in_set;
+  Eigen::VectorXd w, k_diag, flat, weighted_flat, total_lambda, normal_velocity;
+  Eigen::MatrixXd N, Y;
+  std::vector<SolveScratch> solves = std::vector<SolveScratch>(kRowCountsKeptApart + 1);
+  SolveScratch& solve_of(std::size_t rows) {
+    return solves[rows <= kRowCountsKeptApart ? rows : 0];
+  }
+  // Momenta after each solve; the first `history_size` entries are this call's.
+  std::vector<Eigen::VectorXd> history;
+  std::size_t history_size = 0;
+};
+
+// The columns `columns` of N, in that order, as NV.
+void select_columns(const Eigen::MatrixXd& N, const std::vector<int>& columns,
+                    Eigen::MatrixXd& NV) {
+  NV.resize(N.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    NV.col(static_cast<Eigen::Index>(k)) = N.col(columns[k]);
+  }
+}
+}  // namespace
+
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
                         const std::vector<Vec3>& q, std::vector<Vec3>& p, const Box& box,
                         ReflectionOperator op, double tolerance, const SolverLimits& limits,
                         const ShadowOperator* shadow) {
-  std::vector<int> eq_rows, in_rows;
+  thread_local ReflectionScratch s;
+  std::vector<int>& eq_rows = s.eq_rows;
+  std::vector<int>& in_rows = s.in_rows;
+  eq_rows.clear();
+  in_rows.clear();
   for (std::size_t k = 0; k < cluster.rows.size(); ++k) {
     (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
   }
   ReflectionStats stats;
   if (in_rows.empty()) return stats;
-  const Eigen::VectorXd w = inverse_mass_diagonal(cluster);
+  const Eigen::VectorXd& w = s.w;
+  inverse_mass_diagonal(cluster, s.w);
   // N = G - F Y, Y = (F^T W F)^+ F^T W G: projected_normals' N, with Y (the equality rows'
   // share of an impulse N lambda is -Y lambda) from the same decomposition instead of a
   // second one.
-  Eigen::MatrixXd N = gradient_matrix(cluster, in_rows, q, box);
-  Eigen::MatrixXd Y;
+  Eigen::MatrixXd& N = s.N;
+  Eigen::MatrixXd& Y = s.Y;
+  gradient_matrix(cluster, in_rows, q, box, N);
   // Chains of rods in O(rows); other equality rows through the dense pseudo-inverse.
   if (!eq_rows.empty() && !project_out_chains(cluster, eq_rows, q, box, N, Y)) {
     const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
@@ -67,41 +110,49 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     N -= F * Y;
   }
   stats.row_impulse.assign(cluster.rows.size(), 0.0);
-  Eigen::VectorXd total_lambda = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(in_rows.size()));
-  const Eigen::VectorXd k_diag = 0.5 * w;  // K = M^-1 / 2 (E = H)
-  Eigen::VectorXd flat = flatten(p);
-  std::vector<bool> reflected(in_rows.size(), false);
+  Eigen::VectorXd& total_lambda = s.total_lambda;
+  total_lambda.setZero(static_cast<Eigen::Index>(in_rows.size()));
+  s.k_diag = 0.5 * w;  // K = M^-1 / 2 (E = H)
+  const Eigen::VectorXd& k_diag = s.k_diag;
+  Eigen::VectorXd& flat = s.flat;
+  flatten(p, flat);
+  std::vector<char>& reflected = s.reflected;
+  reflected.assign(in_rows.size(), 0);
 
   // Momenta after each solve: a later solve landing on one of them bit for bit has entered a
   // cycle (e.g. a particle pinned between two parallel walls bounces from one to the other
   // for ever), which no number of further iterations leaves.
-  std::vector<Eigen::VectorXd> history;
-  std::vector<bool> ever_in_set(in_rows.size(), false);
+  s.history_size = 0;
+  std::vector<char>& ever_in_set = s.ever_in_set;
+  ever_in_set.assign(in_rows.size(), 0);
   bool stopped = false;
   for (int iteration = 0;; ++iteration) {
-    const Eigen::VectorXd normal_velocity = N.transpose() * (w.asDiagonal() * flat);
-    std::vector<int> set;
+    // N^T (W p), W p made first (what the product would make as its own temporary).
+    s.weighted_flat.noalias() = w.asDiagonal() * flat;
+    s.normal_velocity.noalias() = N.transpose() * s.weighted_flat;
+    const Eigen::VectorXd& normal_velocity = s.normal_velocity;
+    std::vector<int>& set = s.set;
+    set.clear();
     for (std::size_t k = 0; k < in_rows.size(); ++k) {
       const bool approaching = normal_velocity(static_cast<Eigen::Index>(k)) < -tolerance;
       if (op == ReflectionOperator::moreau ? true : approaching) set.push_back(static_cast<int>(k));
     }
     if (op == ReflectionOperator::generalized && set.empty()) break;
     if (op == ReflectionOperator::moreau && iteration == 1) break;
-    for (int k : set) ever_in_set[k] = true;
+    for (int k : set) ever_in_set[k] = 1;
     if (iteration >= limits.reflection_solves) {
       stats.capped = true;
       stopped = true;
       break;
     }
-    Eigen::MatrixXd NV(N.rows(), static_cast<Eigen::Index>(set.size()));
-    for (std::size_t k = 0; k < set.size(); ++k) {
-      NV.col(static_cast<Eigen::Index>(k)) = N.col(set[k]);
-    }
+    SolveScratch& solve = s.solve_of(set.size());
+    Eigen::MatrixXd &NV = solve.NV, &KN = solve.KN, &Q = solve.Q;
+    Eigen::VectorXd &c = solve.c, &lambda = solve.lambda;
+    select_columns(N, set, NV);
     // E = H: K = M^-1 / 2, Q = N^T K N, c = 2 N^T K p.
-    const Eigen::MatrixXd KN = k_diag.asDiagonal() * NV;
-    const Eigen::MatrixXd Q = NV.transpose() * KN;
-    const Eigen::VectorXd c = 2.0 * (KN.transpose() * flat);
-    Eigen::VectorXd lambda;
+    KN.noalias() = k_diag.asDiagonal() * NV;
+    Q.noalias() = NV.transpose() * KN;
+    c.noalias() = 2.0 * (KN.transpose() * flat);
     bool solved = false;
     if (shadow) {
       // K~ = K + h^2/12 W d2V W (W = M^-1): the Hessian acts on velocities.
@@ -144,45 +195,46 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     for (std::size_t k = 0; k < set.size(); ++k)
       total_lambda(set[k]) += lambda(static_cast<Eigen::Index>(k));
     for (std::size_t k = 0; k < set.size(); ++k) {
-      if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[set[k]] = true;
+      if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[set[k]] = 1;
     }
     if (op == ReflectionOperator::generalized) {
-      for (const Eigen::VectorXd& earlier : history) {
-        if (earlier == flat) stats.cycled = true;
+      for (std::size_t h = 0; h < s.history_size; ++h) {
+        if (s.history[h] == flat) stats.cycled = true;
       }
       if (stats.cycled) {
         stopped = true;
         break;
       }
-      history.push_back(flat);
+      if (s.history.size() == s.history_size) s.history.emplace_back();
+      s.history[s.history_size++] = flat;
     }
   }
   if (stopped) {
     // No energy-preserving way out: take the least kinetic energy change that leaves every
     // row met so far non-approaching (an inelastic Moreau step, min |p' - p|_K over
     // p' = p + N lambda, lambda >= 0), so the step ends feasible. Counted by the caller.
-    std::vector<int> rows;
+    std::vector<int>& rows = s.rows;
+    rows.clear();
     for (std::size_t k = 0; k < in_rows.size(); ++k) {
       if (ever_in_set[k]) rows.push_back(static_cast<int>(k));
     }
-    Eigen::MatrixXd NV(N.rows(), static_cast<Eigen::Index>(rows.size()));
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-      NV.col(static_cast<Eigen::Index>(k)) = N.col(rows[k]);
-    }
-    const Eigen::MatrixXd KN = k_diag.asDiagonal() * NV;
-    const Eigen::MatrixXd Q = NV.transpose() * KN;
-    const Eigen::VectorXd c = KN.transpose() * flat;
-    Eigen::VectorXd lambda;
+    SolveScratch& solve = s.solve_of(rows.size());
+    Eigen::MatrixXd &NV = solve.NV, &KN = solve.KN, &Q = solve.Q;
+    Eigen::VectorXd &c = solve.c, &lambda = solve.lambda;
+    select_columns(N, rows, NV);
+    KN.noalias() = k_diag.asDiagonal() * NV;
+    Q.noalias() = NV.transpose() * KN;
+    c.noalias() = KN.transpose() * flat;
     const SolverStatus qp = solve_nonnegative_qp(
         Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()), limits.qp_iterations);
     if (!qp.converged) ++stats.qp_caps;
     flat += NV * lambda;
     for (std::size_t k = 0; k < rows.size(); ++k) {
       total_lambda(rows[k]) += lambda(static_cast<Eigen::Index>(k));
-      if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[rows[k]] = true;
+      if (lambda(static_cast<Eigen::Index>(k)) > 0) reflected[rows[k]] = 1;
     }
   }
-  for (bool r : reflected) stats.reflected += r ? 1 : 0;
+  for (char r : reflected) stats.reflected += r ? 1 : 0;
   for (std::size_t k = 0; k < in_rows.size(); ++k)
     stats.row_impulse[in_rows[k]] = total_lambda(static_cast<Eigen::Index>(k));
   if (!eq_rows.empty()) {
@@ -191,7 +243,7 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       stats.row_impulse[eq_rows[k]] = along_equalities(static_cast<Eigen::Index>(k));
     }
   }
-  p = unflatten(flat);
+  unflatten(flat, p);
   return stats;
 }
 

@@ -19,4 +19,11 @@ Eigen::VectorXd inverse_mass_diagonal(const LocalCluster& cluster);
 Eigen::VectorXd flatten(const std::vector<Vec3>& v);
 std::vector<Vec3> unflatten(const Eigen::VectorXd& v);
 
+// The same into kept storage (no allocation when the size is the one it already has).
+void gradient_matrix(const LocalCluster& cluster, const std::vector<int>& rows,
+                     const std::vector<Vec3>& x, const Box& box, Eigen::MatrixXd& G);
+void inverse_mass_diagonal(const LocalCluster& cluster, Eigen::VectorXd& w);
+void flatten(const std::vector<Vec3>& v, Eigen::VectorXd& out);
+void unflatten(const Eigen::VectorXd& v, std::vector<Vec3>& out);
+
 }  // namespace deli

@@ -142,6 +142,34 @@ TEST(Reflection, DependentPairOfNormalsBouncesOnce) {
   expect_vec_near(p[0], {0.6, -0.2, 2.0}, 1e-14);
 }
 
+// reflect() and the QP keep their vectors and decompositions between calls: a call after
+// others of other sizes gives the same bits as the first (the expected values are that first
+// call's: same input, same result). A corner of two walls, the floor listed twice (three
+// rows, one particle), then two particles on the floor (two rows), then the corner again.
+TEST(Reflection, KeptScratchCarriesNothingToTheNextCall) {
+  Constraint wall = floor_at(0, 0.0);
+  wall.normal = {1, 0, 0};
+  const LocalCluster corner = cluster_of({2.0}, {floor_at(0, 0.0), wall, floor_at(0, 0.0)});
+  const LocalCluster pair = cluster_of({1.0, 3.0}, {floor_at(0, 0.0), floor_at(1, 0.0)});
+  auto bounce_corner = [&](std::vector<Vec3>& p) {
+    return reflect(corner, {false, false, false}, {{0.0, 0.1, 0.0}}, p, kOpenBox,
+                   ReflectionOperator::generalized, 1e-10, kLimits);
+  };
+  std::vector<Vec3> first{{-0.7, 0.3, -1.1}};
+  const ReflectionStats first_stats = bounce_corner(first);
+  std::vector<Vec3> p_pair{{0.2, 0.0, -0.5}, {0.0, 0.4, -0.9}};
+  (void)reflect(pair, {false, false}, {{0, 0, 0}, {1, 0, 0}}, p_pair, kOpenBox,
+                ReflectionOperator::generalized, 1e-10, kLimits);
+  std::vector<Vec3> again{{-0.7, 0.3, -1.1}};
+  const ReflectionStats again_stats = bounce_corner(again);
+  EXPECT_EQ(again[0].x, first[0].x);
+  EXPECT_EQ(again[0].y, first[0].y);
+  EXPECT_EQ(again[0].z, first[0].z);
+  EXPECT_EQ(again_stats.row_impulse, first_stats.row_impulse);
+  EXPECT_EQ(again_stats.iterations, first_stats.iterations);
+  expect_vec_near(first[0], {0.7, 0.3, 1.1}, 1e-14);  // both normal components reversed
+}
+
 // --- Momentum update --------------------------------------------------------------------
 
 // A flat square with its four sides and both diagonals as rods: six rows on four particles
