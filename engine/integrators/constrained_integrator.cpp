@@ -118,6 +118,33 @@ struct UnconvergedCluster {
   PositionProblem problem;
   std::string before_file, after_file;  // the message around "the problem FILE"
 };
+
+// Clusters begin..end-1 in index order: runs of up to RodChainLanes::width consecutive chains
+// of one length (chain_of(index) non-null) go to together(chains, indices, count) with
+// count >= 2; every other cluster, and a run of one, to alone(index).
+template <class ChainOf, class Alone, class Together>
+void by_chain_runs(std::size_t begin, std::size_t end, const ChainOf& chain_of, const Alone& alone,
+                   const Together& together) {
+  constexpr std::size_t width = RodChainLanes::width;
+  std::size_t index = begin;
+  while (index < end) {
+    const RodChain* chains[width];
+    std::size_t indices[width];
+    std::size_t count = 0;
+    for (; index < end && count < width; ++index) {
+      const RodChain* chain = chain_of(index);
+      if (!chain || (count > 0 && chain->rows() != chains[0]->rows())) break;
+      chains[count] = chain;
+      indices[count++] = index;
+    }
+    if (count <= 1) {
+      if (count == 0) ++index;
+      alone(count == 0 ? index - 1 : indices[0]);
+      continue;
+    }
+    together(chains, indices, count);
+  }
+}
 }  // namespace
 
 // The clusters are independent (disjoint particles): they are solved in chunks of clusters
@@ -270,25 +297,11 @@ double ConstrainedIntegrator::solve_positions(
     for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
       RodChainWorkspace& work = chain_works_[static_cast<std::size_t>(c)];
       RodChainLanes& lanes = chain_lanes_[static_cast<std::size_t>(c)];
-      constexpr std::size_t width = RodChainLanes::width;
-      std::size_t index = begin;
-      while (index < end) {
-        // Up to `width` consecutive chains of one length, solved together; what they leave
-        // unsolved (and every other cluster) is solved alone, in index order.
-        const RodChain* chains[width];
-        std::size_t indices[width];
-        std::size_t count = 0;
-        for (; index < end && count < width; ++index) {
-          const RodChain* chain = chain_to_solve(index);
-          if (!chain || (count > 0 && chain->rows() != chains[0]->rows())) break;
-          chains[count] = chain;
-          indices[count++] = index;
-        }
-        if (count <= 1) {
-          if (count == 0) ++index;
-          solve_cluster(count == 0 ? index - 1 : indices[0], work);
-          continue;
-        }
+      // Consecutive chains of one length solved together; what they leave unsolved (and
+      // every other cluster) is solved alone, in index order.
+      auto alone = [&](std::size_t index) { solve_cluster(index, work); };
+      auto together = [&](const RodChain** chains, const std::size_t* indices, std::size_t count) {
+        constexpr std::size_t width = RodChainLanes::width;
         double chain_virial[width];
         SolverStatus status[width];
         bool solved[width];
@@ -309,7 +322,8 @@ double ConstrainedIntegrator::solve_positions(
             equality_chain_solved_[at] = 1;
           }
         }
-      }
+      };
+      by_chain_runs(begin, end, chain_to_solve, alone, together);
     });
   } catch (const UnconvergedCluster& failure) {
     const PositionProblem& problem = failure.problem;
@@ -383,25 +397,9 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
   for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
     RodChainWorkspace& work = chain_works_[static_cast<std::size_t>(c)];
     RodChainLanes& lanes = chain_lanes_[static_cast<std::size_t>(c)];
-    constexpr std::size_t width = RodChainLanes::width;
-    std::size_t index = begin;
-    while (index < end) {
-      // As in solve_positions: consecutive chains of one length together.
-      const RodChain* chains[width];
-      std::size_t indices[width];
-      std::size_t count = 0;
-      for (; index < end && count < width; ++index) {
-        const RodChain* chain = chain_of(index);
-        if (!chain || (count > 0 && chain->rows() != chains[0]->rows())) break;
-        chains[count] = chain;
-        indices[count++] = index;
-      }
-      if (count <= 1) {
-        if (count == 0) ++index;
-        project_cluster(count == 0 ? index - 1 : indices[0], work);
-        continue;
-      }
-      bool solved[width];
+    auto alone = [&](std::size_t index) { project_cluster(index, work); };
+    auto together = [&](const RodChain** chains, const std::size_t* indices, std::size_t count) {
+      bool solved[RodChainLanes::width];
       RodChain::project_momenta_lanes(chains, count, x.data(), p.data(), system.box, lanes, solved);
       const std::size_t m = chains[0]->rows();
       for (std::size_t l = 0; l < count; ++l) {
@@ -411,7 +409,8 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
         }
         std::copy_n(lanes.virial_terms.data() + l * m, m, virial_terms_.take(indices[l], m));
       }
-    }
+    };
+    by_chain_runs(begin, end, chain_of, alone, together);
   });
   double virial = 0.0;
   virial_terms_.add_to(virial);

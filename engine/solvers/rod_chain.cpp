@@ -324,12 +324,16 @@ RodChain::LineSearch RodChain::line_search(const Box& box, double tolerance, int
   }
 }
 
+void RodChain::bead_impulses(RodChainWorkspace& ws) const {
+  ws.impulse.resize(3 * beads());
+  rod_passes::impulses(rows(), memo_.u.data(), ws.z.data(), first_sign_.data(), second_sign_.data(),
+                       ws.impulse.data());
+}
+
 void RodChain::finish_positions(RodChainWorkspace& ws, Vec3* impulse, double& virial) const {
   const std::size_t n = beads();
   const std::size_t m = rows();
-  ws.impulse.resize(3 * n);
-  rod_passes::impulses(m, memo_.u.data(), ws.z.data(), first_sign_.data(), second_sign_.data(),
-                       ws.impulse.data());
+  bead_impulses(ws);
   for (std::size_t b = 0; b < n; ++b) {
     impulse[bead_particle_[b]] = {ws.impulse[b], ws.impulse[n + b], ws.impulse[2 * n + b]};
   }
@@ -443,9 +447,7 @@ void RodChain::begin_momenta(const Vec3* x, const Vec3* p, const Box& box,
 void RodChain::finish_momenta(RodChainWorkspace& ws, Vec3* p, double* virial_terms) const {
   const std::size_t n = beads();
   const std::size_t m = rows();
-  ws.impulse.resize(3 * n);
-  rod_passes::impulses(m, memo_.u.data(), ws.z.data(), first_sign_.data(), second_sign_.data(),
-                       ws.impulse.data());
+  bead_impulses(ws);
   for (std::size_t b = 0; b < n; ++b) {
     p[bead_particle_[b]] += Vec3{ws.impulse[b], ws.impulse[n + b], ws.impulse[2 * n + b]};
   }

@@ -117,6 +117,9 @@ class RodChain {
   enum class LineSearch { held, descended, failed };
   LineSearch line_search(const Box& box, double tolerance, int halvings, RodChainWorkspace& ws,
                          SolverStatus& status) const;
+  // Per bead, the impulse C z of the multipliers ws.z along the remembered directions, into
+  // ws.impulse (x, y, z blocks of beads() each).
+  void bead_impulses(RodChainWorkspace& ws) const;
   // The impulses C(q) z and the virial of a converged solve.
   void finish_positions(RodChainWorkspace& ws, Vec3* impulse, double& virial) const;
   // Gathers the velocities at positions x, remembers x's directions and makes RATTLE's

@@ -150,17 +150,22 @@ double shadow_change_over_bounce(int remainder_steps, double start) {
 // falls; with the rest read from 10 virtual Verlet steps either side (shadow_remainder.hpp)
 // the change of S over the bounce, averaged (signed and absolute) over 16 places of the
 // contact in its step, is to be a small part of it.
-TEST(ContactTreatment, ImpactTimeShadowRemainderKeepsModifiedEnergyOverBounce) {
-  double alone = 0, alone_abs = 0, with = 0, with_abs = 0;
+// The mean and the mean absolute value of change(remainder_steps, start) over 16 places of
+// the contact in its step (the starting distance moved by 1.2 h / 16 at a time).
+template <class Change>
+std::pair<double, double> over_places(const Change& change, int remainder_steps) {
+  double mean = 0, mean_abs = 0;
   for (int k = 0; k < 16; ++k) {
-    const double start = 2.0 + 1.2 * 0.016 * k / 16;
-    const double a = shadow_change_over_bounce(0, start);
-    const double b = shadow_change_over_bounce(10, start);
-    alone += a / 16;
-    alone_abs += std::abs(a) / 16;
-    with += b / 16;
-    with_abs += std::abs(b) / 16;
+    const double value = change(remainder_steps, 2.0 + 1.2 * 0.016 * k / 16);
+    mean += value / 16;
+    mean_abs += std::abs(value) / 16;
   }
+  return {mean, mean_abs};
+}
+
+TEST(ContactTreatment, ImpactTimeShadowRemainderKeepsModifiedEnergyOverBounce) {
+  const auto [alone, alone_abs] = over_places(shadow_change_over_bounce, 0);
+  const auto [with, with_abs] = over_places(shadow_change_over_bounce, 10);
   std::printf(
       "change of S over a bounce: S alone mean %.3e, mean |.| %.3e; with the rest %.3e, "
       "%.3e\n",
@@ -222,16 +227,8 @@ double dimer_shadow_change_over_bounce(int remainder_steps, double start) {
 // 40, against a mean |.| of 2.7e-5 for S alone). S alone's signed mean over the 16 places is
 // small here (4.8e-7): both are held to its mean |.|.
 TEST(ContactTreatment, ImpactTimeShadowRemainderKeepsModifiedEnergyOverBounceWithRods) {
-  double alone = 0, alone_abs = 0, with = 0, with_abs = 0;
-  for (int k = 0; k < 16; ++k) {
-    const double start = 2.0 + 1.2 * 0.016 * k / 16;
-    const double a = dimer_shadow_change_over_bounce(0, start);
-    const double b = dimer_shadow_change_over_bounce(40, start);
-    alone += a / 16;
-    alone_abs += std::abs(a) / 16;
-    with += b / 16;
-    with_abs += std::abs(b) / 16;
-  }
+  const auto [alone, alone_abs] = over_places(dimer_shadow_change_over_bounce, 0);
+  const auto [with, with_abs] = over_places(dimer_shadow_change_over_bounce, 40);
   std::printf(
       "rod dimers, change of S over a bounce: S alone mean %.3e, mean |.| %.3e; with the rest "
       "%.3e, %.3e\n",
