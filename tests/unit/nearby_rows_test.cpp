@@ -91,8 +91,8 @@ TEST(NearbyRows, RowsWithinTheReachInTheScansOrder) {
   }
 }
 
-// On two threads the list's scan (1024 particles and more) and the screen (cheap items: here
-// split from 1024 pairs on) run in chunks joined in chunk order: the same rows, in the same
+// On two threads the list's scan and the screen (both cheap items: here split from 1024
+// particles and 1024 pairs on) run in chunks joined in chunk order: the same rows, in the same
 // order, with the same gaps bit for bit as on one thread, and those of the plain scan.
 TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
 #ifndef _OPENMP
