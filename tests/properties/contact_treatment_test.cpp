@@ -109,6 +109,28 @@ TEST(ContactTreatment, ImpactTimeBounceErrorIsSecondOrder) {
   EXPECT_LT(std::abs(at_h), 0.1 * std::abs(mean_bounce_error(ContactTreatment::paper, 0.002)));
 }
 
+// The input run with impact_time's shadow_remainder_steps for `duration` (steps of its
+// timestep): the change of the thermo's shadow energy S from the end of the first step to the
+// end of the run, and the run's statistics.
+struct ShadowChange {
+  double change;
+  std::vector<std::pair<std::string, double>> stats;
+};
+ShadowChange shadow_change_over_run(RunInput& input, int remainder_steps, double duration) {
+  GviOptions options = input.gvi;
+  options.shadow_remainder_steps = remainder_steps;
+  Gvi gvi(*input.force_field, input.constraints, options, input.system.particles);
+  System& s = input.system;
+  gvi.setup(s);
+  const auto steps = static_cast<int>(std::lround(duration / options.timestep));
+  double first = 0;
+  for (int n = 0; n < steps; ++n) {
+    gvi.step(s, true);
+    if (n == 0) first = *gvi.shadow_energy(s);
+  }
+  return {*gvi.shadow_energy(s) - first, gvi.take_statistics()};
+}
+
 // Two beads head on (LJ epsilon 1, sigma 1 = hard core, relative speed 1.2 from separation
 // `start`) at h = 0.016, h omega about 0.5 on LJ's wall at the core (omega = (V''(1)/mu)^(1/2)
 // = 30): one bounce, then Verlet's shadow energy S at t = 1.6, where the pair is back at
@@ -125,24 +147,13 @@ double shadow_change_over_bounce(int remainder_steps, double start) {
       "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
       "[integrator]\ntype = \"gvi\"\ntimestep = 0.016\ncontact = \"impact_time\"\n"
       "[run]\nsteps = 0\n");
-  GviOptions options = input.gvi;
-  options.shadow_remainder_steps = remainder_steps;
-  Gvi gvi(*input.force_field, input.constraints, options, input.system.particles);
-  System& s = input.system;
-  gvi.setup(s);
-  const double h = options.timestep;
-  const auto steps = static_cast<int>(std::lround(1.6 / h));
-  double first = 0;
-  for (int n = 0; n < steps; ++n) {
-    gvi.step(s, true);
-    if (n == 0) first = *gvi.shadow_energy(s);
-  }
-  const auto stats = gvi.take_statistics();
-  EXPECT_EQ(statistic(stats, "reflected"), 1);
+  const ShadowChange run = shadow_change_over_run(input, remainder_steps, 1.6);
+  EXPECT_EQ(statistic(run.stats, "reflected"), 1);
+  const System& s = input.system;
   const double separation = s.particles.position[1].x - s.particles.position[0].x;
   EXPECT_GT(separation, 1.6);
   EXPECT_LT(separation, 2.5);
-  return *gvi.shadow_energy(s) - first;
+  return run.change;
 }
 
 // Restoring S alone on the contact step leaves S~ - S of the step's two ends, R(start) -
@@ -198,26 +209,14 @@ double dimer_shadow_change_over_bounce(int remainder_steps, double start) {
       "rods = [{ atoms = [1, 2], length = 1.0 }, { atoms = [3, 4], length = 1.0 }]\n"
       "[integrator]\ntype = \"gvi\"\ntimestep = 0.016\ncontact = \"impact_time\"\n"
       "[run]\nsteps = 0\n");
-  GviOptions options = input.gvi;
-  options.shadow_remainder_steps = remainder_steps;
-  Gvi gvi(*input.force_field, input.constraints, options, input.system.particles);
-  System& s = input.system;
-  gvi.setup(s);
-  const double h = options.timestep;
-  const auto steps = static_cast<int>(std::lround(2.4 / h));
-  double first = 0;
-  for (int n = 0; n < steps; ++n) {
-    gvi.step(s, true);
-    if (n == 0) first = *gvi.shadow_energy(s);
-  }
-  const auto stats = gvi.take_statistics();
-  EXPECT_GE(statistic(stats, "reflected"), 1);
-  EXPECT_EQ(statistic(stats, "landings"), 0);
-  const std::vector<Vec3>& x = s.particles.position;
+  const ShadowChange run = shadow_change_over_run(input, remainder_steps, 2.4);
+  EXPECT_GE(statistic(run.stats, "reflected"), 1);
+  EXPECT_EQ(statistic(run.stats, "landings"), 0);
+  const std::vector<Vec3>& x = input.system.particles.position;
   for (int i : {0, 1}) {
     for (int j : {2, 3}) EXPECT_GT(norm(x[j] - x[i]), 2.5) << "beads " << i << ", " << j;
   }
-  return *gvi.shadow_energy(s) - first;
+  return run.change;
 }
 
 // As ImpactTimeShadowRemainderKeepsModifiedEnergyOverBounce, with rods: the virtual steps are
