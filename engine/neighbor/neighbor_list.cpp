@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "core/parallel.hpp"
+#include "neighbor/candidate_scan.hpp"
 
 namespace deli {
 
@@ -206,6 +207,9 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   std::vector<std::size_t>& slot_of = slot_of_;
   member.resize(static_cast<std::size_t>(n));
   member_position.resize(static_cast<std::size_t>(n));
+  member_x_.resize(static_cast<std::size_t>(n));
+  member_y_.resize(static_cast<std::size_t>(n));
+  member_z_.resize(static_cast<std::size_t>(n));
   member_moved.resize(static_cast<std::size_t>(n));
   member_cell.resize(static_cast<std::size_t>(n));
   slot_of.resize(static_cast<std::size_t>(n));
@@ -216,6 +220,9 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       const std::size_t s = fill[cell_of[i]]++;
       slot_of[i] = s;
       member_position[s] = inside[i];
+      member_x_[s] = inside[i].x;
+      member_y_[s] = inside[i].y;
+      member_z_[s] = inside[i].z;
       member_moved[s] = moved[i];
       member_cell[s] = cell_of[i];
       member[s] = i;
@@ -276,19 +283,27 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     // which the predictor would lose about a third of the time.
     std::vector<std::int32_t> hit_slot = std::move(chunk_hit_slots_[k]);
     std::vector<std::uint8_t> hit_code = std::move(chunk_hit_codes_[k]);
-    hit_slot.resize(static_cast<std::size_t>(n) + 1);
-    hit_code.resize(static_cast<std::size_t>(n) + 1);
+    hit_slot.resize(static_cast<std::size_t>(n) + 1 + kScanSlack);
+    hit_code.resize(static_cast<std::size_t>(n) + 1 + kScanSlack);
+    const double* const at_x = member_x_.data();
+    const double* const at_y = member_y_.data();
+    const double* const at_z = member_z_.data();
     for (std::size_t slot = begin; slot < end; ++slot) {
       const std::int32_t i = member[slot];
       const Vec3 xi = at[slot];
       std::size_t hits = 0;
       auto scan = [&](std::size_t first, std::size_t last, int code) {
         const Vec3 origin = xi - image_shifts_[code];
+        if (shifted) {
+          hits = scan_candidates(at_x, at_y, at_z, first, last, origin.x, origin.y, origin.z,
+                                 within2, static_cast<std::uint8_t>(code), hit_slot.data(),
+                                 hit_code.data(), hits);
+          return;
+        }
         std::int32_t* slot_out = hit_slot.data();
         std::uint8_t* code_out = hit_code.data();
         for (std::size_t m = first; m < last; ++m) {
-          Vec3 d = at[m] - origin;
-          if (!shifted) d = here.minimum_image(d);
+          const Vec3 d = here.minimum_image(at[m] - origin);
           slot_out[hits] = static_cast<std::int32_t>(m);
           code_out[hits] = static_cast<std::uint8_t>(code);
           hits += d.x * d.x + d.y * d.y + d.z * d.z < within2;
@@ -319,7 +334,12 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
         if (!shifted && j <= i) continue;
         if (std::find(partners, partners_end, j) != partners_end) continue;
         out.push_back(j);
-        if (shifted) out_codes.push_back(pair_code(hit_code[h], slot, m, coded));
+        if (shifted) {
+          // Both particles moved by the same periods into the box (nearly always: none),
+          // so the stencil's shift stands.
+          const bool same_moves = member_moved[m] == member_moved[slot];
+          out_codes.push_back(same_moves ? hit_code[h] : pair_code(hit_code[h], slot, m, coded));
+        }
       }
       // Counts within the chunk for now; made global offsets below.
       slot_offsets_[slot + 1] = out.size();

@@ -102,6 +102,7 @@ class NeighborList {
   // afresh, their pages were faulted in again on every build, on the calling thread alone
   // (LJ 32000, 2 threads: 3 % of the run's samples in page faults under the build).
   std::vector<Vec3> inside_, member_position_;
+  std::vector<double> member_x_, member_y_, member_z_;  // member_position_ by component
   std::vector<std::array<int, 3>> moved_, member_moved_;
   std::vector<std::int32_t> cell_of_, member_, member_cell_;
   std::vector<std::size_t> cell_start_, cell_fill_, slot_of_;
