@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
+#include "integrators/contact_group.hpp"
 #include "integrators/shadow_correction.hpp"
 #include "solvers/cluster_matrices.hpp"
 
@@ -715,36 +716,68 @@ void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, 
     const std::vector<Vec3> sum = unflatten(N.rowwise().sum());
     for (std::size_t k = 0; k < cluster.particles.size(); ++k) d[cluster.particles[k]] += sum[k];
   }
-  double kinetic = 0, a = 0, b = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    kinetic += 0.5 * norm2(p[i]) / P.mass[i];
-    a += norm2(d[i]) / P.mass[i];
-    b += dot(d[i], p[i]) / P.mass[i];
-  }
-  double missing = target - (kinetic + engine_.last().potential);
-  if (!(a > 0)) return;
-  if (shadow_target) {
-    // S(p + alpha d) = S(start): the shadow correction's own dependence on alpha joins the
-    // quadratic, so the momenta it is taken with are the restored ones.
+  // E(p + alpha d) = target: E(p) + b alpha + a/2 alpha^2 = E(p) + missing, E the shadow
+  // energy where its own dependence on alpha keeps the quadratic convex (then taken with the
+  // restored momenta themselves), else H. The larger root, or none where there is no real one.
+  struct Along {
+    double a = 0, b = 0, missing = 0;
+    std::optional<double> root() const {
+      const double discriminant = b * b + 2.0 * a * missing;
+      if (discriminant < 0) return std::nullopt;
+      return (-b + std::sqrt(discriminant)) / a;
+    }
+  };
+  auto along = [&](const std::vector<Vec3>& direction) {
+    double kinetic = 0;
+    Along q;
+    for (std::size_t i = 0; i < n; ++i) {
+      kinetic += 0.5 * norm2(p[i]) / P.mass[i];
+      q.a += norm2(direction[i]) / P.mass[i];
+      q.b += dot(direction[i], p[i]) / P.mass[i];
+    }
+    q.missing = target - (kinetic + engine_.last().potential);
+    if (!(q.a > 0) || !shadow_target) return q;
     const auto s = shadow_correction_on_rods(
-        engine_, system, dt_, p, d, constraints_.equalities, [&](std::vector<Vec3>& force) {
+        engine_, system, dt_, p, direction, constraints_.equalities, [&](std::vector<Vec3>& force) {
           project_momenta(system, constraints_.equalities, P.position, force);
         });
-    if (s && a + 2.0 * s->quadratic > 0) {
-      missing = *shadow_target - (kinetic + engine_.last().potential + s->constant);
-      a += 2.0 * s->quadratic;
-      b += s->linear;
+    if (s && q.a + 2.0 * s->quadratic > 0) {
+      q.missing = *shadow_target - (kinetic + engine_.last().potential + s->constant);
+      q.a += 2.0 * s->quadratic;
+      q.b += s->linear;
+    }
+    return q;
+  };
+  const Along normal = along(d);
+  if (!(normal.a > 0)) return;
+  if (const std::optional<double> alpha = normal.root()) {
+    for (std::size_t i = 0; i < n; ++i) p[i] += d[i] * *alpha;
+    return;
+  }
+  // The energy to take away exceeds what the normal motion holds (several contacts in one
+  // step on LJ's steep wall can end it with a potential energy far above the start's). With
+  // impact_time it is taken from the motion relative to the rigid motion (momenta, angular
+  // momentum and rods kept) of the touched rows' particles and their rod clusters, or where
+  // that holds too little (two beads: their normal motion alone), of all particles.
+  if (contact_ == ContactTreatment::impact_time) {
+    std::vector<char> group = contact_group(landed, constraints_.equalities, n);
+    for (int widened = 0; widened < 2; ++widened) {
+      if (widened == 1) {
+        if (std::all_of(group.begin(), group.end(), [](char in) { return in != 0; })) break;
+        group.assign(n, 1);
+      }
+      const std::vector<Vec3> internal = internal_momenta(P, system.box, p, group);
+      const Along relative = along(internal);
+      const std::optional<double> alpha = relative.a > 0 ? relative.root() : std::nullopt;
+      if (alpha) {
+        for (std::size_t i = 0; i < n; ++i) p[i] += internal[i] * *alpha;
+        return;
+      }
     }
   }
-  // K(p + alpha d) = K(p) + missing: a/2 alpha^2 + b alpha - missing = 0.
-  const double discriminant = b * b + 2.0 * a * missing;
-  double alpha;
-  if (discriminant >= 0) {
-    alpha = (-b + std::sqrt(discriminant)) / a;
-  } else {
-    alpha = -b / a;
-    ++stats_.deficits;
-  }
+  // Out of reach: the normal motion stopped, the rest left.
+  ++stats_.deficits;
+  const double alpha = -normal.b / normal.a;
   for (std::size_t i = 0; i < n; ++i) p[i] += d[i] * alpha;
 }
 

@@ -144,6 +144,10 @@ class Gvi final : public ConstrainedIntegrator {
   std::optional<double> start_shadow_energy(System& system, double start);
   // An impulse along the landed rows' normals that brings H back to `target`, or, given
   // `shadow_target`, Verlet's shadow energy to it (H where the shadow energy is unavailable).
+  // With impact_time, where the energy to take away exceeds what the normal motion holds, an
+  // impulse along the motion relative to the rigid motion (contact_group.hpp) of the landed
+  // rows' particles and their rod clusters, else of all particles; a deficit where none
+  // reaches the target.
   void restore_energy(System& system, const std::vector<Constraint>& landed, double target,
                       std::vector<Vec3>& p, std::optional<double> shadow_target = std::nullopt);
 

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
+#include "integrators/contact_group.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/shadow_correction.hpp"
 #include "integrators/shadow_remainder.hpp"
@@ -81,18 +81,7 @@ void Gvi::restore_shadow_remainder(System& system, const std::vector<Constraint>
                                    double target, double shadow_target, std::vector<Vec3>& p) {
   const std::size_t n = system.particles.size();
   const std::vector<Constraint>& rods = constraints_.equalities;
-  std::vector<char> moving(n, 0);
-  for (const Constraint& c : touched) {
-    moving[static_cast<std::size_t>(c.i)] = 1;
-    if (c.j >= 0) moving[static_cast<std::size_t>(c.j)] = 1;
-  }
-  for (const Cluster& cluster : rods.empty() ? std::vector<Cluster>{} : find_clusters(rods, n)) {
-    bool touching = false;
-    for (std::int32_t i : cluster.particles)
-      touching = touching || moving[static_cast<std::size_t>(i)];
-    if (!touching) continue;
-    for (std::int32_t i : cluster.particles) moving[static_cast<std::size_t>(i)] = 1;
-  }
+  const std::vector<char> moving = contact_group(touched, rods, n);
   // The virtual steps' solves are not the run's: its statistics and virial stay as they were.
   const ConstraintStatistics counted = stats_;
   // RATTLE's stages on the rods. solve_positions scales its impulses by dt_
