@@ -24,6 +24,13 @@ namespace {
 
 using testing::statistic;
 
+// Angular momentum about the origin (the sphere walls' centre).
+Vec3 angular_momentum(const Particles& p) {
+  Vec3 l;
+  for (std::size_t i = 0; i < p.size(); ++i) l += cross(p.position[i], p.velocity[i] * p.mass[i]);
+  return l;
+}
+
 // 108 spheres of diameter 1 at packing fraction 0.262, the lattice jiggled so that contacts
 // start at once.
 RunInput fluid() {
@@ -362,15 +369,8 @@ BeadsResult lj_beads_in_sphere(double h, int steps = 100000, int seed = 0, int e
   Gvi gvi(*input.force_field, input.constraints, options, input.system.particles);
   System& s = input.system;
   gvi.setup(s);
-  auto angular = [&] {
-    Vec3 l;
-    for (std::size_t i = 0; i < s.particles.size(); ++i) {
-      l += cross(s.particles.position[i], s.particles.velocity[i] * s.particles.mass[i]);
-    }
-    return l;
-  };
   auto energy = [&] { return kinetic_energy(s.particles) + gvi.forces().last().potential; };
-  const Vec3 l0 = angular();
+  const Vec3 l0 = angular_momentum(s.particles);
   const double e0 = energy();
   std::vector<double> error;
   for (int n = 0; n < steps; ++n) {
@@ -381,7 +381,7 @@ BeadsResult lj_beads_in_sphere(double h, int steps = 100000, int seed = 0, int e
   BeadsResult r;
   r.trend = testing::energy_trend(error);
   r.l0 = norm(l0);
-  r.l_change = norm(angular() - l0);
+  r.l_change = norm(angular_momentum(s.particles) - l0);
   r.contacts = statistic(stats, "reflected");
   r.min_gap = statistic(stats, "min_gap");
   std::printf(
@@ -674,14 +674,7 @@ TEST(ContactTreatment, ImpactTimeLjChainInSphereKeepsAngularMomentumRodsAndGaps)
   Gvi gvi(*input.force_field, input.constraints, input.gvi, input.system.particles);
   System& s = input.system;
   gvi.setup(s);
-  auto angular = [&] {
-    Vec3 l;
-    for (std::size_t i = 0; i < s.particles.size(); ++i) {
-      l += cross(s.particles.position[i], s.particles.velocity[i] * s.particles.mass[i]);
-    }
-    return l;
-  };
-  const Vec3 l0 = angular();
+  const Vec3 l0 = angular_momentum(s.particles);
   auto energy = [&] { return kinetic_energy(s.particles) + gvi.forces().last().potential; };
   const double e0 = energy();
   std::vector<double> error;
@@ -694,7 +687,7 @@ TEST(ContactTreatment, ImpactTimeLjChainInSphereKeepsAngularMomentumRodsAndGaps)
   EXPECT_GT(statistic(stats, "reflected"), 100);
   EXPECT_GT(statistic(stats, "min_gap"), -1e-10);
   EXPECT_LT(statistic(stats, "max_rod_violation"), 1e-10);
-  EXPECT_LT(norm(angular() - l0), 1e-12 * std::max(1.0, norm(l0)));
+  EXPECT_LT(norm(angular_momentum(s.particles) - l0), 1e-12 * std::max(1.0, norm(l0)));
   const testing::EnergyTrend trend = testing::energy_trend(error);
   std::printf("LJ chain, impact_time, h = 0.005: energy trend %.3e, fluctuation %.3e\n",
               trend.trend, trend.fluctuation);
@@ -733,14 +726,7 @@ TEST(ContactTreatment, ImpactTimeLjChainContactStepsKeepShadowEnergyAtLargeSteps
   gvi.setup(s);
   // As `deli run` starts it (run_loop.cpp): the temperature set after the setup.
   set_temperature(s.particles, input.degrees_of_freedom, *input.start_temperature);
-  auto angular = [&] {
-    Vec3 l;
-    for (std::size_t i = 0; i < s.particles.size(); ++i) {
-      l += cross(s.particles.position[i], s.particles.velocity[i] * s.particles.mass[i]);
-    }
-    return l;
-  };
-  const Vec3 l0 = angular();
+  const Vec3 l0 = angular_momentum(s.particles);
   double contacts = 0, deficits = 0, min_gap = 1e9, rod_violation = 0, largest_change = 0;
   int worst_step = 0;
   double before = *gvi.shadow_energy(s);
@@ -767,7 +753,7 @@ TEST(ContactTreatment, ImpactTimeLjChainContactStepsKeepShadowEnergyAtLargeSteps
   EXPECT_LT(largest_change, 1e-9) << "step " << worst_step;
   EXPECT_GT(min_gap, -1e-10);
   EXPECT_LT(rod_violation, 1e-10);
-  EXPECT_LT(norm(angular() - l0), 1e-12 * std::max(1.0, norm(l0)));
+  EXPECT_LT(norm(angular_momentum(s.particles) - l0), 1e-12 * std::max(1.0, norm(l0)));
 }
 
 }  // namespace
