@@ -77,6 +77,17 @@ void select_columns(const Eigen::MatrixXd& N, const std::vector<int>& columns,
     NV.col(static_cast<Eigen::Index>(k)) = N.col(columns[k]);
   }
 }
+
+// The kinetic energy's quadratic over the columns `columns` of N: their scratch with
+// NV = N[:, columns], KN = K NV and Q = NV^T K NV (K = diag(k_diag)); c is the caller's.
+SolveScratch& kinetic_form(ReflectionScratch& s, const Eigen::MatrixXd& N,
+                           const std::vector<int>& columns, const Eigen::VectorXd& k_diag) {
+  SolveScratch& solve = s.solve_of(columns.size());
+  select_columns(N, columns, solve.NV);
+  solve.KN.noalias() = k_diag.asDiagonal() * solve.NV;
+  solve.Q.noalias() = solve.NV.transpose() * solve.KN;
+  return solve;
+}
 }  // namespace
 
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
@@ -145,13 +156,10 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       stopped = true;
       break;
     }
-    SolveScratch& solve = s.solve_of(set.size());
+    // E = H: K = M^-1 / 2, Q = N^T K N, c = 2 N^T K p.
+    SolveScratch& solve = kinetic_form(s, N, set, k_diag);
     Eigen::MatrixXd &NV = solve.NV, &KN = solve.KN, &Q = solve.Q;
     Eigen::VectorXd &c = solve.c, &lambda = solve.lambda;
-    select_columns(N, set, NV);
-    // E = H: K = M^-1 / 2, Q = N^T K N, c = 2 N^T K p.
-    KN.noalias() = k_diag.asDiagonal() * NV;
-    Q.noalias() = NV.transpose() * KN;
     c.noalias() = 2.0 * (KN.transpose() * flat);
     bool solved = false;
     if (shadow) {
@@ -218,12 +226,9 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     for (std::size_t k = 0; k < in_rows.size(); ++k) {
       if (ever_in_set[k]) rows.push_back(static_cast<int>(k));
     }
-    SolveScratch& solve = s.solve_of(rows.size());
+    SolveScratch& solve = kinetic_form(s, N, rows, k_diag);
     Eigen::MatrixXd &NV = solve.NV, &KN = solve.KN, &Q = solve.Q;
     Eigen::VectorXd &c = solve.c, &lambda = solve.lambda;
-    select_columns(N, rows, NV);
-    KN.noalias() = k_diag.asDiagonal() * NV;
-    Q.noalias() = NV.transpose() * KN;
     c.noalias() = KN.transpose() * flat;
     const SolverStatus qp = solve_nonnegative_qp(
         Q, c, lambda, 1e-14 * std::max(1.0, c.lpNorm<Eigen::Infinity>()), limits.qp_iterations);
