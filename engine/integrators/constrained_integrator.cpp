@@ -776,6 +776,7 @@ void ConstraintStatistics::add(const ConstraintStatistics& later) {
   feasibility_caps += later.feasibility_caps;
   qp_caps += later.qp_caps;
   contact_time_caps += later.contact_time_caps;
+  relative_restorations += later.relative_restorations;
 }
 
 void ConstraintStatistics::save(std::vector<double>& out) const {
@@ -789,6 +790,7 @@ void ConstraintStatistics::save(std::vector<double>& out) const {
   for (std::int64_t count : {active_set_caps, feasibility_caps, qp_caps, contact_time_caps}) {
     out.push_back(static_cast<double>(count));
   }
+  out.push_back(static_cast<double>(relative_restorations));
 }
 
 ConstraintStatistics ConstraintStatistics::load(const double* in, std::size_t size) {
@@ -806,6 +808,8 @@ ConstraintStatistics ConstraintStatistics::load(const double* in, std::size_t si
        {&s.active_set_caps, &s.feasibility_caps, &s.qp_caps, &s.contact_time_caps}) {
     *count = static_cast<std::int64_t>(*in++);
   }
+  if (size == saved_size_without_relative) return s;
+  s.relative_restorations = static_cast<std::int64_t>(*in++);
   return s;
 }
 
@@ -821,10 +825,11 @@ std::vector<double> ConstrainedIntegrator::saved_state() const {
 
 void ConstrainedIntegrator::restore_state(const std::vector<double>& state, const System& system) {
   const std::size_t n = system.particles.size();
-  // The current layout, or that of a checkpoint written before the limit counters.
+  // The current layout, or that of a checkpoint written by an earlier deli.
   std::size_t stats_size = ConstraintStatistics::saved_size;
   for (std::size_t size :
-       {ConstraintStatistics::saved_size, ConstraintStatistics::saved_size_without_caps}) {
+       {ConstraintStatistics::saved_size, ConstraintStatistics::saved_size_without_relative,
+        ConstraintStatistics::saved_size_without_caps}) {
     const std::size_t head = 2 * size + 2;
     if (state.size() == head || state.size() == head + 3 * n) {
       stats_size = size;
@@ -872,6 +877,7 @@ std::vector<std::pair<std::string, double>> ConstrainedIntegrator::take_statisti
           {"penetrating_steps", static_cast<double>(s.penetrations)},
           {"landings", static_cast<double>(s.fallbacks)},
           {"landing_deficits", static_cast<double>(s.deficits)},
+          {"relative_restorations", static_cast<double>(s.relative_restorations)},
           {"shadow_fallbacks", static_cast<double>(s.shadow_fallbacks)},
           {"solver_iterations_mean",
            s.solves > 0 ? static_cast<double>(s.solver_iterations) / static_cast<double>(s.solves)

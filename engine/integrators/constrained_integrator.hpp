@@ -34,12 +34,17 @@ struct ConstraintStatistics {
   std::int64_t feasibility_caps = 0;   // steps whose guard still had overlapped rows
   std::int64_t qp_caps = 0;            // reflection QP solves ended unconverged
   std::int64_t contact_time_caps = 0;  // contact times left unbracketed (collision)
+  // Landings whose excess energy was taken from the motion relative to the rigid motion
+  // (impact_time), the touched rows' normal motion holding too little.
+  std::int64_t relative_restorations = 0;
 
   void add(const ConstraintStatistics& later);
   // As numbers for a checkpoint (counts are exact in a double up to 2^53).
   void save(std::vector<double>& out) const;
-  static constexpr std::size_t saved_size = 19;
-  // The layout before the limit counters (a checkpoint of an earlier deli): they load as 0.
+  static constexpr std::size_t saved_size = 20;
+  // Layouts of checkpoints of an earlier deli, whose missing counters load as 0: before
+  // relative_restorations, and before the limit counters too.
+  static constexpr std::size_t saved_size_without_relative = 19;
   static constexpr std::size_t saved_size_without_caps = 15;
   static ConstraintStatistics load(const double* in, std::size_t size = saved_size);
 };

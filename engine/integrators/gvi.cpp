@@ -771,6 +771,7 @@ void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, 
       const std::optional<double> alpha = relative.a > 0 ? relative.root() : std::nullopt;
       if (alpha) {
         for (std::size_t i = 0; i < n; ++i) p[i] += internal[i] * *alpha;
+        ++stats_.relative_restorations;
         return;
       }
     }
