@@ -212,6 +212,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   member_z_.resize(static_cast<std::size_t>(n));
   member_moved.resize(static_cast<std::size_t>(n));
   member_cell.resize(static_cast<std::size_t>(n));
+  member_moved_key_.resize(static_cast<std::size_t>(n));
   slot_of.resize(static_cast<std::size_t>(n));
   {
     std::vector<std::size_t>& fill = cell_fill_;
@@ -224,6 +225,9 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       member_y_[s] = inside[i].y;
       member_z_[s] = inside[i].z;
       member_moved[s] = moved[i];
+      const std::array<int, 3>& k = moved[i];
+      const bool small = std::abs(k[0]) <= 1 && std::abs(k[1]) <= 1 && std::abs(k[2]) <= 1;
+      member_moved_key_[s] = small ? code_of(k[0], k[1], k[2]) : 27 + static_cast<std::int32_t>(s);
       member_cell[s] = cell_of[i];
       member[s] = i;
     }
@@ -288,6 +292,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     const double* const at_x = member_x_.data();
     const double* const at_y = member_y_.data();
     const double* const at_z = member_z_.data();
+    const std::int32_t* const moved_key = member_moved_key_.data();
     for (std::size_t slot = begin; slot < end; ++slot) {
       const std::int32_t i = member[slot];
       const Vec3 xi = at[slot];
@@ -328,19 +333,30 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       const std::int32_t* partners = partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
       const std::int32_t* partners_end =
           partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
+      // Room for every hit, written through pointers (no capacity test per partner), then
+      // cut to those kept.
+      const std::size_t listed = out.size();
+      out.resize(listed + hits);
+      if (shifted) out_codes.resize(listed + hits);
+      std::int32_t* const kept_j = out.data() + listed;
+      std::uint8_t* const kept_code = shifted ? out_codes.data() + listed : nullptr;
+      std::size_t kept = 0;
       for (std::size_t h = 0; h < hits; ++h) {
         const auto m = static_cast<std::size_t>(hit_slot[h]);
         const std::int32_t j = member[m];
         if (!shifted && j <= i) continue;
         if (std::find(partners, partners_end, j) != partners_end) continue;
-        out.push_back(j);
         if (shifted) {
           // Both particles moved by the same periods into the box (nearly always: none),
           // so the stencil's shift stands.
-          const bool same_moves = member_moved[m] == member_moved[slot];
-          out_codes.push_back(same_moves ? hit_code[h] : pair_code(hit_code[h], slot, m, coded));
+          kept_code[kept] = moved_key[m] == moved_key[slot]
+                                ? hit_code[h]
+                                : pair_code(hit_code[h], slot, m, coded);
         }
+        kept_j[kept++] = j;
       }
+      out.resize(listed + kept);
+      if (shifted) out_codes.resize(listed + kept);
       // Counts within the chunk for now; made global offsets below.
       slot_offsets_[slot + 1] = out.size();
     }

@@ -105,6 +105,9 @@ class NeighborList {
   std::vector<double> member_x_, member_y_, member_z_;  // member_position_ by component
   std::vector<std::array<int, 3>> moved_, member_moved_;
   std::vector<std::int32_t> cell_of_, member_, member_cell_;
+  // Per slot: the periods moved as a code 0..26 where each is -1..1, else 27 + slot (unique):
+  // equal keys mean equal moves.
+  std::vector<std::int32_t> member_moved_key_;
   std::vector<std::size_t> cell_start_, cell_fill_, slot_of_;
   // The joined list by slot (cell order), before it is rearranged by particle.
   std::vector<std::size_t> slot_offsets_;
