@@ -234,13 +234,13 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   }
 
   // A pair found through stencil shift s (periods) between wrapped positions has, in the
-  // caller's positions, the shift s + moved_j - moved_i; codes hold -1..1 periods per
+  // caller's positions, the shift s + moved_i - moved_j; codes hold -1..1 periods per
   // axis, and anything else (positions far outside the box) drops the codes. Slots here.
   auto pair_code = [&](int stencil_code, std::size_t slot_i, std::size_t slot_j,
                        bool& coded) -> std::uint8_t {
     int k[3] = {stencil_code % 3 - 1, (stencil_code / 3) % 3 - 1, stencil_code / 9 - 1};
     for (int a = 0; a < 3; ++a) {
-      k[a] += member_moved[slot_j][a] - member_moved[slot_i][a];
+      k[a] += member_moved[slot_i][a] - member_moved[slot_j][a];
       if (k[a] < -1 || k[a] > 1) {
         coded = false;
         return kNoShift;

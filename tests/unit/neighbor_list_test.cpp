@@ -135,6 +135,42 @@ TEST(NeighborList, StaysValidWithinHalfSkin) {
   EXPECT_TRUE(list.needs_rebuild(x));
 }
 
+// Each listed pair's image code names the periods between x_i - x_j and its minimum image
+// (the definition the pair loop relies on), for particles up to a period outside the box,
+// moved into it by different periods; a particle two periods out drops the codes, and the
+// list still holds the right pairs.
+TEST(NeighborList, ImageCodesGiveTheMinimumImage) {
+  const Box box({-1.0, 0.0, 2.0}, {11.0, 13.0, 16.0}, {true, true, true});
+  auto x = random_positions(900, box, 21, 0.1);
+  NeighborList list(2.5, 0.3);
+  list.build(x, box);
+  ASSERT_FALSE(list.image_codes().empty());
+  std::size_t shifted = 0;
+  for (std::size_t i = 0; i + 1 < list.offsets().size(); ++i) {
+    for (std::size_t k = list.offsets()[i]; k < list.offsets()[i + 1]; ++k) {
+      const auto j = static_cast<std::size_t>(list.neighbors()[k]);
+      const Vec3 coded = x[i] - x[j] - list.image_shifts()[list.image_codes()[k]];
+      const Vec3 minimum = box.minimum_image(x[i] - x[j]);
+      EXPECT_LT(norm(coded - minimum), 1e-12) << i << "," << j;
+      shifted += list.image_codes()[k] != 13;  // 13: no shift
+    }
+  }
+  EXPECT_GT(shifted, 100u);
+  // A particle just below lo and one inside near hi: neighbours through one period, found
+  // between their wrapped positions with no stencil shift (the sign of the moves' part of
+  // the code was once reversed: +1 period instead of -1, the pair then beyond reach).
+  const std::vector<Vec3> two = {{-1.05, 5.0, 8.0}, {10.5, 5.0, 8.0}};
+  list.build(two, box);
+  ASSERT_EQ(list.image_codes().size(), 1u);
+  EXPECT_LT(norm(two[0] - two[1] - list.image_shifts()[list.image_codes()[0]] -
+                 box.minimum_image(two[0] - two[1])),
+            1e-12);
+  x[5] += Vec3{2 * 12.0, 0, 0};
+  list.build(x, box);
+  EXPECT_TRUE(list.image_codes().empty());
+  EXPECT_EQ(listed(list), brute_force(x, box, 2.8));
+}
+
 TEST(NeighborList, SameInputSameOrder) {
   const Box box({0, 0, 0}, {10, 10, 10}, {true, true, true});
   const auto x = random_positions(800, box, 8);
