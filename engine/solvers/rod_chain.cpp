@@ -111,16 +111,35 @@ void RodChain::directions(const double* x, const Box& box, double* u, double* r)
 // as it does when |d - period n| <= 0.4 period on every periodic axis (d / period within 0.4
 // of n, and the rounding of the division far below 0.1). Only when a rod leaves that range
 // (a particle was wrapped, or a first call) is the image rounded anew, for the whole pass.
+namespace {
+// The box's periods and the per-axis range within which a rod's last image still holds.
+struct ImageRange {
+  double periods[3], limit[3];
+  explicit ImageRange(const Box& box) {
+    const Vec3 period = box.period();
+    constexpr double open = std::numeric_limits<double>::infinity();
+    periods[0] = period.x;
+    periods[1] = period.y;
+    periods[2] = period.z;
+    limit[0] = period.x > 0 ? 0.4 * period.x : open;
+    limit[1] = period.y > 0 ? 0.4 * period.y : open;
+    limit[2] = period.z > 0 ? 0.4 * period.z : open;
+  }
+};
+}  // namespace
+
 void RodChain::differences(const double* x, const Box& box, double* d, double* d2) const {
+  const ImageRange range(box);
+  if (rod_passes::differences(rows(), x, forward_.data(), image_.data(), range.periods, range.limit,
+                              d, d2)) {
+    return;
+  }
+  rewrap_differences(x, box, d, d2);
+}
+
+void RodChain::rewrap_differences(const double* x, const Box& box, double* d, double* d2) const {
   const std::size_t m = rows();
   const std::size_t n = beads();
-  const Vec3 period = box.period();
-  constexpr double open = std::numeric_limits<double>::infinity();
-  const double periods[3] = {period.x, period.y, period.z};
-  const double limit[3] = {period.x > 0 ? 0.4 * period.x : open,
-                           period.y > 0 ? 0.4 * period.y : open,
-                           period.z > 0 ? 0.4 * period.z : open};
-  if (rod_passes::differences(m, x, forward_.data(), image_.data(), periods, limit, d, d2)) return;
   const Vec3& inverse_period = box.inverse_period();
   for (std::size_t k = 0; k < m; ++k) {
     const std::size_t a = forward_[k] > 0 ? k : k + 1;
@@ -145,12 +164,19 @@ void RodChain::differences(const double* x, const Box& box, double* d, double* d
 // as |sqrt(d2) - L| = |d2 - L^2| / (sqrt(d2) + L) <= |d2 - L^2| / L. The bound
 // (rod_passes::held_bounds) rounds with slack 2^-50 on both terms, above all rounding of its
 // own evaluation.
-double RodChain::held_bound(const double* d2, double tolerance, RodChainWorkspace& ws) const {
+double RodChain::differences_and_bound(const double* x, const Box& box, double* d, double* d2,
+                                       double tolerance, RodChainWorkspace& ws) const {
   const std::size_t m = rows();
   ws.bounds.resize(m);
   ws.usable.resize(m);
-  rod_passes::held_bounds(m, d2, length_.data(), inverse_length_.data(), tolerance,
-                          ws.bounds.data(), ws.usable.data());
+  const ImageRange range(box);
+  if (!rod_passes::differences_and_bounds(m, x, forward_.data(), image_.data(), range.periods,
+                                          range.limit, length_.data(), inverse_length_.data(),
+                                          tolerance, d, d2, ws.bounds.data(), ws.usable.data())) {
+    rewrap_differences(x, box, d, d2);
+    rod_passes::held_bounds(m, d2, length_.data(), inverse_length_.data(), tolerance,
+                            ws.bounds.data(), ws.usable.data());
+  }
   double bound = 0.0;
   for (std::size_t k = 0; k < m; ++k) {
     if (!ws.usable[k]) return std::numeric_limits<double>::infinity();
@@ -192,63 +218,75 @@ bool RodChain::solve_coupled(const double* a, const double* b, double scale,
       x.data(), ws.pivots.data());
 }
 
-void RodChain::solve_lanes(std::size_t m, const bool* solving, RodChainLanes& lanes, bool into_z) {
+void RodChain::size_lanes(std::size_t m, RodChainLanes& lanes) {
   constexpr std::size_t w = RodChainLanes::width;
   static_assert(w == rod_passes::lanes);
+  // Slots of lanes not solving keep whatever they held (initialised, never read back), as do
+  // entries lower(0) and upper(m-1), never made nor read.
   lanes.lower.resize(m * w);
   lanes.diagonal.resize(m * w);
   lanes.upper.resize(m * w);
   lanes.rhs.resize(m * w);
   lanes.x.resize(m * w);
   lanes.c.resize(m * w);
-  // Lanes not solving keep whatever their slots held (initialised, never read back).
-  for (std::size_t l = 0; l < w; ++l) {
-    if (!solving[l]) continue;
-    const RodChainWorkspace& ws = lanes.lane[l];
-    // Entries lower(0) and upper(m-1) are never made nor read.
-    for (std::size_t k = 1; k < m; ++k) lanes.lower[k * w + l] = ws.lower[k];
-    for (std::size_t k = 0; k < m; ++k) lanes.diagonal[k * w + l] = ws.diagonal[k];
-    for (std::size_t k = 0; k + 1 < m; ++k) lanes.upper[k * w + l] = ws.upper[k];
-    for (std::size_t k = 0; k < m; ++k) lanes.rhs[k * w + l] = ws.rhs[k];
-  }
-  rod_passes::eliminate_lanes(m, lanes.lower.data(), lanes.diagonal.data(), lanes.upper.data(),
-                              lanes.rhs.data(), lanes.x.data(), lanes.c.data(), lanes.solved);
-  for (std::size_t l = 0; l < w; ++l) {
-    if (!solving[l] || !lanes.solved[l]) continue;
-    Eigen::VectorXd& out = into_z ? lanes.lane[l].z : lanes.lane[l].step;
-    out.resize(static_cast<Eigen::Index>(m));
-    for (std::size_t k = 0; k < m; ++k) out(static_cast<Eigen::Index>(k)) = lanes.x[k * w + l];
-  }
 }
 
-bool RodChain::remembered_at(const std::vector<double>& x, const Box& box) const {
+void RodChain::eliminate_lanes(std::size_t m, RodChainLanes& lanes) {
+  rod_passes::eliminate_lanes(m, lanes.lower.data(), lanes.diagonal.data(), lanes.upper.data(),
+                              lanes.rhs.data(), lanes.x.data(), lanes.c.data(), lanes.solved);
+}
+
+bool RodChain::memo_in(const Box& box) const {
   const DirectionsMemo& memo = memo_;
   return memo.valid && memo.period.x == box.period().x && memo.period.y == box.period().y &&
          memo.period.z == box.period().z && memo.inverse_period.x == box.inverse_period().x &&
          memo.inverse_period.y == box.inverse_period().y &&
-         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == x.size() &&
-         std::memcmp(memo.x.data(), x.data(), x.size() * sizeof(double)) == 0;
+         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == 3 * beads();
 }
 
-void RodChain::start_directions(const std::vector<double>& q, const Box& box) const {
-  if (!remembered_at(q, box)) remember_directions(q, box);
+namespace {
+std::uint64_t bits_of(double v) {
+  std::uint64_t b;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+}  // namespace
+
+bool RodChain::gather_remembered(const Vec3* global, std::vector<double>& out,
+                                 const Box& box) const {
+  const std::size_t n = beads();
+  out.resize(3 * n);
+  const bool known = memo_in(box);
+  // Compared bit for bit (a zero's sign too), as the memo's positions were gathered; without
+  // a memo the positions are compared with themselves and the answer dropped.
+  const double* memo = known ? memo_.x.data() : out.data();
+  std::uint64_t differ = 0;
+  for (std::size_t b = 0; b < n; ++b) {
+    const Vec3& v = global[bead_particle_[b]];
+    out[b] = v.x;
+    out[n + b] = v.y;
+    out[2 * n + b] = v.z;
+    differ |= (bits_of(v.x) ^ bits_of(memo[b])) | (bits_of(v.y) ^ bits_of(memo[n + b])) |
+              (bits_of(v.z) ^ bits_of(memo[2 * n + b]));
+  }
+  return known && differ == 0;
 }
 
-void RodChain::remember_directions(const std::vector<double>& x, const Box& box) const {
+void RodChain::remember_directions(std::vector<double>& x, const Box& box) const {
   memo_.u.resize(3 * rows());
   memo_.r.resize(rows());
   directions(x.data(), box, memo_.u.data(), memo_.r.data());
-  memo_.x = x;
+  // The positions are the caller's scratch: swapped in rather than copied.
+  std::swap(memo_.x, x);
   memo_.period = box.period();
   memo_.inverse_period = box.inverse_period();
   memo_.valid = true;
 }
 
-bool RodChain::held_or_residual(Eigen::VectorXd& phi, std::vector<double>& u,
-                                std::vector<double>& r, double merit_cap, double tolerance,
-                                RodChainWorkspace& ws, SolverStatus& status) const {
+bool RodChain::held_or_residual(double bound, Eigen::VectorXd& phi, double& phi_norm,
+                                std::vector<double>& u, std::vector<double>& r, double merit_cap,
+                                double tolerance, SolverStatus& status) const {
   const std::size_t m = rows();
-  const double bound = held_bound(r.data(), tolerance, ws);
   // sum_k phi_k^2 <= m bound^2; the factor 2 covers the rounding of Eigen's sum. The
   // residual, then computed, would show the rods held: the iteration would take the same
   // course. At the last position of a solve this saves the square roots and divisions of
@@ -257,9 +295,8 @@ bool RodChain::held_or_residual(Eigen::VectorXd& phi, std::vector<double>& u,
     status.residual = bound;
     return true;
   }
-  rod_passes::normalize(m, u.data(), r.data());
   phi.resize(static_cast<Eigen::Index>(m));
-  for (std::size_t k = 0; k < m; ++k) phi(static_cast<Eigen::Index>(k)) = r[k] - length_[k];
+  phi_norm = rod_passes::normalize_residual(m, u.data(), r.data(), length_.data(), phi.data());
   return false;
 }
 
@@ -268,57 +305,68 @@ bool RodChain::begin_positions(const Vec3* q, const Vec3* delta, double h, const
                                SolverStatus& status) const {
   const std::size_t n = beads();
   const std::size_t m = rows();
-  gather(q, ws.q);
   ws.x0.resize(3 * n);
-  ws.x.resize(3 * n);
   ws.xt.resize(3 * n);
   ws.hw.resize(n);
   ws.ux.resize(3 * m);
   ws.uxt.resize(3 * m);
   ws.rx.resize(m);
   ws.rxt.resize(m);
+  // Directions of the impulses: the rods at the start of the step, fixed.
+  const bool remembered = gather_remembered(q, ws.q, box);
   for (std::size_t b = 0; b < n; ++b) {
     const std::int32_t g = bead_particle_[b];
-    ws.x0[b] = delta[g].x + q[g].x;
-    ws.x0[n + b] = delta[g].y + q[g].y;
-    ws.x0[2 * n + b] = delta[g].z + q[g].z;
+    ws.x0[b] = delta[g].x + ws.q[b];
+    ws.x0[n + b] = delta[g].y + ws.q[n + b];
+    ws.x0[2 * n + b] = delta[g].z + ws.q[2 * n + b];
     ws.hw[b] = h * bead_inverse_mass_[b];
   }
-  // Directions of the impulses: the rods at the start of the step, fixed.
-  start_directions(ws.q, box);
+  if (!remembered) remember_directions(ws.q, box);
   status = SolverStatus{};
   ws.z.setZero(static_cast<Eigen::Index>(m));
-  // positions(z = 0): a zero impulse adds +0 to x0, which leaves it as it is.
-  ws.x = ws.x0;
-  differences(ws.x.data(), box, ws.ux.data(), ws.rx.data());
-  return held_or_residual(ws.phi, ws.ux, ws.rx, std::numeric_limits<double>::infinity(), tolerance,
-                          ws, status);
+  ws.merit = -1.0;
+  // The residual at z = 0: a zero impulse adds +0 to x0, which leaves it as it is.
+  const double bound =
+      differences_and_bound(ws.x0.data(), box, ws.ux.data(), ws.rx.data(), tolerance, ws);
+  return held_or_residual(bound, ws.phi, ws.phi_norm, ws.ux, ws.rx,
+                          std::numeric_limits<double>::infinity(), tolerance, status);
+}
+
+double RodChain::merit(RodChainWorkspace& ws) {
+  if (ws.merit < 0) ws.merit = ws.phi.squaredNorm();
+  return ws.merit;
+}
+
+RodChain::LineSearch RodChain::try_trial(const Box& box, double tolerance, double merit_cap,
+                                         RodChainWorkspace& ws, SolverStatus& status) const {
+  const std::size_t m = rows();
+  rod_passes::positions(m, ws.x0.data(), memo_.u.data(), ws.trial.data(), first_sign_.data(),
+                        second_sign_.data(), ws.hw.data(), ws.xt.data());
+  const double bound =
+      differences_and_bound(ws.xt.data(), box, ws.uxt.data(), ws.rxt.data(), tolerance, ws);
+  if (held_or_residual(bound, ws.pt, ws.pt_norm, ws.uxt, ws.rxt, merit_cap, tolerance, status)) {
+    std::swap(ws.z, ws.trial);
+    return LineSearch::held;
+  }
+  const double trial_merit = ws.pt.squaredNorm();
+  if (!(trial_merit <= merit_cap)) return LineSearch::failed;
+  std::swap(ws.z, ws.trial);
+  std::swap(ws.phi, ws.pt);
+  std::swap(ws.phi_norm, ws.pt_norm);
+  std::swap(ws.ux, ws.uxt);
+  std::swap(ws.rx, ws.rxt);
+  ws.merit = trial_merit;
+  return LineSearch::descended;
 }
 
 RodChain::LineSearch RodChain::line_search(const Box& box, double tolerance, int halvings_allowed,
                                            RodChainWorkspace& ws, SolverStatus& status) const {
-  const std::size_t m = rows();
-  const double merit = ws.phi.squaredNorm();
+  const double merit_now = merit(ws);
   double t = 1.0;
   for (int halvings = 0;; ++halvings) {
     ws.trial = ws.z + t * ws.step;
-    rod_passes::positions(m, ws.x0.data(), memo_.u.data(), ws.trial.data(), first_sign_.data(),
-                          second_sign_.data(), ws.hw.data(), ws.xt.data());
-    const double merit_cap = (1 - 1e-4 * t) * merit;
-    differences(ws.xt.data(), box, ws.uxt.data(), ws.rxt.data());
-    if (held_or_residual(ws.pt, ws.uxt, ws.rxt, merit_cap, tolerance, ws, status)) {
-      std::swap(ws.z, ws.trial);
-      std::swap(ws.x, ws.xt);
-      return LineSearch::held;
-    }
-    if (ws.pt.squaredNorm() <= merit_cap) {
-      std::swap(ws.z, ws.trial);
-      std::swap(ws.x, ws.xt);
-      std::swap(ws.phi, ws.pt);
-      std::swap(ws.ux, ws.uxt);
-      std::swap(ws.rx, ws.rxt);
-      return LineSearch::descended;
-    }
+    const LineSearch outcome = try_trial(box, tolerance, (1 - 1e-4 * t) * merit_now, ws, status);
+    if (outcome != LineSearch::failed) return outcome;
     if (halvings == halvings_allowed) return LineSearch::failed;
     t *= 0.5;
   }
@@ -346,7 +394,7 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
                                SolverStatus& status) const {
   bool held = begin_positions(q, delta, h, box, tolerance, ws, status);
   while (!held) {
-    status.residual = residual_norm(ws.phi);
+    status.residual = ws.phi_norm;
     if (status.residual <= tolerance) break;
     if (status.iterations >= max_iterations) return false;
     ++status.iterations;
@@ -362,63 +410,260 @@ bool RodChain::solve_positions(const Vec3* q, const Vec3* delta, double h, const
   return true;
 }
 
+namespace {
+// Copies lane `from` of a lane-major vector into lane `to`.
+void copy_lane(std::vector<double>& v, std::size_t from, std::size_t to) {
+  constexpr std::size_t w = RodChainLanes::width;
+  for (std::size_t i = 0; i < v.size(); i += w) v[i + to] = v[i + from];
+}
+}  // namespace
+
+RodChainLanes::Group* RodChain::find_group(const RodChain* const* chains, std::size_t count,
+                                           RodChainLanes& lanes) {
+  constexpr std::size_t w = RodChainLanes::width;
+  const std::size_t m = chains[0]->rows();
+  for (RodChainLanes::Group& g : lanes.across.groups) {
+    bool same = g.rows == m;
+    for (std::size_t l = 0; same && l < w; ++l) {
+      same = g.chains[l] == (l < count ? chains[l] : nullptr);
+    }
+    if (same) return &g;
+  }
+  return nullptr;
+}
+
+RodChainLanes::Group& RodChain::group_of(const RodChain* const* chains, std::size_t count, double h,
+                                         RodChainLanes& lanes) {
+  constexpr std::size_t w = RodChainLanes::width;
+  const std::size_t m = chains[0]->rows();
+  const std::size_t n = m + 1;
+  std::vector<RodChainLanes::Group>& groups = lanes.across.groups;
+  RodChainLanes::Group* found = find_group(chains, count, lanes);
+  if (found && found->h == h) return *found;
+  if (!found) {
+    // Chains regrouped (another partition, a subset solved again): start afresh past a bound.
+    if (groups.size() >= 64) groups.clear();
+    found = &groups.emplace_back();
+    for (std::size_t l = 0; l < w; ++l) found->chains[l] = l < count ? chains[l] : nullptr;
+    found->rows = m;
+  }
+  RodChainLanes::Group& g = *found;
+  g.h = h;
+  for (auto* v : {&g.forward, &g.length, &g.inverse_length, &g.w_low, &g.w_high, &g.coupling,
+                  &g.low_first, &g.low_sign, &g.high_sign}) {
+    v->assign(m * w, 0.0);
+  }
+  g.image.assign(3 * m * w, 0.0);
+  for (auto* v : {&g.first_sign, &g.second_sign, &g.hw}) v->assign(n * w, 0.0);
+  for (std::size_t lane = 0; lane < w; ++lane) {
+    const RodChain& c = *chains[lane < count ? lane : 0];
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::size_t i = k * w + lane;
+      g.forward[i] = c.forward_[k];
+      g.length[i] = c.length_[k];
+      g.inverse_length[i] = c.inverse_length_[k];
+      g.w_low[i] = c.w_low_[k];
+      g.w_high[i] = c.w_high_[k];
+      g.coupling[i] = c.coupling_[k];
+      g.low_first[i] = c.low_first_[k];
+      g.low_sign[i] = c.low_sign_[k];
+      g.high_sign[i] = c.high_sign_[k];
+      for (std::size_t a = 0; a < 3; ++a) g.image[(a * m + k) * w + lane] = c.image_[a * m + k];
+    }
+    for (std::size_t b = 0; b < n; ++b) {
+      g.first_sign[b * w + lane] = c.first_sign_[b];
+      g.second_sign[b * w + lane] = c.second_sign_[b];
+      g.hw[b * w + lane] = h * c.bead_inverse_mass_[b];
+    }
+  }
+  return g;
+}
+
+void RodChain::begin_across(const Vec3* q, const Vec3* delta, const Box& box, std::size_t lane,
+                            RodChainLanes& lanes) const {
+  constexpr std::size_t w = RodChainLanes::width;
+  const std::size_t n = beads();
+  const std::size_t m = rows();
+  RodChainLanes::Across& a = lanes.across;
+  RodChainWorkspace& ws = lanes.lane[lane];
+  // Directions of the impulses: the rods at the start of the step, fixed.
+  if (!gather_remembered(q, ws.q, box)) remember_directions(ws.q, box);
+  for (std::size_t b = 0; b < n; ++b) {
+    const std::int32_t g = bead_particle_[b];
+    a.x0[b * w + lane] = delta[g].x + q[g].x;
+    a.x0[(n + b) * w + lane] = delta[g].y + q[g].y;
+    a.x0[(2 * n + b) * w + lane] = delta[g].z + q[g].z;
+  }
+  for (std::size_t k = 0; k < 3 * m; ++k) a.start_u[k * w + lane] = memo_.u[k];
+  for (std::size_t k = 0; k < m; ++k) a.start_r[k * w + lane] = memo_.r[k];
+}
+
+void RodChain::rewrap_across(const double* x, const Box& box, std::size_t lane,
+                             RodChainLanes::Group& group, RodChainLanes::Across& across) const {
+  constexpr std::size_t w = RodChainLanes::width;
+  const std::size_t m = rows();
+  const std::size_t n = beads();
+  const Vec3& inverse_period = box.inverse_period();
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t a = forward_[k] > 0 ? k : k + 1;
+    const std::size_t b = forward_[k] > 0 ? k + 1 : k;
+    const Vec3 e = Vec3{x[a * w + lane], x[(n + a) * w + lane], x[(2 * n + a) * w + lane]} -
+                   Vec3{x[b * w + lane], x[(n + b) * w + lane], x[(2 * n + b) * w + lane]};
+    group.image[k * w + lane] = Box::round_to_integer(e.x * inverse_period.x);
+    group.image[(m + k) * w + lane] = Box::round_to_integer(e.y * inverse_period.y);
+    group.image[(2 * m + k) * w + lane] = Box::round_to_integer(e.z * inverse_period.z);
+    const Vec3 image = box.minimum_image(e);
+    across.u[k * w + lane] = image.x;
+    across.u[(m + k) * w + lane] = image.y;
+    across.u[(2 * m + k) * w + lane] = image.z;
+    across.r[k * w + lane] = norm2(image);
+  }
+}
+
+// solve_positions' iteration for all lanes at once, each lane's numbers its own; the per-lane
+// decisions (held, converged, descended) as solve_positions takes them. The merit (the squared
+// residual norm, Eigen's sum there) is summed in row order here: a decision it makes within
+// rounding of the line search's bound sends the lane to solve_positions instead.
 void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t count,
                                      const Vec3* q, const Vec3* delta, double h, const Box& box,
                                      double tolerance, int max_iterations, RodChainLanes& lanes,
                                      Vec3* impulse, double* virial, SolverStatus* status,
                                      bool* solved) {
   constexpr std::size_t w = RodChainLanes::width;
-  const std::size_t m = count > 0 ? chains[0]->rows() : 0;
-  // Per lane: still iterating, or done (converged).
-  bool active[w] = {}, done[w] = {};
+  if (count == 0) return;
+  const std::size_t m = chains[0]->rows();
+  const std::size_t n = m + 1;
+  RodChainLanes::Across& a = lanes.across;
+  RodChainLanes::Group& g = group_of(chains, count, h, lanes);
+  a.x0.resize(3 * n * w);
+  a.x.resize(3 * n * w);
+  a.impulse.resize(3 * n * w);
+  a.start_u.resize(3 * m * w);
+  a.u.resize(3 * m * w);
+  a.start_r.resize(m * w);
+  a.r.resize(m * w);
+  a.phi.resize(m * w);
+  // z = 0, as solve_positions starts.
+  a.z.assign(m * w, 0.0);
+  size_lanes(m, lanes);
   for (std::size_t l = 0; l < count; ++l) {
+    chains[l]->begin_across(q, delta, box, l, lanes);
+    status[l] = SolverStatus{};
     solved[l] = false;
-    if (chains[l]->begin_positions(q, delta, h, box, tolerance, lanes.lane[l], status[l])) {
-      done[l] = true;
-    } else {
-      active[l] = true;
-    }
   }
+  // Lanes without a chain repeat the first one (their results are never read).
+  for (std::size_t l = count; l < w; ++l) {
+    for (auto* v : {&a.x0, &a.start_u, &a.start_r}) copy_lane(*v, 0, l);
+  }
+  const ImageRange range(box);
+  enum class State : std::uint8_t { active, done, out };
+  State state[w];
+  for (std::size_t l = 0; l < w; ++l) state[l] = l < count ? State::active : State::out;
+  double norm[w] = {}, merit[w] = {}, cap[w];
+  std::uint8_t trying[w];
+  // The residual at a.x for the trying lanes (held_or_residual, then try_trial's test of the
+  // merit against cap; the first residual takes none).
+  auto evaluate = [&](const double* x, bool first) {
+    std::uint8_t hold[w];
+    rod_passes::across::differences(m, x, g.forward.data(), g.image.data(), range.periods,
+                                    range.limit, a.u.data(), a.r.data(), hold);
+    for (std::size_t l = 0; l < count; ++l) {
+      if (trying[l] && !hold[l]) chains[l]->rewrap_across(x, box, l, g, a);
+    }
+    double bound[w];
+    rod_passes::across::held_bound(m, a.r.data(), g.length.data(), g.inverse_length.data(),
+                                   tolerance, bound);
+    // Whether x is within rounding of a finite `limit` (the estimate of the merit being off
+    // by that: a relative 1e-10 is far above the rounding of a sum of a few hundred squares).
+    auto unsure = [](double x, double limit) {
+      return std::isfinite(limit) && std::abs(x - limit) <= 1e-10 * std::abs(limit);
+    };
+    bool residual = false;
+    for (std::size_t l = 0; l < count; ++l) {
+      if (!trying[l]) continue;
+      const double held_merit = static_cast<double>(m) * bound[l] * bound[l] * 2;
+      if (bound[l] <= tolerance && held_merit <= cap[l]) {
+        if (unsure(held_merit, cap[l])) {
+          state[l] = State::out;
+        } else {
+          state[l] = State::done;
+          status[l].residual = bound[l];
+        }
+        trying[l] = 0;
+        continue;
+      }
+      if (bound[l] <= tolerance && unsure(held_merit, cap[l])) {
+        state[l] = State::out;
+        trying[l] = 0;
+        continue;
+      }
+      residual = true;
+    }
+    if (!residual) return;
+    double new_norm[w], new_merit[w];
+    rod_passes::across::normalize_residual(m, a.u.data(), a.r.data(), g.length.data(), a.phi.data(),
+                                           new_norm, new_merit);
+    for (std::size_t l = 0; l < count; ++l) {
+      if (!trying[l]) continue;
+      if (!first && (unsure(new_merit[l], cap[l]) || !(new_merit[l] <= cap[l]))) {
+        state[l] = State::out;  // failed (solve_positions halves) or unsure
+        continue;
+      }
+      norm[l] = new_norm[l];
+      merit[l] = new_merit[l];
+    }
+  };
+  for (std::size_t l = 0; l < w; ++l) {
+    trying[l] = state[l] == State::active;
+    cap[l] = std::numeric_limits<double>::infinity();
+  }
+  evaluate(a.x0.data(), true);
   for (;;) {
     bool any = false;
     for (std::size_t l = 0; l < count; ++l) {
-      if (!active[l]) continue;
-      RodChainWorkspace& ws = lanes.lane[l];
-      status[l].residual = residual_norm(ws.phi);
+      if (state[l] != State::active) continue;
+      status[l].residual = norm[l];
       if (status[l].residual <= tolerance) {
-        active[l] = false;
-        done[l] = true;
-        continue;
+        state[l] = State::done;
+      } else if (status[l].iterations >= max_iterations) {
+        state[l] = State::out;  // left to solve_positions (which gives up too)
+      } else {
+        ++status[l].iterations;
+        any = true;
       }
-      if (status[l].iterations >= max_iterations) {
-        active[l] = false;  // left to solve_positions (which gives up too)
-        continue;
-      }
-      ++status[l].iterations;
-      chains[l]->make_bands(ws.ux.data(), chains[l]->memo_.u.data(), h, ws.phi, ws);
-      any = true;
     }
     if (!any) break;
-    solve_lanes(m, active, lanes, false);
-    for (std::size_t l = 0; l < count; ++l) {
-      if (!active[l]) continue;
-      // A vanishing pivot or a halving: solve_positions redoes the chain.
-      const LineSearch outcome =
-          lanes.solved[l] ? chains[l]->line_search(box, tolerance, 0, lanes.lane[l], status[l])
-                          : LineSearch::failed;
-      if (outcome == LineSearch::failed) {
-        active[l] = false;
-      } else if (outcome == LineSearch::held) {
-        active[l] = false;
-        done[l] = true;
-      }
+    rod_passes::across::bands(m, a.u.data(), a.start_u.data(), g.w_low.data(), g.w_high.data(),
+                              g.coupling.data(), h, a.phi.data(), lanes.lower.data(),
+                              lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
+    eliminate_lanes(m, lanes);
+    for (std::size_t l = 0; l < w; ++l) {
+      // A vanishing pivot: solve_positions redoes the chain.
+      if (state[l] == State::active && !lanes.solved[l]) state[l] = State::out;
+      trying[l] = state[l] == State::active;
+      cap[l] = (1 - 1e-4 * 1.0) * merit[l];
     }
+    rod_passes::across::advance(m, a.z.data(), lanes.x.data(), trying);
+    rod_passes::across::positions(m, a.x0.data(), a.start_u.data(), a.z.data(), g.first_sign.data(),
+                                  g.second_sign.data(), g.hw.data(), a.x.data());
+    evaluate(a.x.data(), false);
   }
+  bool any_done = false;
+  for (std::size_t l = 0; l < count; ++l) any_done = any_done || state[l] == State::done;
+  if (!any_done) return;
+  rod_passes::across::impulses(m, a.start_u.data(), a.z.data(), g.first_sign.data(),
+                               g.second_sign.data(), a.impulse.data());
+  double virials[w];
+  rod_passes::across::virial(m, a.z.data(), a.start_r.data(), virials);
   for (std::size_t l = 0; l < count; ++l) {
-    if (!done[l]) continue;
+    if (state[l] != State::done) continue;
     status[l].converged = true;
-    virial[l] = 0.0;
-    chains[l]->finish_positions(lanes.lane[l], impulse, virial[l]);
+    virial[l] = virials[l];
+    const std::vector<std::int32_t>& particle = chains[l]->bead_particle_;
+    for (std::size_t b = 0; b < n; ++b) {
+      impulse[particle[b]] = {a.impulse[b * w + l], a.impulse[(n + b) * w + l],
+                              a.impulse[(2 * n + b) * w + l]};
+    }
     solved[l] = true;
   }
 }
@@ -427,10 +672,14 @@ void RodChain::begin_momenta(const Vec3* x, const Vec3* p, const Box& box,
                              RodChainWorkspace& ws) const {
   const std::size_t n = beads();
   const std::size_t m = rows();
-  gather(x, ws.x);
+  ws.x.resize(3 * n);
   ws.v.resize(3 * n);
   for (std::size_t b = 0; b < n; ++b) {
-    const Vec3 v = p[bead_particle_[b]] * bead_inverse_mass_[b];
+    const std::int32_t g = bead_particle_[b];
+    ws.x[b] = x[g].x;
+    ws.x[n + b] = x[g].y;
+    ws.x[2 * n + b] = x[g].z;
+    const Vec3 v = p[g] * bead_inverse_mass_[b];
     ws.v[b] = v.x;
     ws.v[n + b] = v.y;
     ws.v[2 * n + b] = v.z;
@@ -465,33 +714,102 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
   return true;
 }
 
+void RodChain::gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t lane,
+                                     RodChainLanes& lanes) const {
+  constexpr std::size_t w = RodChainLanes::width;
+  const std::size_t n = beads();
+  RodChainLanes::Across& a = lanes.across;
+  std::vector<double>& own = lanes.lane[lane].x;
+  own.resize(3 * n);
+  for (std::size_t b = 0; b < n; ++b) {
+    const std::int32_t g = bead_particle_[b];
+    own[b] = a.x[b * w + lane] = x[g].x;
+    own[n + b] = a.x[(n + b) * w + lane] = x[g].y;
+    own[2 * n + b] = a.x[(2 * n + b) * w + lane] = x[g].z;
+    const Vec3 v = p[g] * bead_inverse_mass_[b];
+    a.v[b * w + lane] = v.x;
+    a.v[(n + b) * w + lane] = v.y;
+    a.v[(2 * n + b) * w + lane] = v.z;
+  }
+}
+
+void RodChain::remember_across(const Box& box, std::size_t lane, RodChainLanes& lanes) const {
+  constexpr std::size_t w = RodChainLanes::width;
+  const std::size_t m = rows();
+  const RodChainLanes::Across& a = lanes.across;
+  memo_.u.resize(3 * m);
+  memo_.r.resize(m);
+  for (std::size_t k = 0; k < 3 * m; ++k) memo_.u[k] = a.u[k * w + lane];
+  for (std::size_t k = 0; k < m; ++k) memo_.r[k] = a.r[k * w + lane];
+  std::swap(memo_.x, lanes.lane[lane].x);
+  memo_.period = box.period();
+  memo_.inverse_period = box.inverse_period();
+  memo_.valid = true;
+}
+
+// project_momenta for every lane at once (begin_momenta, the solve, finish_momenta), each
+// lane's numbers its own.
 void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t count,
                                      const Vec3* x, Vec3* p, const Box& box, RodChainLanes& lanes,
                                      bool* solved) {
   constexpr std::size_t w = RodChainLanes::width;
-  const std::size_t m = count > 0 ? chains[0]->rows() : 0;
-  bool solving[w] = {};
-  for (std::size_t l = 0; l < count; ++l) {
-    RodChainWorkspace& ws = lanes.lane[l];
-    chains[l]->begin_momenta(x, p, box, ws);
-    const double* u = chains[l]->memo_.u.data();
-    chains[l]->make_bands(u, u, 1.0, ws.pt, ws);
-    solving[l] = true;
+  if (count == 0) return;
+  const std::size_t m = chains[0]->rows();
+  const std::size_t n = m + 1;
+  RodChainLanes::Across& a = lanes.across;
+  // The constants the position solve left (its step h only sets hw, not read here).
+  RodChainLanes::Group* found = find_group(chains, count, lanes);
+  RodChainLanes::Group& g = found ? *found : group_of(chains, count, 0.0, lanes);
+  a.x.resize(3 * n * w);
+  a.v.resize(3 * n * w);
+  a.impulse.resize(3 * n * w);
+  a.u.resize(3 * m * w);
+  a.r.resize(m * w);
+  a.phi.resize(m * w);
+  size_lanes(m, lanes);
+  for (std::size_t l = 0; l < count; ++l) chains[l]->gather_momenta_across(x, p, l, lanes);
+  for (std::size_t l = count; l < w; ++l) {
+    copy_lane(a.x, 0, l);
+    copy_lane(a.v, 0, l);
   }
-  solve_lanes(m, solving, lanes, true);
+  // The directions at x (directions()), remembered where the next solve finds them.
+  const ImageRange range(box);
+  std::uint8_t hold[w];
+  rod_passes::across::differences(m, a.x.data(), g.forward.data(), g.image.data(), range.periods,
+                                  range.limit, a.u.data(), a.r.data(), hold);
+  for (std::size_t l = 0; l < count; ++l) {
+    if (!hold[l]) chains[l]->rewrap_across(a.x.data(), box, l, g, a);
+  }
+  rod_passes::normalize(m * w, a.u.data(), a.r.data());
+  for (std::size_t l = 0; l < count; ++l) chains[l]->remember_across(box, l, lanes);
+  // (C^T M^-1 C) mu = -C^T M^-1 p.
+  rod_passes::across::projections(m, a.u.data(), a.v.data(), g.low_first.data(), g.low_sign.data(),
+                                  g.high_sign.data(), a.phi.data());
+  rod_passes::across::bands(m, a.u.data(), a.u.data(), g.w_low.data(), g.w_high.data(),
+                            g.coupling.data(), 1.0, a.phi.data(), lanes.lower.data(),
+                            lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
+  eliminate_lanes(m, lanes);
+  rod_passes::across::impulses(m, a.u.data(), lanes.x.data(), g.first_sign.data(),
+                               g.second_sign.data(), a.impulse.data());
   lanes.virial_terms.resize(count * m);
   for (std::size_t l = 0; l < count; ++l) {
     solved[l] = lanes.solved[l] != 0;
-    if (solved[l]) chains[l]->finish_momenta(lanes.lane[l], p, lanes.virial_terms.data() + l * m);
+    if (!solved[l]) continue;
+    double* terms = lanes.virial_terms.data() + l * m;
+    for (std::size_t k = 0; k < m; ++k) terms[k] = lanes.x[k * w + l] * a.r[k * w + l];
+    const std::vector<std::int32_t>& particle = chains[l]->bead_particle_;
+    for (std::size_t b = 0; b < n; ++b) {
+      p[particle[b]] +=
+          Vec3{a.impulse[b * w + l], a.impulse[(n + b) * w + l], a.impulse[(2 * n + b) * w + l]};
+    }
   }
 }
 
 double RodChain::largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
                                             double start) const {
   const std::size_t m = rows();
-  gather(x, ws.x);
   const std::vector<double>* r = &memo_.r;
-  if (!remembered_at(ws.x, box)) {
+  if (!gather_remembered(x, ws.x, box)) {
     ws.ux.resize(3 * m);
     ws.rx.resize(m);
     directions(ws.x.data(), box, ws.ux.data(), ws.rx.data());

@@ -20,13 +20,35 @@ struct RodChainWorkspace {
   std::vector<double> ux, uxt, rx, rxt, bounds, lower, diagonal, upper, rhs;  // per rod
   std::vector<std::uint8_t> usable;
   Eigen::VectorXd z, step, trial, phi, pt, pivots;
+  // residual_norm of phi and pt, made with them; phi's squared norm once known (else < 0).
+  double phi_norm = 0.0, pt_norm = 0.0, merit = -1.0;
 };
+
+class RodChain;
 
 // Scratch space of the lockstep kernels (RodChain::solve_positions_lanes and
 // project_momenta_lanes): one workspace per lane, and the lanes' band entries interleaved.
 struct RodChainLanes {
   static constexpr std::size_t width = 8;  // rod_passes::lanes
   RodChainWorkspace lane[width];
+  // A group of chains side by side (rod_passes::across layout): their constants, with the
+  // step h, and their periodic images (a cache that never changes a number, as RodChain's own).
+  struct Group {
+    const RodChain* chains[width] = {};
+    std::size_t rows = 0;
+    double h = 0.0;
+    std::vector<double> forward, length, inverse_length, w_low, w_high, coupling, low_first,
+        low_sign, high_sign, image;                   // rods
+    std::vector<double> first_sign, second_sign, hw;  // beads
+  };
+  struct Across {
+    // The groups met so far: the same groups come at every step.
+    std::vector<Group> groups;
+    // Per solve: the free positions, the start directions and lengths, the positions, their
+    // directions (differences first), lengths and residual, the multipliers, the impulses.
+    std::vector<double> x0, start_u, start_r, x, u, r, phi, z, impulse;
+    std::vector<double> v;  // the momentum projection's velocities
+  } across;
   std::vector<double> lower, diagonal, upper, rhs, x, c, virial_terms;
   std::uint8_t solved[width];
 };
@@ -66,11 +88,13 @@ class RodChain {
                                      double* virial_terms) const;
 
   // solve_positions for chains[0..count) at once (count <= RodChainLanes::width, every
-  // chain with the same number of rods), their eliminations run with one chain per vector
-  // lane; every lane's numbers are solve_positions' own. solved[l]: whether chain l's
-  // results were written (impulse, virial[l], status[l]). A chain that needs a line-search
-  // halving, more iterations than allowed or the generic path is left unsolved: the
-  // caller solves it alone with solve_positions (which redoes it from the start).
+  // chain with the same number of rods), every pass with one chain per vector lane
+  // (rod_passes::across); every lane's numbers are solve_positions' own. solved[l]: whether
+  // chain l's results were written (impulse, virial[l], status[l]). A chain that needs a
+  // line-search halving, more iterations than allowed or the generic path, or whose line-search
+  // test falls within rounding of its bound (the merit is summed in another order here), is
+  // left unsolved: the caller solves it alone with solve_positions (which redoes it from the
+  // start).
   static void solve_positions_lanes(const RodChain* const* chains, std::size_t count, const Vec3* q,
                                     const Vec3* delta, double h, const Box& box, double tolerance,
                                     int max_iterations, RodChainLanes& lanes, Vec3* impulse,
@@ -99,24 +123,34 @@ class RodChain {
   // The rods' minimum-image differences d and squared lengths d2 at positions x (the first
   // half of directions(); rod_passes::normalize is the second).
   void differences(const double* x, const Box& box, double* d, double* d2) const;
-  // An upper bound, from the squared lengths d2 alone (no square roots), on max_k |r_k - L_k|
-  // as directions() and the residual would compute it; +inf when that bound exceeds
-  // `tolerance` for some rod (or d2 is not finite).
-  double held_bound(const double* d2, double tolerance, RodChainWorkspace& ws) const;
+  // differences() where a rod left its last image: every image rounded anew.
+  void rewrap_differences(const double* x, const Box& box, double* d, double* d2) const;
+  // differences(), and in the same pass an upper bound, from the squared lengths d2 alone (no
+  // square roots), on max_k |r_k - L_k| as directions() and the residual would compute it;
+  // +inf when that bound exceeds `tolerance` for some rod (or d2 is not finite).
+  double differences_and_bound(const double* x, const Box& box, double* d, double* d2,
+                               double tolerance, RodChainWorkspace& ws) const;
   // The phases of solve_positions. Gathers the step's start and free positions, the start
   // directions, and the residual at the free positions: true when the rods are held there.
   bool begin_positions(const Vec3* q, const Vec3* delta, double h, const Box& box, double tolerance,
                        RodChainWorkspace& ws, SolverStatus& status) const;
-  // Whether the rods at x, whose differences and squared lengths u, r hold, are proven held
-  // (with the residual's norm below `merit_cap` too) without their square roots; otherwise
-  // u, r, phi become the directions, lengths and residual at x.
-  bool held_or_residual(Eigen::VectorXd& phi, std::vector<double>& u, std::vector<double>& r,
-                        double merit_cap, double tolerance, RodChainWorkspace& ws,
-                        SolverStatus& status) const;
+  // Whether the rods at x, whose differences and squared lengths u, r hold and whose
+  // differences_and_bound is `bound`, are proven held (with the residual's norm below
+  // `merit_cap` too) without their square roots; otherwise u, r, phi become the directions,
+  // lengths and residual at x, and phi_norm residual_norm(phi).
+  bool held_or_residual(double bound, Eigen::VectorXd& phi, double& phi_norm,
+                        std::vector<double>& u, std::vector<double>& r, double merit_cap,
+                        double tolerance, SolverStatus& status) const;
+  // ws.phi's squared norm, made once per residual.
+  static double merit(RodChainWorkspace& ws);
   // After the Newton step ws.step: the line search (at most `halvings` halvings).
   enum class LineSearch { held, descended, failed };
   LineSearch line_search(const Box& box, double tolerance, int halvings, RodChainWorkspace& ws,
                          SolverStatus& status) const;
+  // One trial of the line search, the multipliers ws.trial: taken (held or descended, below
+  // `merit_cap`) or failed (nothing taken).
+  LineSearch try_trial(const Box& box, double tolerance, double merit_cap, RodChainWorkspace& ws,
+                       SolverStatus& status) const;
   // Per bead, the impulse C z of the multipliers ws.z along the remembered directions, into
   // ws.impulse (x, y, z blocks of beads() each).
   void bead_impulses(RodChainWorkspace& ws) const;
@@ -127,10 +161,32 @@ class RodChain {
   void begin_momenta(const Vec3* x, const Vec3* p, const Box& box, RodChainWorkspace& ws) const;
   // Adds the impulses C(x) mu (mu in ws.z) to p and writes the virial terms.
   void finish_momenta(RodChainWorkspace& ws, Vec3* p, double* virial_terms) const;
-  // The lanes' band entries, interleaved (rod_passes::eliminate_lanes), solved; the
-  // solutions into each solving lane's ws.step (or ws.z). lanes.solved[l]: whether lane l's
-  // elimination succeeded.
-  static void solve_lanes(std::size_t rows, const bool* solving, RodChainLanes& lanes, bool into_z);
+  // The group of chains[0..count) with step h from lanes.across.groups, made if new (lanes
+  // past count repeat chain 0).
+  static RodChainLanes::Group& group_of(const RodChain* const* chains, std::size_t count, double h,
+                                        RodChainLanes& lanes);
+  // The group of chains[0..count) in lanes.across.groups, or null.
+  static RodChainLanes::Group* find_group(const RodChain* const* chains, std::size_t count,
+                                          RodChainLanes& lanes);
+  // Lane `lane` of lanes.across for the momentum projection: the positions x (also into the
+  // lane's ws.x, chain order) and velocities M^-1 p.
+  void gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t lane,
+                             RodChainLanes& lanes) const;
+  // remember_directions from lane `lane` of lanes.across (directions and lengths made there at
+  // the lane's ws.x).
+  void remember_across(const Box& box, std::size_t lane, RodChainLanes& lanes) const;
+  // Lane `lane` of lanes.across: the free positions x0 = q + delta and the start directions
+  // (memo_, made where not remembered) of this solve.
+  void begin_across(const Vec3* q, const Vec3* delta, const Box& box, std::size_t lane,
+                    RodChainLanes& lanes) const;
+  // rewrap_differences for lane `lane` at positions x (lane-major), into lanes.across.
+  void rewrap_across(const double* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
+                     RodChainLanes::Across& across) const;
+  // The interleaved arrays sized for chains of `rows` rods.
+  static void size_lanes(std::size_t rows, RodChainLanes& lanes);
+  // The lanes' interleaved band entries solved (rod_passes::eliminate_lanes): solution k of
+  // lane l at lanes.x[k * width + l]; lanes.solved[l]: whether lane l's elimination succeeded.
+  static void eliminate_lanes(std::size_t rows, RodChainLanes& lanes);
   // The band entries and right-hand side solve_coupled eliminates, into ws.
   void make_bands(const double* a, const double* b, double scale, const Eigen::VectorXd& minus_rhs,
                   RodChainWorkspace& ws) const;
@@ -140,14 +196,16 @@ class RodChain {
   [[nodiscard]] bool solve_coupled(const double* a, const double* b, double scale,
                                    const Eigen::VectorXd& minus_rhs, Eigen::VectorXd& x,
                                    RodChainWorkspace& ws) const;
-  // Directions and lengths at the start of the step's positions q, in memo_: those of the
-  // last momentum projection (or solve) when q is bit for bit the positions it had, as it is
-  // unless the neighbour list wrapped them in between; computed otherwise.
-  void start_directions(const std::vector<double>& q, const Box& box) const;
-  // Computes the directions and lengths at positions x into memo_.
-  void remember_directions(const std::vector<double>& x, const Box& box) const;
-  // Whether the memo holds the directions at positions x in this box.
-  bool remembered_at(const std::vector<double>& x, const Box& box) const;
+  // Gathers positions (gather()) and tells, in the same pass, whether memo_ holds the
+  // directions at them in this box: the last momentum projection's (or solve's) when they
+  // are bit for bit the positions it had, as they are unless the neighbour list wrapped
+  // them in between.
+  bool gather_remembered(const Vec3* global, std::vector<double>& out, const Box& box) const;
+  // Whether the memo is valid for this box and this chain's size.
+  bool memo_in(const Box& box) const;
+  // Computes the directions and lengths at positions x into memo_, and takes x (chain-order
+  // scratch; x receives the memo's old positions).
+  void remember_directions(std::vector<double>& x, const Box& box) const;
 
   // The last directions computed at a step's end or start positions, with those positions
   // and the box's periods (chain order): directions() is a function of these alone.

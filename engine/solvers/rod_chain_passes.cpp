@@ -1,5 +1,9 @@
 #include "solvers/rod_chain_passes.hpp"
 
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 namespace deli::rod_passes {
 
 // __restrict: the arrays never overlap, so the loops vectorise without runtime alias checks.
@@ -7,14 +11,30 @@ namespace deli::rod_passes {
 // built for another CPU.
 
 namespace {
-// differences() with a pointer per axis (restrict: no runtime overlap checks).
+constexpr double bound_slack = 0x1p-50;
+
+// One rod's held_bounds entry (bound and usability) from its squared length d2.
+inline void held_bound_of(double d2, double l, double inverse_l, double tolerance, double& bound,
+                          std::uint8_t& usable) {
+  const double relative_gap = __builtin_fabs(d2 - l * l) * inverse_l;
+  const double rod_bound = relative_gap * (1 + bound_slack) + l * bound_slack;
+  bound = rod_bound;
+  // Also false for NaN.
+  usable = static_cast<std::uint8_t>((relative_gap <= 0.25 * l) & (rod_bound <= tolerance));
+}
+
+// differences() with a pointer per axis (restrict: no runtime overlap checks); with
+// `bounds`, held_bounds() of the squared lengths in the same pass.
+template <bool bounds>
 inline bool differences_by_axis(std::size_t m, const double* __restrict bx,
                                 const double* __restrict by, const double* __restrict bz,
                                 const double* __restrict forward, const double* __restrict ix,
                                 const double* __restrict iy, const double* __restrict iz,
                                 const double* __restrict period, const double* __restrict limit,
                                 double* __restrict dx, double* __restrict dy, double* __restrict dz,
-                                double* __restrict d2) {
+                                double* __restrict d2, const double* __restrict length,
+                                const double* __restrict inverse_length, double tolerance,
+                                double* __restrict bound, std::uint8_t* __restrict usable) {
   const double px = period[0], py = period[1], pz = period[2];
   const double lx = limit[0], ly = limit[1], lz = limit[2];
   int hold = 1;
@@ -34,7 +54,11 @@ inline bool differences_by_axis(std::size_t m, const double* __restrict bx,
     dx[k] = ex;
     dy[k] = ey;
     dz[k] = ez;
-    d2[k] = ex * ex + ey * ey + ez * ez;
+    const double squared = ex * ex + ey * ey + ez * ez;
+    d2[k] = squared;
+    if constexpr (bounds) {
+      held_bound_of(squared, length[k], inverse_length[k], tolerance, bound[k], usable[k]);
+    }
   }
   return hold != 0;
 }
@@ -43,8 +67,19 @@ inline bool differences_by_axis(std::size_t m, const double* __restrict bx,
 bool differences(std::size_t m, const double* x, const double* forward, const double* image,
                  const double* period, const double* limit, double* d, double* d2) {
   const std::size_t n = m + 1;
-  return differences_by_axis(m, x, x + n, x + 2 * n, forward, image, image + m, image + 2 * m,
-                             period, limit, d, d + m, d + 2 * m, d2);
+  return differences_by_axis<false>(m, x, x + n, x + 2 * n, forward, image, image + m,
+                                    image + 2 * m, period, limit, d, d + m, d + 2 * m, d2, nullptr,
+                                    nullptr, 0.0, nullptr, nullptr);
+}
+
+bool differences_and_bounds(std::size_t m, const double* x, const double* forward,
+                            const double* image, const double* period, const double* limit,
+                            const double* length, const double* inverse_length, double tolerance,
+                            double* d, double* d2, double* bound, std::uint8_t* usable) {
+  const std::size_t n = m + 1;
+  return differences_by_axis<true>(m, x, x + n, x + 2 * n, forward, image, image + m, image + 2 * m,
+                                   period, limit, d, d + m, d + 2 * m, d2, length, inverse_length,
+                                   tolerance, bound, usable);
 }
 
 void normalize(std::size_t m, double* __restrict d, double* __restrict r) {
@@ -59,17 +94,35 @@ void normalize(std::size_t m, double* __restrict d, double* __restrict r) {
   }
 }
 
+double normalize_residual(std::size_t m, double* __restrict d, double* __restrict r,
+                          const double* __restrict length, double* __restrict phi) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const double l = __builtin_sqrt(r[k]);
+    const double inverse = 1.0 / l;
+    const bool positive = l > 0;
+    r[k] = l;
+    d[k] = positive ? d[k] * inverse : 0.0;
+    d[m + k] = positive ? d[m + k] * inverse : 0.0;
+    d[2 * m + k] = positive ? d[2 * m + k] * inverse : 0.0;
+    phi[k] = l - length[k];
+  }
+  // residual_norm: the largest |phi_k| (a maximum, the same in any order), +inf unless every
+  // phi_k is finite.
+  double largest = 0.0;
+  bool finite = true;
+  for (std::size_t k = 0; k < m; ++k) {
+    const double a = __builtin_fabs(phi[k]);
+    finite &= (phi[k] - phi[k]) == 0;
+    largest = a > largest ? a : largest;
+  }
+  return finite ? largest : __builtin_inf();
+}
+
 void held_bounds(std::size_t m, const double* __restrict d2, const double* __restrict length,
                  const double* __restrict inverse_length, double tolerance,
                  double* __restrict bound, std::uint8_t* __restrict usable) {
-  constexpr double slack = 0x1p-50;
   for (std::size_t k = 0; k < m; ++k) {
-    const double l = length[k];
-    const double relative_gap = __builtin_fabs(d2[k] - l * l) * inverse_length[k];
-    const double rod_bound = relative_gap * (1 + slack) + l * slack;
-    bound[k] = rod_bound;
-    // Also false for NaN.
-    usable[k] = static_cast<std::uint8_t>((relative_gap <= 0.25 * l) & (rod_bound <= tolerance));
+    held_bound_of(d2[k], length[k], inverse_length[k], tolerance, bound[k], usable[k]);
   }
 }
 
@@ -112,13 +165,24 @@ void impulses(std::size_t m, const double* u, const double* z, const double* fir
   impulse_components(m, u, z, first_sign, second_sign, out, out + n, out + 2 * n);
 }
 
-void positions(std::size_t m, const double* __restrict x0, const double* u, const double* z,
-               const double* first_sign, const double* second_sign, const double* __restrict hw,
+void positions(std::size_t m, const double* __restrict x0, const double* __restrict u,
+               const double* __restrict z, const double* __restrict first_sign,
+               const double* __restrict second_sign, const double* __restrict hw,
                double* __restrict out) {
+  // impulse_components' sums, each added to x0 as it is made (one pass per axis).
   const std::size_t n = m + 1;
-  impulse_components(m, u, z, first_sign, second_sign, out, out + n, out + 2 * n);
   for (std::size_t c = 0; c < 3; ++c) {
-    for (std::size_t b = 0; b < n; ++b) out[c * n + b] = x0[c * n + b] + out[c * n + b] * hw[b];
+    const double* __restrict uc = u + c * m;
+    const double* __restrict x0c = x0 + c * n;
+    double* __restrict oc = out + c * n;
+    oc[0] = x0c[0] + (0.0 + uc[0] * (first_sign[0] * z[0])) * hw[0];
+    for (std::size_t b = 1; b + 1 < n; ++b) {
+      const double sa = first_sign[b] * z[b - 1];
+      const double sb = second_sign[b] * z[b];
+      oc[b] = x0c[b] + ((0.0 + uc[b - 1] * sa) + uc[b] * sb) * hw[b];
+    }
+    const std::size_t b = n - 1;
+    oc[b] = x0c[b] + (0.0 + uc[b - 1] * (first_sign[b] * z[b - 1])) * hw[b];
   }
 }
 
@@ -283,3 +347,212 @@ void eliminate_lanes(std::size_t n, const double* __restrict lower,
 }
 
 }  // namespace deli::rod_passes
+
+namespace deli::rod_passes::across {
+
+// Each pass in explicit vectors of one entry per lane (the autovectoriser leaves loops with
+// per-lane accumulators scalar).
+namespace {
+constexpr std::size_t w = lanes;
+
+inline Lanes absolute(Lanes v) {
+  LaneMask bits;
+  __builtin_memcpy(&bits, &v, sizeof bits);
+  bits &= 0x7fffffffffffffffL;
+  __builtin_memcpy(&v, &bits, sizeof v);
+  return v;
+}
+inline Lanes square_root(Lanes v) {
+#if defined(__AVX512F__)
+  __m512d x;
+  __builtin_memcpy(&x, &v, sizeof x);
+  x = _mm512_mask_sqrt_pd(x, 0xff, x);  // every lane (a pass-through source: no undefined one)
+  __builtin_memcpy(&v, &x, sizeof v);
+#else
+  for (std::size_t l = 0; l < w; ++l) v[l] = __builtin_sqrt(v[l]);
+#endif
+  return v;
+}
+inline Lanes broadcast(double v) {
+  Lanes out;
+  for (std::size_t l = 0; l < w; ++l) out[l] = v;
+  return out;
+}
+inline void store_lanes(double* out, const Lanes& v) {
+  for (std::size_t l = 0; l < w; ++l) out[l] = v[l];
+}
+const LaneMask all_lanes = broadcast(0.0) == 0.0;
+}  // namespace
+
+void differences(std::size_t m, const double* x, const double* forward, const double* image,
+                 const double* period, const double* limit, double* d, double* d2,
+                 std::uint8_t* hold) {
+  const std::size_t n = m + 1;
+  const std::size_t all = m * w;
+  const double px = period[0], py = period[1], pz = period[2];
+  const double lx = limit[0], ly = limit[1], lz = limit[2];
+  LaneMask within = all_lanes;
+  for (std::size_t i = 0; i < all; i += w) {
+    const LaneMask f = load(forward + i) > 0;
+    const Lanes ax = load(x + i), ay = load(x + n * w + i), az = load(x + 2 * n * w + i);
+    const Lanes cx = load(x + i + w), cy = load(x + n * w + i + w),
+                cz = load(x + 2 * n * w + i + w);
+    Lanes ex = (f ? ax : cx) - (f ? cx : ax);
+    Lanes ey = (f ? ay : cy) - (f ? cy : ay);
+    Lanes ez = (f ? az : cz) - (f ? cz : az);
+    ex -= px * load(image + i);
+    ey -= py * load(image + all + i);
+    ez -= pz * load(image + 2 * all + i);
+    // Also false for NaN.
+    within &= (absolute(ex) <= lx) & (absolute(ey) <= ly) & (absolute(ez) <= lz);
+    store(d + i, ex);
+    store(d + all + i, ey);
+    store(d + 2 * all + i, ez);
+    store(d2 + i, ex * ex + ey * ey + ez * ez);
+  }
+  for (std::size_t l = 0; l < w; ++l) hold[l] = static_cast<std::uint8_t>(within[l] != 0);
+}
+
+void held_bound(std::size_t m, const double* d2, const double* length, const double* inverse_length,
+                double tolerance, double* per_lane) {
+  Lanes largest = broadcast(0.0);
+  LaneMask usable = all_lanes;
+  for (std::size_t i = 0; i < m * w; i += w) {
+    // held_bound_of, lane by lane.
+    const Lanes l = load(length + i);
+    const Lanes relative_gap = absolute(load(d2 + i) - l * l) * load(inverse_length + i);
+    const Lanes rod_bound = relative_gap * (1 + bound_slack) + l * bound_slack;
+    usable &= (relative_gap <= 0.25 * l) & (rod_bound <= tolerance);
+    // The maximum of the usable bounds (all finite): the same in any order.
+    largest = rod_bound > largest ? rod_bound : largest;
+  }
+  for (std::size_t l = 0; l < w; ++l) per_lane[l] = usable[l] ? largest[l] : __builtin_inf();
+}
+
+void normalize_residual(std::size_t m, double* d, double* r, const double* length, double* phi,
+                        double* norm, double* merit) {
+  const std::size_t all = m * w;
+  Lanes largest = broadcast(0.0), squares = broadcast(0.0);
+  LaneMask finite = all_lanes;
+  for (std::size_t i = 0; i < all; i += w) {
+    const Lanes l = square_root(load(r + i));
+    const Lanes inverse = 1.0 / l;
+    const LaneMask positive = l > 0;
+    store(r + i, l);
+    store(d + i, positive ? load(d + i) * inverse : 0.0);
+    store(d + all + i, positive ? load(d + all + i) * inverse : 0.0);
+    store(d + 2 * all + i, positive ? load(d + 2 * all + i) * inverse : 0.0);
+    const Lanes p = l - load(length + i);
+    store(phi + i, p);
+    const Lanes a = absolute(p);
+    finite &= (p - p) == 0;
+    largest = a > largest ? a : largest;
+    squares += p * p;
+  }
+  for (std::size_t l = 0; l < w; ++l) {
+    norm[l] = finite[l] ? largest[l] : __builtin_inf();
+    merit[l] = squares[l];
+  }
+}
+
+void bands(std::size_t m, const double* a, const double* b, const double* w_low,
+           const double* w_high, const double* coupling, double scale, const double* phi,
+           double* lower, double* diagonal, double* upper, double* rhs) {
+  const std::size_t all = m * w;
+  for (std::size_t i = 0; i < all; i += w) {
+    const Lanes d = load(a + i) * load(b + i) + load(a + all + i) * load(b + all + i) +
+                    load(a + 2 * all + i) * load(b + 2 * all + i);
+    Lanes entry = broadcast(0.0);
+    entry += 1.0 * load(w_low + i) * d;
+    entry += 1.0 * load(w_high + i) * d;
+    store(diagonal + i, entry * scale);
+    store(rhs + i, -load(phi + i));
+  }
+  for (std::size_t i = 0; i + w < all; i += w) {
+    const std::size_t j = i + w;  // the next rod, same lane
+    const Lanes up = load(a + i) * load(b + j) + load(a + all + i) * load(b + all + j) +
+                     load(a + 2 * all + i) * load(b + 2 * all + j);
+    store(upper + i, (0.0 + load(coupling + i) * up) * scale);
+    const Lanes down = load(a + j) * load(b + i) + load(a + all + j) * load(b + all + i) +
+                       load(a + 2 * all + j) * load(b + 2 * all + i);
+    store(lower + j, (0.0 + load(coupling + i) * down) * scale);
+  }
+}
+
+void advance(std::size_t m, double* z, const double* step, const std::uint8_t* take) {
+  LaneMask taken;
+  for (std::size_t l = 0; l < w; ++l) taken[l] = take[l] ? -1L : 0L;
+  for (std::size_t i = 0; i < m * w; i += w) {
+    const Lanes now = load(z + i);
+    store(z + i, taken ? now + load(step + i) : now);
+  }
+}
+
+namespace {
+// One axis of impulse_components (out = the impulse) or of positions (out = x0 + impulse hw).
+template <bool moved>
+inline void bead_axis(std::size_t m, const double* uc, const double* z, const double* first_sign,
+                      const double* second_sign, const double* x0c, const double* hw, double* oc) {
+  const std::size_t n = m + 1;
+  auto put = [&](std::size_t i, const Lanes& impulse) {
+    if constexpr (moved) {
+      store(oc + i, load(x0c + i) + impulse * load(hw + i));
+    } else {
+      store(oc + i, impulse);
+    }
+  };
+  put(0, 0.0 + load(uc) * (load(first_sign) * load(z)));
+  for (std::size_t i = w; i < (n - 1) * w; i += w) {
+    const Lanes sa = load(first_sign + i) * load(z + i - w);
+    const Lanes sb = load(second_sign + i) * load(z + i);
+    put(i, (0.0 + load(uc + i - w) * sa) + load(uc + i) * sb);
+  }
+  const std::size_t i = (n - 1) * w;
+  put(i, 0.0 + load(uc + i - w) * (load(first_sign + i) * load(z + i - w)));
+}
+}  // namespace
+
+void positions(std::size_t m, const double* x0, const double* u, const double* z,
+               const double* first_sign, const double* second_sign, const double* hw, double* out) {
+  const std::size_t n = m + 1;
+  for (std::size_t c = 0; c < 3; ++c) {
+    bead_axis<true>(m, u + c * m * w, z, first_sign, second_sign, x0 + c * n * w, hw,
+                    out + c * n * w);
+  }
+}
+
+void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
+              const double* second_sign, double* out) {
+  const std::size_t n = m + 1;
+  for (std::size_t c = 0; c < 3; ++c) {
+    bead_axis<false>(m, u + c * m * w, z, first_sign, second_sign, nullptr, nullptr,
+                     out + c * n * w);
+  }
+}
+
+void projections(std::size_t m, const double* u, const double* v, const double* low_first,
+                 const double* low_sign, const double* high_sign, double* out) {
+  const std::size_t n = m + 1;
+  const std::size_t all = m * w;
+  for (std::size_t i = 0; i < all; i += w) {
+    const LaneMask f = load(low_first + i) > 0;
+    const Lanes ax = load(v + i), ay = load(v + n * w + i), az = load(v + 2 * n * w + i);
+    const Lanes cx = load(v + i + w), cy = load(v + n * w + i + w),
+                cz = load(v + 2 * n * w + i + w);
+    const Lanes ux = load(u + i), uy = load(u + all + i), uz = load(u + 2 * all + i);
+    const Lanes to_low = ux * (f ? ax : cx) + uy * (f ? ay : cy) + uz * (f ? az : cz);
+    const Lanes to_high = ux * (f ? cx : ax) + uy * (f ? cy : ay) + uz * (f ? cz : az);
+    Lanes projected = broadcast(0.0);
+    projected += load(low_sign + i) * to_low;
+    projected += load(high_sign + i) * to_high;
+    store(out + i, projected);
+  }
+}
+
+void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
+  Lanes sum = broadcast(0.0);
+  for (std::size_t i = 0; i < m * w; i += w) sum += load(z + i) * load(r + i);
+  store_lanes(per_lane, sum);
+}
+
+}  // namespace deli::rod_passes::across

@@ -21,8 +21,17 @@ namespace deli::rod_passes {
 bool differences(std::size_t m, const double* x, const double* forward, const double* image,
                  const double* period, const double* limit, double* d, double* d2);
 
+// differences() and held_bounds() of its squared lengths in one pass.
+bool differences_and_bounds(std::size_t m, const double* x, const double* forward,
+                            const double* image, const double* period, const double* limit,
+                            const double* length, const double* inverse_length, double tolerance,
+                            double* d, double* d2, double* bound, std::uint8_t* usable);
+
 // d2 -> r = sqrt(d2) and d -> d / r (0 where r is not positive), in place.
 void normalize(std::size_t m, double* d, double* r);
+// normalize(), the residual phi = r - length, and residual_norm(phi) (solver_status.hpp):
+// max |phi_k|, +inf unless every phi_k is finite.
+double normalize_residual(std::size_t m, double* d, double* r, const double* length, double* phi);
 
 // Per rod: the bound RodChain::held_bound takes the maximum of, and whether it may be used
 // (0 or 1).
@@ -62,3 +71,42 @@ void eliminate_lanes(std::size_t n, const double* lower, const double* diagonal,
                      std::uint8_t* solved);
 
 }  // namespace deli::rod_passes
+
+namespace deli::rod_passes::across {
+
+// The position solve of `lanes` chains of m rods each in lane-major order: entry (k, lane) at
+// k * lanes + lane, component c of a per-rod vector at (c m + k) lanes + lane, of a per-bead
+// vector at (c (m+1) + b) lanes + lane. Every pass is the per-chain pass above with the
+// chains side by side: each lane does its chain's operations in the same order, and the
+// loops run over whole vectors of lanes (no tails, no per-chain loop overhead). Per-lane
+// results (`per_lane`) have `lanes` entries.
+
+// differences(); hold[lane]: whether every rod of the lane is within its image's range.
+void differences(std::size_t m, const double* x, const double* forward, const double* image,
+                 const double* period, const double* limit, double* d, double* d2,
+                 std::uint8_t* hold);
+// Per lane, max_k of held_bounds' bound, +inf where a rod is not usable.
+void held_bound(std::size_t m, const double* d2, const double* length, const double* inverse_length,
+                double tolerance, double* per_lane);
+// normalize_residual(): per lane residual_norm of phi, and sum_k phi_k^2 in row order (not
+// Eigen's order: an estimate of the merit within rounding).
+void normalize_residual(std::size_t m, double* d, double* r, const double* length, double* phi,
+                        double* norm, double* merit);
+// bands() (rhs = -phi), in eliminate_lanes' layout.
+void bands(std::size_t m, const double* a, const double* b, const double* w_low,
+           const double* w_high, const double* coupling, double scale, const double* phi,
+           double* lower, double* diagonal, double* upper, double* rhs);
+// z + step in the lanes where take[lane] (line_search's first trial: 1 step is the step).
+void advance(std::size_t m, double* z, const double* step, const std::uint8_t* take);
+// positions() and impulses().
+void positions(std::size_t m, const double* x0, const double* u, const double* z,
+               const double* first_sign, const double* second_sign, const double* hw, double* out);
+void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
+              const double* second_sign, double* out);
+// projections() (the layout's per-chain normalize is rod_passes::normalize with m lanes rods).
+void projections(std::size_t m, const double* u, const double* v, const double* low_first,
+                 const double* low_sign, const double* high_sign, double* out);
+// Per lane, 0 + sum_k z_k r_k in row order (finish_positions' virial).
+void virial(std::size_t m, const double* z, const double* r, double* per_lane);
+
+}  // namespace deli::rod_passes::across

@@ -341,5 +341,68 @@ TEST(RodChain, LanesGiveTheChainKernelsNumbers) {
   expect_equal_components(p_lanes, p_alone);
 }
 
+// A group of fewer chains than lanes (the empty lanes repeat the first chain), solved three
+// times with the same workspace: again at the same step (the group's interleaved constants
+// and images kept from the first solve) and at another step (remade). Every time the chain
+// kernel alone gives the same numbers bit for bit, positions and momenta.
+TEST(RodChain, AShortGroupSolvedAgainGivesTheChainKernelsNumbers) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const double tolerance = 1e-12;
+  const SolverLimits limits;
+  constexpr std::size_t count = 3, beads = 30;
+  std::vector<Vec3> q, delta, p;
+  std::vector<std::unique_ptr<RodChain>> alone, lanes_chains;
+  for (std::size_t c = 0; c < count; ++c) {
+    Chain chain = random_chain(beads, box, 40 + c);
+    for (std::int32_t& particle : chain.cluster.particles) {
+      particle += static_cast<std::int32_t>(c * beads);
+    }
+    q.insert(q.end(), chain.q.begin(), chain.q.end());
+    delta.insert(delta.end(), chain.delta.begin(), chain.delta.end());
+    p.insert(p.end(), chain.p.begin(), chain.p.end());
+    alone.push_back(RodChain::make(chain.cluster));
+    lanes_chains.push_back(RodChain::make(chain.cluster));
+  }
+  std::vector<const RodChain*> chains;
+  for (const auto& chain : lanes_chains) chains.push_back(chain.get());
+  RodChainWorkspace work;
+  RodChainLanes lanes;
+  for (const double h : {0.005, 0.005, 0.004}) {
+    std::vector<Vec3> impulse_alone(q.size()), impulse_lanes(q.size());
+    double virial[RodChainLanes::width];
+    SolverStatus status[RodChainLanes::width];
+    bool solved[RodChainLanes::width];
+    RodChain::solve_positions_lanes(chains.data(), count, q.data(), delta.data(), h, box, tolerance,
+                                    limits.newton, lanes, impulse_lanes.data(), virial, status,
+                                    solved);
+    for (std::size_t c = 0; c < count; ++c) {
+      ASSERT_TRUE(solved[c]) << "chain " << c << ", h " << h;
+      double virial_alone = 0.0;
+      SolverStatus status_alone;
+      ASSERT_TRUE(alone[c]->solve_positions(q.data(), delta.data(), h, box, tolerance,
+                                            limits.newton, limits.line_search, work,
+                                            impulse_alone.data(), virial_alone, status_alone));
+      EXPECT_EQ(virial[c], virial_alone) << "chain " << c << ", h " << h;
+      EXPECT_EQ(status[c].iterations, status_alone.iterations) << "chain " << c << ", h " << h;
+      EXPECT_EQ(status[c].residual, status_alone.residual) << "chain " << c << ", h " << h;
+    }
+    expect_equal_components(impulse_lanes, impulse_alone);
+    std::vector<Vec3> x(q.size());
+    for (std::size_t k = 0; k < x.size(); ++k) x[k] = q[k] + delta[k] + impulse_alone[k] * h;
+    std::vector<Vec3> p_alone = p, p_lanes = p;
+    RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
+                                    solved);
+    for (std::size_t c = 0; c < count; ++c) {
+      ASSERT_TRUE(solved[c]);
+      std::vector<double> terms(alone[c]->rows());
+      ASSERT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
+      for (std::size_t k = 0; k < terms.size(); ++k) {
+        EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
+      }
+    }
+    expect_equal_components(p_lanes, p_alone);
+  }
+}
+
 }  // namespace
 }  // namespace deli
