@@ -5,6 +5,10 @@
 #if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
 #include <immintrin.h>
 #define DELI_LJ_AVX512 1
+// GCC 12 warns that the intrinsics' own _mm512_undefined_pd() is (or may be) used
+// uninitialized inside the extracts and reductions (a false positive: GCC PR 105593).
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 
 namespace deli {
@@ -86,19 +90,24 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
   const ShiftTable sx(c.shifts, 0), sy(c.shifts, 1), sz(c.shifts, 2);
   __m512d energy = _mm512_setzero_pd();
   __m512d wxx = energy, wyy = energy, wzz = energy, wxy = energy, wxz = energy, wyz = energy;
-  alignas(32) std::int32_t j[8];
+  alignas(32) std::int32_t tail[8];
   for (std::int32_t i = c.first; i < c.last; ++i) {
     const __m512d xi = _mm512_set1_pd(c.x[i].x), yi = _mm512_set1_pd(c.x[i].y),
                   zi = _mm512_set1_pd(c.x[i].z);
     __m512d fxi = _mm512_setzero_pd(), fyi = fxi, fzi = fxi;
     const std::size_t end = c.offsets[i + 1];
     for (std::size_t k = c.offsets[i]; k < end; k += 8) {
-      // Lanes past the list's end take particle i itself: its position is readable and
-      // the +0 subtracted from its force changes nothing.
+      // The partners' slots read one by one from the list (cheaper than from a vector);
+      // in the last, partial vector lanes past the list's end take particle i itself: its
+      // position is readable and the +0 subtracted from its force changes nothing.
       const std::size_t left = end - k;
       const auto lanes = static_cast<__mmask8>(left >= 8 ? 0xffu : (1u << left) - 1);
-      _mm256_store_si256(reinterpret_cast<__m256i*>(j),
-                         _mm256_mask_loadu_epi32(_mm256_set1_epi32(i), lanes, c.list + k));
+      const std::int32_t* j = c.list + k;
+      if (left < 8) {
+        _mm256_store_si256(reinterpret_cast<__m256i*>(tail),
+                           _mm256_mask_loadu_epi32(_mm256_set1_epi32(i), lanes, j));
+        j = tail;
+      }
       __m512d xj, yj, zj;
       load_transposed(c.x, j, xj, yj, zj);
       __m512d dx = _mm512_sub_pd(xi, xj), dy = _mm512_sub_pd(yi, yj), dz = _mm512_sub_pd(zi, zj);
@@ -173,8 +182,7 @@ double LennardJones::vector_loop(const Params& p, const VectorPairChunk& c, bool
     for (std::size_t k = c.offsets[i]; k < c.offsets[i + 1]; ++k) {
       const std::int32_t j = c.list[k];
       const Vec3& s = c.shifts[c.codes[k]];
-      const Vec3 d{c.x[i].x - c.x[j].x - s.x, c.x[i].y - c.x[j].y - s.y,
-                   c.x[i].z - c.x[j].z - s.z};
+      const Vec3 d{c.x[i].x - c.x[j].x - s.x, c.x[i].y - c.x[j].y - s.y, c.x[i].z - c.x[j].z - s.z};
       const double r2 = norm2(d);
       if (!(r2 < p.cutoff2)) continue;
       double f_over_r, e;

@@ -94,9 +94,8 @@ class PairForce final : public ForceTerm {
       energy = by_slot ? vector_loops(system.particles.position, ordered.particle.data(),
                                       ordered.neighbors.data(), ordered.image_codes.data(),
                                       ordered.offsets.data(), neighbors, force, virial, tally)
-                       : vector_loops(system.particles.position, nullptr, listed.list,
-                                      listed.codes, listed.offsets, neighbors, force, virial,
-                                      tally);
+                       : vector_loops(system.particles.position, nullptr, listed.list, listed.codes,
+                                      listed.offsets, neighbors, force, virial, tally);
     } else if (!by_slot) {
       energy = loops(system.box, neighbors, listed, n, force, virial, tally);
     } else {
@@ -207,19 +206,19 @@ class PairForce final : public ForceTerm {
         padded_force_[s] = PaddedVec3{};
       });
       const Vec3* shifts = neighbors.image_shifts().data();
-      const double energy = padded_chunked_.run(
-          n, padded_force_, virial,
-          [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
-            const VectorPairChunk chunk{padded_position_.data(),
-                                        f,
-                                        list,
-                                        codes,
-                                        offsets,
-                                        shifts,
-                                        static_cast<std::int32_t>(begin),
-                                        static_cast<std::int32_t>(end)};
-            return Evaluator::vector_loop(table_[0], chunk, tally, w);
-          });
+      const double energy =
+          padded_chunked_.run(n, padded_force_, virial,
+                              [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
+                                const VectorPairChunk chunk{padded_position_.data(),
+                                                            f,
+                                                            list,
+                                                            codes,
+                                                            offsets,
+                                                            shifts,
+                                                            static_cast<std::int32_t>(begin),
+                                                            static_cast<std::int32_t>(end)};
+                                return Evaluator::vector_loop(table_[0], chunk, tally, w);
+                              });
       parallel_for(n, [&](std::size_t s) {
         const PaddedVec3& f = padded_force_[s];
         force[at(s)] += Vec3{f.x, f.y, f.z};

@@ -35,8 +35,8 @@ struct VectorPairChunk {
 // under DELI_NATIVE), vector_loop() runs a chunk (forces added to chunk.f, the virial to
 // `virial` when tallying; returns the energy when tallying).
 template <class E>
-concept VectorPairEvaluator =
-    requires(const typename E::Params& p, const VectorPairChunk& chunk, SymTensor& w) {
+concept VectorPairEvaluator = requires(const typename E::Params& p, const VectorPairChunk& chunk,
+                                       SymTensor& w) {
   { E::vector_loop_built() } -> std::same_as<bool>;
   { E::vector_loop(p, chunk, true, w) } -> std::same_as<double>;
 };
