@@ -50,8 +50,9 @@ struct LennardJones {
   }
 
   // PairForce's loop eight pairs at a time (lennard_jones_vector.cpp: AVX-512 under
-  // DELI_NATIVE on a CPU that has it). Each pair's f/r and energy are evaluate()'s bits; a
-  // particle's own force is summed by lane, so sums differ from the scalar loop's in the
+  // DELI_NATIVE on a CPU that has it). Each pair's f/r and energy are evaluate()'s bits, and
+  // the energy and virial are summed in the scalar loop's order (the same bits); a
+  // particle's own force is summed by lane, so forces differ from the scalar loop's in the
   // last bits (the same on every run).
   static bool vector_loop_built();
   static double vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,

@@ -2,8 +2,9 @@
 // list: LennardJones::vector_loop, AVX-512 where the build has it) against the definition,
 // every pair of particles by minimum image with r^2 < cutoff^2 (strict), and against the
 // scalar loop (the same model as a two-type table, which PairForce runs pair by pair). The
-// vector loop sums a particle's pairs by lane, so the sums agree to round-off (1e-12 of the
-// largest force), not bit for bit. Without AVX-512 in the build both sides are scalar and the
+// vector loop sums a particle's pairs by lane, so the forces agree to round-off (1e-12 of the
+// largest force), not bit for bit; energy and virial are summed in the scalar order (its
+// bits). Without AVX-512 in the build both sides are scalar and the
 // test still checks the loop against the definition.
 #include <gtest/gtest.h>
 
@@ -125,6 +126,14 @@ TEST(LjVectorLoop, MatchesDefinitionAndScalarLoopOnRandomLiquids) {
         const PairResult scalar = run_term(two_types, system, cell_order);
         expect_close(vector, exact, "vector loop against the definition");
         expect_close(vector, scalar, "vector loop against the scalar loop");
+        // Energy and virial in the scalar loop's order: its bits.
+        EXPECT_EQ(vector.energy, scalar.energy);
+        EXPECT_EQ(vector.virial.xx, scalar.virial.xx);
+        EXPECT_EQ(vector.virial.yy, scalar.virial.yy);
+        EXPECT_EQ(vector.virial.zz, scalar.virial.zz);
+        EXPECT_EQ(vector.virial.xy, scalar.virial.xy);
+        EXPECT_EQ(vector.virial.xz, scalar.virial.xz);
+        EXPECT_EQ(vector.virial.yz, scalar.virial.yz);
         // Without the tally the same forces, bit for bit.
         const PairResult untallied = run_term(one_type, system, cell_order, false);
         for (std::size_t i = 0; i < system.particles.size(); ++i) {
