@@ -88,6 +88,14 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
   const __m512d lj3 = _mm512_set1_pd(p.lj3), lj4 = _mm512_set1_pd(p.lj4);
   const __m512d shift = _mm512_set1_pd(p.energy_shift);
   const ShiftTable sx(c.shifts, 0), sy(c.shifts, 1), sz(c.shifts, 2);
+  // The code of a zero shift (the list's numbering, not assumed here; 255, never a code,
+  // if there were none): vectors whose lanes all have it skip the shift.
+  int zero_shift = 255;
+  for (int code = 26; code >= 0; --code) {
+    const Vec3& s = c.shifts[code];
+    if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) zero_shift = code;
+  }
+  const __m128i unshifted = _mm_set1_epi8(static_cast<char>(zero_shift));
   double energy = 0.0;
   SymTensor w;
   alignas(32) std::int32_t tail[8];
@@ -111,9 +119,9 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
       __m512d xj, yj, zj;
       load_transposed(c.x, j, xj, yj, zj);
       __m512d dx = _mm512_sub_pd(xi, xj), dy = _mm512_sub_pd(yi, yj), dz = _mm512_sub_pd(zi, zj);
-      // Most vectors cross no periodic boundary (all codes 0, the unshifted image).
-      const __m128i codes = _mm_maskz_loadu_epi8(lanes, c.codes + k);
-      if (!_mm_testz_si128(codes, codes)) {
+      // Most vectors cross no periodic boundary: every lane's code the unshifted image's.
+      const __m128i codes = _mm_mask_loadu_epi8(unshifted, lanes, c.codes + k);
+      if (_mm_cmpneq_epi8_mask(codes, unshifted) != 0) {
         const __m512i code = _mm512_cvtepu8_epi64(codes);
         dx = _mm512_sub_pd(dx, sx(code));
         dy = _mm512_sub_pd(dy, sy(code));

@@ -8,7 +8,9 @@
 // test still checks the loop against the definition.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -32,12 +34,17 @@ PairForce<LennardJones> make_term(int types, const std::vector<LennardJones::Par
   return PairForce<LennardJones>("pair", types, table, true, kCutoff, {});
 }
 
-PairResult run_term(const PairForce<LennardJones>& term, const System& system, bool cell_order,
-                    bool tally = true) {
+NeighborList built_list(const System& system, bool cell_order) {
   NeighborList list(kCutoff, kSkin);
   list.set_cell_order(cell_order);
   list.build(system.particles.position, system.box);
   EXPECT_FALSE(list.image_codes().empty()) << "the box should be wide enough for image codes";
+  return list;
+}
+
+PairResult run_term(const PairForce<LennardJones>& term, const System& system, bool cell_order,
+                    bool tally = true) {
+  const NeighborList list = built_list(system, cell_order);
   PairResult r;
   r.force.assign(system.particles.size(), Vec3{});
   r.energy = term.compute(system, list, r.force, r.virial, tally);
@@ -121,6 +128,17 @@ TEST(LjVectorLoop, MatchesDefinitionAndScalarLoopOnRandomLiquids) {
     for (const double vacancy : {0.0, 0.2, 0.5}) {
       const System system = lattice_liquid(seed, vacancy);
       const PairResult exact = definition(system, 1, {lj});
+      // The cases the vector loop distinguishes occur: partial last vectors of every length
+      // and vectors with a periodic image's shift.
+      const NeighborList list = built_list(system, false);
+      std::vector<bool> remainder(8, false);
+      for (std::size_t i = 0; i + 1 < list.offsets().size(); ++i) {
+        remainder[(list.offsets()[i + 1] - list.offsets()[i]) % 8] = true;
+      }
+      EXPECT_EQ(std::count(remainder.begin(), remainder.end(), true), 8);
+      EXPECT_GT(std::count_if(list.image_codes().begin(), list.image_codes().end(),
+                              [](std::uint8_t code) { return code != 0; }),
+                0);
       for (const bool cell_order : {false, true}) {
         const PairResult vector = run_term(one_type, system, cell_order);
         const PairResult scalar = run_term(two_types, system, cell_order);
@@ -175,6 +193,48 @@ TEST(LjVectorLoop, PairsAtTheCutoffAsTheScalarLoop) {
     EXPECT_EQ(vector.force[4].x, 0.0);
     EXPECT_NE(vector.force[2].x, 0.0);  // just inside: a force
     EXPECT_NE(vector.force[6].x, 0.0);
+  }
+}
+
+// Two clusters of 27 at opposite corners of the box: each particle's partners in the other
+// cluster are all through one periodic image, the corner's (every axis shifted), so whole
+// vectors of eight partners share that code; still the definition.
+TEST(LjVectorLoop, VectorsThroughOneCornerImage) {
+  System system;
+  system.box = Box({0, 0, 0}, {10, 10, 10}, {true, true, true});
+  std::vector<Vec3> x;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      for (int c = 0; c < 3; ++c) {
+        x.push_back({0.2 + 0.8 * a, 0.2 + 0.8 * b, 0.2 + 0.8 * c});
+        x.push_back({9.8 - 0.8 * a, 9.8 - 0.8 * b, 9.8 - 0.8 * c});
+      }
+    }
+  }
+  system.particles.resize(x.size());
+  system.particles.position = x;
+  const LennardJones::Params lj = LennardJones::make(1.0, 1.0, kCutoff);
+  const PairResult exact = definition(system, 1, {lj});
+  for (const bool cell_order : {false, true}) {
+    // The case occurs: a whole vector (eight partners from a multiple of eight) through one
+    // shifted image.
+    const NeighborList list = built_list(system, cell_order);
+    const std::vector<std::size_t>& offsets =
+        cell_order ? list.cell_ordered().offsets : list.offsets();
+    const std::vector<std::uint8_t>& codes =
+        cell_order ? list.cell_ordered().image_codes : list.image_codes();
+    bool shifted_vector = false;
+    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+      for (std::size_t k = offsets[i]; k + 8 <= offsets[i + 1]; k += 8) {
+        const Vec3& s = list.image_shifts()[codes[k]];
+        shifted_vector |= std::all_of(codes.begin() + static_cast<std::ptrdiff_t>(k),
+                                      codes.begin() + static_cast<std::ptrdiff_t>(k + 8),
+                                      [&](std::uint8_t c) { return c == codes[k]; }) &&
+                          s.x != 0.0 && s.y != 0.0 && s.z != 0.0;
+      }
+    }
+    EXPECT_TRUE(shifted_vector);
+    expect_close(run_term(make_term(1, {lj}), system, cell_order), exact, "corner images");
   }
 }
 
