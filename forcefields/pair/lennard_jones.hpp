@@ -57,6 +57,10 @@ struct LennardJones {
   static bool vector_loop_built();
   static double vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                             SymTensor& virial);
+  // vector_loop's sums one pair at a time, in its order: the same bits in any build (the
+  // portable build's vector_loop, and PairForce's loop for one type wherever it runs).
+  static double lane_order_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
+                                SymTensor& virial);
 };
 static_assert(PairEvaluator<LennardJones>);
 static_assert(VectorPairEvaluator<LennardJones>);

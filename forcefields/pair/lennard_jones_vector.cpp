@@ -1,4 +1,5 @@
 #include <cstring>
+#include <vector>
 
 #include "pair/lennard_jones.hpp"
 
@@ -80,6 +81,13 @@ struct ShiftTable {
     return _mm512_mask_blend_pd(_mm512_test_epi64_mask(code, _mm512_set1_epi64(16)), low, high);
   }
 };
+
+// The eight lanes' sum in lane_order_loop's order: ((0 + 4) + (2 + 6)) + ((1 + 5) + (3 + 7)).
+inline double lane_sum(__m512d v) {
+  const __m256d half = _mm256_add_pd(_mm512_castpd512_pd256(v), _mm512_extractf64x4_pd(v, 1));
+  const __m128d quarter = _mm_add_pd(_mm256_castpd256_pd128(half), _mm256_extractf128_pd(half, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(quarter, _mm_unpackhi_pd(quarter, quarter)));
+}
 
 template <bool kTally>
 double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& virial) {
@@ -164,9 +172,9 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
       }
     }
     PaddedVec3& fi = c.f[i];
-    fi.x += _mm512_reduce_add_pd(fxi);
-    fi.y += _mm512_reduce_add_pd(fyi);
-    fi.z += _mm512_reduce_add_pd(fzi);
+    fi.x += lane_sum(fxi);
+    fi.y += lane_sum(fyi);
+    fi.z += lane_sum(fzi);
   }
   if constexpr (kTally) virial += w;
   return energy;
@@ -187,31 +195,63 @@ bool LennardJones::vector_loop_built() {
   return false;
 }
 
-// Never called by PairForce in this build (vector_loop_built() is false); the definition,
-// pair by pair, for any other caller.
-double LennardJones::vector_loop(const Params& p, const VectorPairChunk& c, bool tally,
+double LennardJones::vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                                  SymTensor& virial) {
-  double energy = 0.0;
-  for (std::int32_t i = c.first; i < c.last; ++i) {
-    for (std::size_t k = c.offsets[i]; k < c.offsets[i + 1]; ++k) {
-      const std::int32_t j = c.list[k];
-      const Vec3& s = c.shifts[c.codes[k]];
-      const Vec3 d{c.x[i].x - c.x[j].x - s.x, c.x[i].y - c.x[j].y - s.y, c.x[i].z - c.x[j].z - s.z};
-      const double r2 = norm2(d);
-      if (!(r2 < p.cutoff2)) continue;
-      double f_over_r, e;
-      evaluate(p, r2, f_over_r, e);
-      const Vec3 f = d * f_over_r;
-      c.f[i].x += f.x, c.f[i].y += f.y, c.f[i].z += f.z;
-      c.f[j].x -= f.x, c.f[j].y -= f.y, c.f[j].z -= f.z;
-      if (tally) {
-        energy += e - p.energy_shift;
-        virial.add_outer(d, f);
-      }
-    }
-  }
-  return energy;
+  return lane_order_loop(p, chunk, tally, virial);
 }
 #endif
+
+// The vector loop's sums one pair at a time: a particle's pairs added to eight partial sums
+// by their place in its list modulo 8, those added as lane_sum() adds the lanes. Pairs
+// outside the cutoff add nothing here and +0 there: a partial sum starts at +0 and never
+// becomes -0, so adding +0 changes nothing. Two passes, as PairForce's scalar loop, so
+// that the branch on the cutoff is not taken per pair.
+double LennardJones::lane_order_loop(const Params& p, const VectorPairChunk& c, bool tally,
+                                     SymTensor& virial) {
+  struct Inside {
+    std::int32_t j;
+    int lane;
+    double dx, dy, dz, r2;
+  };
+  thread_local std::vector<Inside> inside;
+  double energy = 0.0;
+  SymTensor w;
+  for (std::int32_t i = c.first; i < c.last; ++i) {
+    const PaddedVec3 xi = c.x[i];
+    const std::size_t begin = c.offsets[i], count = c.offsets[i + 1] - begin;
+    if (inside.size() < count + 1) inside.resize(2 * count + 1);
+    std::size_t kept = 0;
+    for (std::size_t k = begin; k < begin + count; ++k) {
+      const std::int32_t j = c.list[k];
+      const Vec3& s = c.shifts[c.codes[k]];
+      // Subtracting a zero shift, as the vector loop skips it, changes nothing.
+      const double dx = (xi.x - c.x[j].x) - s.x, dy = (xi.y - c.x[j].y) - s.y,
+                   dz = (xi.z - c.x[j].z) - s.z;
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      inside[kept] = {j, static_cast<int>((k - begin) % 8), dx, dy, dz, r2};
+      kept += r2 < p.cutoff2;
+    }
+    double ax[8] = {}, ay[8] = {}, az[8] = {};
+    for (std::size_t k = 0; k < kept; ++k) {
+      const Inside& q = inside[k];
+      double f_over_r, e;
+      evaluate(p, q.r2, f_over_r, e);
+      const double fx = q.dx * f_over_r, fy = q.dy * f_over_r, fz = q.dz * f_over_r;
+      ax[q.lane] += fx, ay[q.lane] += fy, az[q.lane] += fz;
+      c.f[q.j].x -= fx, c.f[q.j].y -= fy, c.f[q.j].z -= fz;
+      if (tally) {
+        energy += e - p.energy_shift;
+        w.xx += q.dx * fx, w.yy += q.dy * fy, w.zz += q.dz * fz;
+        w.xy += q.dx * fy, w.xz += q.dx * fz, w.yz += q.dy * fz;
+      }
+    }
+    auto sum = [](const double* a) {
+      return ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
+    };
+    c.f[i].x += sum(ax), c.f[i].y += sum(ay), c.f[i].z += sum(az);
+  }
+  if (tally) virial += w;
+  return energy;
+}
 
 }  // namespace deli

@@ -179,11 +179,12 @@ class PairForce final : public ForceTerm {
     bool coded;  // periodic shifts from image codes (else minimum-image rounding)
   };
 
-  // The evaluator's vector loop where this build has one: one type (one parameter set)
-  // and image-coded lists; else the scalar loop.
+  // The evaluator's vector loop (in a build without its instruction set, its sums one pair
+  // at a time: the same bits in every build): one type (one parameter set) and image-coded
+  // lists; else the scalar loop.
   bool vector_loop_applies(const Listed& listed) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
-      return type_count_ == 1 && listed.coded && Evaluator::vector_loop_built();
+      return type_count_ == 1 && listed.coded;
     }
     return false;
   }

@@ -31,9 +31,9 @@ struct VectorPairChunk {
 };
 
 // An evaluator with a vector form of PairForce's loop for one type pair and image-coded
-// lists: vector_loop_built() says whether this build has it (the CPU's instruction set
-// under DELI_NATIVE), vector_loop() runs a chunk (forces added to chunk.f, the virial to
-// `virial` when tallying; returns the energy when tallying).
+// lists: vector_loop() runs a chunk (forces added to chunk.f, the virial to `virial` when
+// tallying; returns the energy when tallying) by vector where vector_loop_built() (the
+// CPU's instruction set under DELI_NATIVE), else with the same sums one pair at a time.
 template <class E>
 concept VectorPairEvaluator = requires(const typename E::Params& p, const VectorPairChunk& chunk,
                                        SymTensor& w) {

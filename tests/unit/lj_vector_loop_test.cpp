@@ -238,6 +238,44 @@ TEST(LjVectorLoop, VectorsThroughOneCornerImage) {
   }
 }
 
+// The vector loop (where built) and its one-pair-at-a-time form, which a build without
+// AVX-512 runs: the same forces, energy and virial bit for bit.
+TEST(LjVectorLoop, OnePairAtATimeGivesTheVectorLoopsBits) {
+  const LennardJones::Params lj = LennardJones::make(1.0, 1.0, kCutoff);
+  for (const double vacancy : {0.0, 0.3}) {
+    const System system = lattice_liquid(5, vacancy);
+    const NeighborList list = built_list(system, false);
+    const std::size_t n = system.particles.size();
+    std::vector<PaddedVec3> x(n), f_vector(n), f_pairs(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3& p = system.particles.position[i];
+      x[i] = {p.x, p.y, p.z, 0.0};
+    }
+    auto chunk = [&](std::vector<PaddedVec3>& f) {
+      return VectorPairChunk{x.data(),
+                             f.data(),
+                             list.neighbors().data(),
+                             list.image_codes().data(),
+                             list.offsets().data(),
+                             list.image_shifts().data(),
+                             0,
+                             static_cast<std::int32_t>(n)};
+    };
+    SymTensor w_vector, w_pairs;
+    const double e_vector = LennardJones::vector_loop(lj, chunk(f_vector), true, w_vector);
+    const double e_pairs = LennardJones::lane_order_loop(lj, chunk(f_pairs), true, w_pairs);
+    EXPECT_EQ(e_vector, e_pairs);
+    EXPECT_EQ(w_vector.xx, w_pairs.xx);
+    EXPECT_EQ(w_vector.yz, w_pairs.yz);
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(f_vector[i].x, f_pairs[i].x) << i;
+      ASSERT_EQ(f_vector[i].y, f_pairs[i].y) << i;
+      ASSERT_EQ(f_vector[i].z, f_pairs[i].z) << i;
+    }
+  }
+  if (!LennardJones::vector_loop_built()) GTEST_SKIP() << "no vector loop in this build";
+}
+
 // Two types with different parameters take the scalar loop (the vector loop has one parameter
 // set): still the definition.
 TEST(LjVectorLoop, SeveralTypesFallBackToTheScalarLoop) {
