@@ -53,7 +53,7 @@ struct LennardJones {
   // DELI_NATIVE on a CPU that has it). Each pair's f/r and energy are evaluate()'s bits, and
   // the energy and virial are summed in the scalar loop's order (the same bits); a
   // particle's own force is summed by lane, so forces differ from the scalar loop's in the
-  // last bits (the same on every run).
+  // last bits (the same on every run, and in every build: see lane_order_loop).
   static bool vector_loop_built();
   static double vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                             SymTensor& virial);
