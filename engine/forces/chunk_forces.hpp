@@ -15,14 +15,16 @@ namespace deli {
 // virials and energies, in chunk order too. One chunk is the serial loop, bit for bit; a
 // given number of chunks adds in one fixed order: the same result on every run.
 // The buffers are kept between calls (their memory reused). Not thread-safe across calls:
-// one term's compute() at a time, as the force field does.
-class ChunkedForceLoop {
+// one term's compute() at a time, as the force field does. Force: the force array's element
+// (Vec3, or a padded form for vector loops), value-initialised to zero, with +=.
+template <class Force>
+class ChunkedForceLoopOf {
  public:
   // Runs body(begin, end, f, w) -> energy over the chunks of [0, items): the chunk's
   // items add their forces to f[particle] and their virial to w, and it returns their
   // energy. Returns the sum of the energies; forces added to `force`, virial to `virial`.
   template <class Body>
-  double run(std::size_t items, std::vector<Vec3>& force, SymTensor& virial, Body&& body) {
+  double run(std::size_t items, std::vector<Force>& force, SymTensor& virial, Body&& body) {
     const int chunks = chunks_for(items);
     const auto extra = static_cast<std::size_t>(chunks - 1);
     buffers_.resize(extra);
@@ -35,14 +37,14 @@ class ChunkedForceLoop {
         return;
       }
       // Zeroed by the thread that fills it (its first touch, on a many-socket machine).
-      std::vector<Vec3>& buffer = buffers_[k - 1];
-      buffer.assign(force.size(), Vec3{});
+      std::vector<Force>& buffer = buffers_[k - 1];
+      buffer.assign(force.size(), Force{});
       virials_[k - 1] = SymTensor{};
       energies_[k] = body(begin, end, buffer.data(), virials_[k - 1]);
     });
     if (extra == 0) return energies_[0];
     parallel_for(force.size(), [&](std::size_t i) {
-      for (const std::vector<Vec3>& b : buffers_) force[i] += b[i];
+      for (const std::vector<Force>& b : buffers_) force[i] += b[i];
     });
     double energy = energies_[0];
     for (std::size_t c = 1; c < energies_.size(); ++c) {
@@ -53,9 +55,10 @@ class ChunkedForceLoop {
   }
 
  private:
-  std::vector<std::vector<Vec3>> buffers_;  // chunks 1.. : their forces
-  std::vector<SymTensor> virials_;          // chunks 1.. : their virials
-  std::vector<double> energies_;            // every chunk's energy
+  std::vector<std::vector<Force>> buffers_;  // chunks 1.. : their forces
+  std::vector<SymTensor> virials_;           // chunks 1.. : their virials
+  std::vector<double> energies_;             // every chunk's energy
 };
+using ChunkedForceLoop = ChunkedForceLoopOf<Vec3>;
 
 }  // namespace deli

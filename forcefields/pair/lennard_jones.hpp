@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "pair/pair_evaluator.hpp"
+#include "pair/vector_pair_loop.hpp"
 
 namespace deli {
 
@@ -47,7 +48,21 @@ struct LennardJones {
     f_over_r = r6inv * (p.lj1 * r6inv - p.lj2) * r2inv;
     energy = r6inv * (p.lj3 * r6inv - p.lj4);
   }
+
+  // PairForce's loop eight pairs at a time (lennard_jones_vector.cpp: AVX-512 under
+  // DELI_NATIVE on a CPU that has it). Each pair's f/r and energy are evaluate()'s bits, and
+  // the energy and virial are summed in the scalar loop's order (the same bits); a
+  // particle's own force is summed by lane, so forces differ from the scalar loop's in the
+  // last bits (the same on every run, and in every build: see lane_order_loop).
+  static bool vector_loop_built();
+  static double vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
+                            SymTensor& virial);
+  // vector_loop's sums one pair at a time, in its order: the same bits in any build (the
+  // portable build's vector_loop, and PairForce's loop for one type wherever it runs).
+  static double lane_order_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
+                                SymTensor& virial);
 };
 static_assert(PairEvaluator<LennardJones>);
+static_assert(VectorPairEvaluator<LennardJones>);
 
 }  // namespace deli

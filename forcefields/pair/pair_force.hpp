@@ -11,6 +11,7 @@
 #include "forces/force_term.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "pair/pair_evaluator.hpp"
+#include "pair/vector_pair_loop.hpp"
 #include "system/system.hpp"
 
 namespace deli {
@@ -88,7 +89,14 @@ class PairForce final : public ForceTerm {
                   neighbors.neighbors().data(),     neighbors.image_codes().data(),
                   neighbors.offsets().data(),       !neighbors.image_codes().empty()};
     double energy = 0.0;
-    if (ordered.particle.size() != n || n == 0) {
+    const bool by_slot = ordered.particle.size() == n && n > 0;
+    if (vector_loop_applies(listed) && n > 0) {
+      energy = by_slot ? vector_loops(system.particles.position, ordered.particle.data(),
+                                      ordered.neighbors.data(), ordered.image_codes.data(),
+                                      ordered.offsets.data(), neighbors, force, virial, tally)
+                       : vector_loops(system.particles.position, nullptr, listed.list, listed.codes,
+                                      listed.offsets, neighbors, force, virial, tally);
+    } else if (!by_slot) {
       energy = loops(system.box, neighbors, listed, n, force, virial, tally);
     } else {
       // Cache order: positions and types gathered into the list's cell order, the forces
@@ -170,6 +178,56 @@ class PairForce final : public ForceTerm {
     const std::size_t* offsets;
     bool coded;  // periodic shifts from image codes (else minimum-image rounding)
   };
+
+  // The evaluator's vector loop (in a build without its instruction set, its sums one pair
+  // at a time: the same bits in every build): one type (one parameter set) and image-coded
+  // lists; else the scalar loop.
+  bool vector_loop_applies(const Listed& listed) const {
+    if constexpr (VectorPairEvaluator<Evaluator>) {
+      return type_count_ == 1 && listed.coded;
+    }
+    return false;
+  }
+
+  // The vector loop over the list by slot: positions gathered into slot order (slot s holds
+  // particle[s], or particle s without `particle`) padded to four doubles, chunked as
+  // loops(), the forces found there added back by particle.
+  double vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
+                      const std::int32_t* list, const std::uint8_t* codes,
+                      const std::size_t* offsets, const NeighborList& neighbors,
+                      std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
+    if constexpr (VectorPairEvaluator<Evaluator>) {
+      const std::size_t n = x.size();
+      auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
+      padded_position_.resize(n);
+      padded_force_.resize(n);
+      parallel_for(n, [&](std::size_t s) {
+        const Vec3& p = x[at(s)];
+        padded_position_[s] = {p.x, p.y, p.z, 0.0};
+        padded_force_[s] = PaddedVec3{};
+      });
+      const Vec3* shifts = neighbors.image_shifts().data();
+      const double energy =
+          padded_chunked_.run(n, padded_force_, virial,
+                              [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
+                                const VectorPairChunk chunk{padded_position_.data(),
+                                                            f,
+                                                            list,
+                                                            codes,
+                                                            offsets,
+                                                            shifts,
+                                                            static_cast<std::int32_t>(begin),
+                                                            static_cast<std::int32_t>(end)};
+                                return Evaluator::vector_loop(table_[0], chunk, tally, w);
+                              });
+      parallel_for(n, [&](std::size_t s) {
+        const PaddedVec3& f = padded_force_[s];
+        force[at(s)] += Vec3{f.x, f.y, f.z};
+      });
+      return energy;
+    }
+    return 0.0;
+  }
 
   // Chunks of consecutive particles (slots), each with its listed pairs.
   double loops(const Box& box, const NeighborList& neighbors, const Listed& listed, std::size_t n,
@@ -282,6 +340,8 @@ class PairForce final : public ForceTerm {
   mutable ChunkedForceLoop chunked_;
   mutable std::vector<Vec3> ordered_position_, ordered_force_;  // cache order, by slot
   mutable std::vector<int> ordered_type_;
+  mutable ChunkedForceLoopOf<PaddedVec3> padded_chunked_;  // the vector loop's
+  mutable std::vector<PaddedVec3> padded_position_, padded_force_;
 };
 
 }  // namespace deli

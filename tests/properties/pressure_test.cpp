@@ -88,7 +88,12 @@ TEST(ShadowEnergy, FluctuatesFarLessThanTheEnergy) {
     EXPECT_TRUE(std::isfinite(shadow));
     return;
   }
-  EXPECT_LT(shadow, 0.2 * energy);
+  // The force jumps at the cutoff (the energy alone is shifted), so each crossing kicks the
+  // modified energy and its spread is a random walk's: over seeds 1-8 (the scalar pair loop,
+  // then the vector loop's round-off, LJ vector loop branch) 0.15-0.29 and 0.10-0.27 of H's,
+  // means 0.20 and 0.17. The bound sits above that scatter: a round-off change of the
+  // trajectory does not cross it, a broken modified energy (as large as H's) does.
+  EXPECT_LT(shadow, 0.35 * energy);
 }
 
 // RATTLE's modified energy on the rod manifold (the thermo's shadow_energy with rods: the

@@ -1,0 +1,257 @@
+#include <cstring>
+#include <vector>
+
+#include "pair/lennard_jones.hpp"
+
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
+#include <immintrin.h>
+#define DELI_LJ_AVX512 1
+// GCC 12 warns that the intrinsics' own _mm512_undefined_pd() is (or may be) used
+// uninitialized inside the extracts and reductions (a false positive: GCC PR 105593).
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+namespace deli {
+
+#ifdef DELI_LJ_AVX512
+namespace {
+
+// Eight partners' positions (padded, 32 bytes each) as x, y and z vectors: eight 256-bit
+// loads and a transpose. Gathers (vgatherdpd) were twice as slow here on AMD's Zen 4.
+inline void load_transposed(const PaddedVec3* x, const std::int32_t* j, __m512d& px, __m512d& py,
+                            __m512d& pz) {
+  auto pair = [&](int a, int b) {
+    return _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(&x[j[a]].x)),
+                              _mm256_load_pd(&x[j[b]].x), 1);
+  };
+  const __m512d a = pair(0, 4), b = pair(1, 5), c = pair(2, 6), d = pair(3, 7);
+  const __m512d ab_xz = _mm512_unpacklo_pd(a, b);  // x0 x1 z0 z1 | x4 x5 z4 z5
+  const __m512d ab_y = _mm512_unpackhi_pd(a, b);   // y0 y1 -  -  | y4 y5 -  -
+  const __m512d cd_xz = _mm512_unpacklo_pd(c, d);
+  const __m512d cd_y = _mm512_unpackhi_pd(c, d);
+  const __m512i first = _mm512_setr_epi64(0, 1, 8, 9, 4, 5, 12, 13);
+  const __m512i second = _mm512_setr_epi64(2, 3, 10, 11, 6, 7, 14, 15);
+  px = _mm512_permutex2var_pd(ab_xz, first, cd_xz);
+  py = _mm512_permutex2var_pd(ab_y, first, cd_y);
+  pz = _mm512_permutex2var_pd(ab_xz, second, cd_xz);
+}
+
+// f[j[l]] -= (fx, fy, fz)[l] for the eight lanes l: the transpose back, then one 256-bit
+// load, subtract and store per lane (a lane without a pair subtracts +0: no change).
+inline void subtract_transposed(PaddedVec3* f, const std::int32_t* j, __m512d fx, __m512d fy,
+                                __m512d fz) {
+  const __m512d zero = _mm512_setzero_pd();
+  const __m512i first = _mm512_setr_epi64(0, 1, 8, 9, 4, 5, 12, 13);
+  const __m512i second = _mm512_setr_epi64(2, 3, 10, 11, 6, 7, 14, 15);
+  const __m512d xz01 = _mm512_permutex2var_pd(fx, first, fz);  // x0 x1 z0 z1 | x4 x5 z4 z5
+  const __m512d xz23 = _mm512_permutex2var_pd(fx, second, fz);
+  const __m512d y01 = _mm512_permutex2var_pd(fy, first, zero);  // y0 y1 0 0 | y4 y5 0 0
+  const __m512d y23 = _mm512_permutex2var_pd(fy, second, zero);
+  const __m512d l04 = _mm512_unpacklo_pd(xz01, y01);  // lane 0 | lane 4, as x y z 0
+  const __m512d l15 = _mm512_unpackhi_pd(xz01, y01);
+  const __m512d l26 = _mm512_unpacklo_pd(xz23, y23);
+  const __m512d l37 = _mm512_unpackhi_pd(xz23, y23);
+  auto subtract = [&](int lane, __m256d v) {
+    double* q = &f[j[lane]].x;
+    _mm256_store_pd(q, _mm256_sub_pd(_mm256_load_pd(q), v));
+  };
+  subtract(0, _mm512_castpd512_pd256(l04));
+  subtract(1, _mm512_castpd512_pd256(l15));
+  subtract(2, _mm512_castpd512_pd256(l26));
+  subtract(3, _mm512_castpd512_pd256(l37));
+  subtract(4, _mm512_extractf64x4_pd(l04, 1));
+  subtract(5, _mm512_extractf64x4_pd(l15, 1));
+  subtract(6, _mm512_extractf64x4_pd(l26, 1));
+  subtract(7, _mm512_extractf64x4_pd(l37, 1));
+}
+
+// The 27 image shifts of one axis as a 32-entry table in four vectors, looked up by code
+// with two permutes and a blend (no memory access).
+struct ShiftTable {
+  __m512d t[4];
+  ShiftTable(const Vec3* shifts, int axis) {
+    alignas(64) double v[32] = {};
+    for (int c = 0; c < 27; ++c) v[c] = shifts[c][axis];
+    for (int q = 0; q < 4; ++q) t[q] = _mm512_load_pd(v + 8 * q);
+  }
+  __m512d operator()(__m512i code) const {
+    const __m512d low = _mm512_permutex2var_pd(t[0], code, t[1]);
+    const __m512d high = _mm512_permutex2var_pd(t[2], code, t[3]);
+    return _mm512_mask_blend_pd(_mm512_test_epi64_mask(code, _mm512_set1_epi64(16)), low, high);
+  }
+};
+
+// The eight lanes' sum in lane_order_loop's order: ((0 + 4) + (2 + 6)) + ((1 + 5) + (3 + 7)).
+inline double lane_sum(__m512d v) {
+  const __m256d half = _mm256_add_pd(_mm512_castpd512_pd256(v), _mm512_extractf64x4_pd(v, 1));
+  const __m128d quarter = _mm_add_pd(_mm256_castpd256_pd128(half), _mm256_extractf128_pd(half, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(quarter, _mm_unpackhi_pd(quarter, quarter)));
+}
+
+template <bool kTally>
+double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& virial) {
+  const __m512d cutoff2 = _mm512_set1_pd(p.cutoff2), one = _mm512_set1_pd(1.0);
+  const __m512d lj1 = _mm512_set1_pd(p.lj1), lj2 = _mm512_set1_pd(p.lj2);
+  const __m512d lj3 = _mm512_set1_pd(p.lj3), lj4 = _mm512_set1_pd(p.lj4);
+  const __m512d shift = _mm512_set1_pd(p.energy_shift);
+  const ShiftTable sx(c.shifts, 0), sy(c.shifts, 1), sz(c.shifts, 2);
+  // The code of a zero shift (the list's numbering, not assumed here; 255, never a code,
+  // if there were none): vectors whose lanes all have it skip the shift.
+  int zero_shift = 255;
+  for (int code = 26; code >= 0; --code) {
+    const Vec3& s = c.shifts[code];
+    if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) zero_shift = code;
+  }
+  const __m128i unshifted = _mm_set1_epi8(static_cast<char>(zero_shift));
+  double energy = 0.0;
+  SymTensor w;
+  alignas(32) std::int32_t tail[8];
+  for (std::int32_t i = c.first; i < c.last; ++i) {
+    const __m512d xi = _mm512_set1_pd(c.x[i].x), yi = _mm512_set1_pd(c.x[i].y),
+                  zi = _mm512_set1_pd(c.x[i].z);
+    __m512d fxi = _mm512_setzero_pd(), fyi = fxi, fzi = fxi;
+    const std::size_t end = c.offsets[i + 1];
+    for (std::size_t k = c.offsets[i]; k < end; k += 8) {
+      // The partners' slots read one by one from the list (cheaper than from a vector);
+      // in the last, partial vector lanes past the list's end take particle i itself: its
+      // position is readable and the +0 subtracted from its force changes nothing.
+      const std::size_t left = end - k;
+      const auto lanes = static_cast<__mmask8>(left >= 8 ? 0xffu : (1u << left) - 1);
+      const std::int32_t* j = c.list + k;
+      if (left < 8) {
+        _mm256_store_si256(reinterpret_cast<__m256i*>(tail),
+                           _mm256_mask_loadu_epi32(_mm256_set1_epi32(i), lanes, j));
+        j = tail;
+      }
+      __m512d xj, yj, zj;
+      load_transposed(c.x, j, xj, yj, zj);
+      __m512d dx = _mm512_sub_pd(xi, xj), dy = _mm512_sub_pd(yi, yj), dz = _mm512_sub_pd(zi, zj);
+      // Most vectors cross no periodic boundary: every lane's code the unshifted image's.
+      const __m128i codes = _mm_mask_loadu_epi8(unshifted, lanes, c.codes + k);
+      if (_mm_cmpneq_epi8_mask(codes, unshifted) != 0) {
+        const __m512i code = _mm512_cvtepu8_epi64(codes);
+        dx = _mm512_sub_pd(dx, sx(code));
+        dy = _mm512_sub_pd(dy, sy(code));
+        dz = _mm512_sub_pd(dz, sz(code));
+      }
+      const __m512d r2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
+                                       _mm512_mul_pd(dz, dz));
+      const __mmask8 in = _mm512_mask_cmp_pd_mask(lanes, r2, cutoff2, _CMP_LT_OQ);
+      // The scalar evaluator's operations in its order: each pair's f/r and energy are the
+      // scalar loop's bit for bit; lanes outside the cutoff are +0.
+      const __m512d r2inv = _mm512_maskz_div_pd(in, one, r2);
+      const __m512d r6inv = _mm512_mul_pd(_mm512_mul_pd(r2inv, r2inv), r2inv);
+      const __m512d f_over_r =
+          _mm512_mul_pd(_mm512_mul_pd(r6inv, _mm512_sub_pd(_mm512_mul_pd(lj1, r6inv), lj2)), r2inv);
+      const __m512d fx = _mm512_maskz_mul_pd(in, dx, f_over_r);
+      const __m512d fy = _mm512_maskz_mul_pd(in, dy, f_over_r);
+      const __m512d fz = _mm512_maskz_mul_pd(in, dz, f_over_r);
+      fxi = _mm512_add_pd(fxi, fx), fyi = _mm512_add_pd(fyi, fy), fzi = _mm512_add_pd(fzi, fz);
+      subtract_transposed(c.f, j, fx, fy, fz);
+      if constexpr (kTally) {
+        // Energy and virial pair by pair in list order, as the scalar loop adds them: the
+        // same sums bit for bit (a lattice's equal terms round alike, and eight lane sums
+        // moved a 32000-atom energy by 3.5e-12 of itself from the other engines', whose
+        // sums are in this order too). Tallies are rare steps: the cost does not show.
+        const __m512d e = _mm512_mul_pd(r6inv, _mm512_sub_pd(_mm512_mul_pd(lj3, r6inv), lj4));
+        alignas(64) double pair[7][8];
+        _mm512_store_pd(pair[0], _mm512_sub_pd(e, shift));
+        _mm512_store_pd(pair[1], _mm512_mul_pd(dx, fx));
+        _mm512_store_pd(pair[2], _mm512_mul_pd(dy, fy));
+        _mm512_store_pd(pair[3], _mm512_mul_pd(dz, fz));
+        _mm512_store_pd(pair[4], _mm512_mul_pd(dx, fy));
+        _mm512_store_pd(pair[5], _mm512_mul_pd(dx, fz));
+        _mm512_store_pd(pair[6], _mm512_mul_pd(dy, fz));
+        for (unsigned m = in; m != 0; m &= m - 1) {
+          const int l = __builtin_ctz(m);
+          energy += pair[0][l];
+          w.xx += pair[1][l], w.yy += pair[2][l], w.zz += pair[3][l];
+          w.xy += pair[4][l], w.xz += pair[5][l], w.yz += pair[6][l];
+        }
+      }
+    }
+    PaddedVec3& fi = c.f[i];
+    fi.x += lane_sum(fxi);
+    fi.y += lane_sum(fyi);
+    fi.z += lane_sum(fzi);
+  }
+  if constexpr (kTally) virial += w;
+  return energy;
+}
+
+}  // namespace
+
+bool LennardJones::vector_loop_built() {
+  return true;
+}
+
+double LennardJones::vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
+                                 SymTensor& virial) {
+  return tally ? loop<true>(p, chunk, virial) : loop<false>(p, chunk, virial);
+}
+#else
+bool LennardJones::vector_loop_built() {
+  return false;
+}
+
+double LennardJones::vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
+                                 SymTensor& virial) {
+  return lane_order_loop(p, chunk, tally, virial);
+}
+#endif
+
+// The vector loop's sums one pair at a time: a particle's pairs added to eight partial sums
+// by their place in its list modulo 8, those added as lane_sum() adds the lanes. Pairs
+// outside the cutoff add nothing here and +0 there: a partial sum starts at +0 and never
+// becomes -0, so adding +0 changes nothing. Two passes, as PairForce's scalar loop, so
+// that the branch on the cutoff is not taken per pair.
+double LennardJones::lane_order_loop(const Params& p, const VectorPairChunk& c, bool tally,
+                                     SymTensor& virial) {
+  struct Inside {
+    std::int32_t j;
+    int lane;
+    double dx, dy, dz, r2;
+  };
+  thread_local std::vector<Inside> inside;
+  double energy = 0.0;
+  SymTensor w;
+  for (std::int32_t i = c.first; i < c.last; ++i) {
+    const PaddedVec3 xi = c.x[i];
+    const std::size_t begin = c.offsets[i], count = c.offsets[i + 1] - begin;
+    if (inside.size() < count + 1) inside.resize(2 * count + 1);
+    std::size_t kept = 0;
+    for (std::size_t k = begin; k < begin + count; ++k) {
+      const std::int32_t j = c.list[k];
+      const Vec3& s = c.shifts[c.codes[k]];
+      // Subtracting a zero shift, as the vector loop skips it, changes nothing.
+      const double dx = (xi.x - c.x[j].x) - s.x, dy = (xi.y - c.x[j].y) - s.y,
+                   dz = (xi.z - c.x[j].z) - s.z;
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      inside[kept] = {j, static_cast<int>((k - begin) % 8), dx, dy, dz, r2};
+      kept += r2 < p.cutoff2;
+    }
+    double ax[8] = {}, ay[8] = {}, az[8] = {};
+    for (std::size_t k = 0; k < kept; ++k) {
+      const Inside& q = inside[k];
+      double f_over_r, e;
+      evaluate(p, q.r2, f_over_r, e);
+      const double fx = q.dx * f_over_r, fy = q.dy * f_over_r, fz = q.dz * f_over_r;
+      ax[q.lane] += fx, ay[q.lane] += fy, az[q.lane] += fz;
+      c.f[q.j].x -= fx, c.f[q.j].y -= fy, c.f[q.j].z -= fz;
+      if (tally) {
+        energy += e - p.energy_shift;
+        w.xx += q.dx * fx, w.yy += q.dy * fy, w.zz += q.dz * fz;
+        w.xy += q.dx * fy, w.xz += q.dx * fz, w.yz += q.dy * fz;
+      }
+    }
+    auto sum = [](const double* a) {
+      return ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
+    };
+    c.f[i].x += sum(ax), c.f[i].y += sum(ay), c.f[i].z += sum(az);
+  }
+  if (tally) virial += w;
+  return energy;
+}
+
+}  // namespace deli
