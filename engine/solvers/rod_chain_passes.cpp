@@ -82,30 +82,29 @@ bool differences_and_bounds(std::size_t m, const double* x, const double* forwar
                                    tolerance, bound, usable);
 }
 
+namespace {
+// Row k of m rows by axis: its length from its squared length r[k] (kept in r[k]) and its
+// direction d scaled to unit length (zero for a zero-length row); returns the length.
+inline double normalize_row(std::size_t m, std::size_t k, double* __restrict d,
+                            double* __restrict r) {
+  const double length = __builtin_sqrt(r[k]);
+  const double inverse = 1.0 / length;
+  const bool positive = length > 0;
+  r[k] = length;
+  d[k] = positive ? d[k] * inverse : 0.0;
+  d[m + k] = positive ? d[m + k] * inverse : 0.0;
+  d[2 * m + k] = positive ? d[2 * m + k] * inverse : 0.0;
+  return length;
+}
+}  // namespace
+
 void normalize(std::size_t m, double* __restrict d, double* __restrict r) {
-  for (std::size_t k = 0; k < m; ++k) {
-    const double length = __builtin_sqrt(r[k]);
-    const double inverse = 1.0 / length;
-    const bool positive = length > 0;
-    r[k] = length;
-    d[k] = positive ? d[k] * inverse : 0.0;
-    d[m + k] = positive ? d[m + k] * inverse : 0.0;
-    d[2 * m + k] = positive ? d[2 * m + k] * inverse : 0.0;
-  }
+  for (std::size_t k = 0; k < m; ++k) normalize_row(m, k, d, r);
 }
 
 double normalize_residual(std::size_t m, double* __restrict d, double* __restrict r,
                           const double* __restrict length, double* __restrict phi) {
-  for (std::size_t k = 0; k < m; ++k) {
-    const double l = __builtin_sqrt(r[k]);
-    const double inverse = 1.0 / l;
-    const bool positive = l > 0;
-    r[k] = l;
-    d[k] = positive ? d[k] * inverse : 0.0;
-    d[m + k] = positive ? d[m + k] * inverse : 0.0;
-    d[2 * m + k] = positive ? d[2 * m + k] * inverse : 0.0;
-    phi[k] = l - length[k];
-  }
+  for (std::size_t k = 0; k < m; ++k) phi[k] = normalize_row(m, k, d, r) - length[k];
   // residual_norm: the largest |phi_k| (a maximum, the same in any order), +inf unless every
   // phi_k is finite.
   double largest = 0.0;
