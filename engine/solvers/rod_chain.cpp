@@ -85,6 +85,10 @@ std::unique_ptr<RodChain> RodChain::make(const LocalCluster& cluster) {
                                       : 0.0);
   }
   c.image_.assign(3 * m, 0.0);
+  c.consecutive_ = true;
+  for (std::size_t b = 0; b < n; ++b) {
+    c.consecutive_ = c.consecutive_ && c.bead_particle_[b] == c.bead_particle_[0] + std::int32_t(b);
+  }
   return chain;
 }
 
@@ -241,46 +245,53 @@ bool RodChain::memo_in(const Box& box) const {
   return memo.valid && memo.period.x == box.period().x && memo.period.y == box.period().y &&
          memo.period.z == box.period().z && memo.inverse_period.x == box.inverse_period().x &&
          memo.inverse_period.y == box.inverse_period().y &&
-         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == 3 * beads();
+         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == beads();
 }
 
-namespace {
-std::uint64_t bits_of(double v) {
-  std::uint64_t b;
-  std::memcpy(&b, &v, sizeof b);
-  return b;
-}
-}  // namespace
-
-bool RodChain::gather_remembered(const Vec3* global, std::vector<double>& out,
-                                 const Box& box) const {
+// Compared bit for bit (a zero's sign too), as the memo's positions were copied.
+bool RodChain::remembers(const Vec3* global, const Box& box) const {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  if (!memo_in(box)) return false;
   const std::size_t n = beads();
-  out.resize(3 * n);
-  const bool known = memo_in(box);
-  // Compared bit for bit (a zero's sign too), as the memo's positions were gathered; without
-  // a memo the positions are compared with themselves and the answer dropped.
-  const double* memo = known ? memo_.x.data() : out.data();
-  std::uint64_t differ = 0;
-  for (std::size_t b = 0; b < n; ++b) {
-    const Vec3& v = global[bead_particle_[b]];
-    out[b] = v.x;
-    out[n + b] = v.y;
-    out[2 * n + b] = v.z;
-    differ |= (bits_of(v.x) ^ bits_of(memo[b])) | (bits_of(v.y) ^ bits_of(memo[n + b])) |
-              (bits_of(v.z) ^ bits_of(memo[2 * n + b]));
+  if (consecutive_) {
+    return std::memcmp(global + bead_particle_[0], memo_.x.data(), n * sizeof(Vec3)) == 0;
   }
-  return known && differ == 0;
+  for (std::size_t b = 0; b < n; ++b) {
+    if (std::memcmp(global + bead_particle_[b], &memo_.x[b], sizeof(Vec3)) != 0) return false;
+  }
+  return true;
 }
 
-void RodChain::remember_directions(std::vector<double>& x, const Box& box) const {
-  memo_.u.resize(3 * rows());
-  memo_.r.resize(rows());
-  directions(x.data(), box, memo_.u.data(), memo_.r.data());
-  // The positions are the caller's scratch: swapped in rather than copied.
-  std::swap(memo_.x, x);
+void RodChain::remember_positions(const Vec3* global, const Box& box) const {
+  const std::size_t n = beads();
+  memo_.x.resize(n);
+  if (consecutive_) {
+    std::memcpy(memo_.x.data(), global + bead_particle_[0], n * sizeof(Vec3));
+  } else {
+    for (std::size_t b = 0; b < n; ++b) memo_.x[b] = global[bead_particle_[b]];
+  }
   memo_.period = box.period();
   memo_.inverse_period = box.inverse_period();
   memo_.valid = true;
+  ++memo_.generation;
+}
+
+double RodChain::largest_deviation(const double* r) const {
+  double largest = 0.0;
+  for (std::size_t k = 0; k < rows(); ++k) {
+    largest = std::max(largest, std::abs(r[k] - length_[k]) / length_[k]);
+  }
+  return largest;
+}
+
+void RodChain::remember_directions(const std::vector<double>& x, const Vec3* global,
+                                   const Box& box) const {
+  memo_.u.resize(3 * rows());
+  memo_.r.resize(rows());
+  directions(x.data(), box, memo_.u.data(), memo_.r.data());
+  remember_positions(global, box);
+  memo_.in_lanes = false;
+  memo_.largest_deviation = largest_deviation(memo_.r.data());
 }
 
 bool RodChain::held_or_residual(double bound, Eigen::VectorXd& phi, double& phi_norm,
@@ -313,15 +324,17 @@ bool RodChain::begin_positions(const Vec3* q, const Vec3* delta, double h, const
   ws.rx.resize(m);
   ws.rxt.resize(m);
   // Directions of the impulses: the rods at the start of the step, fixed.
-  const bool remembered = gather_remembered(q, ws.q, box);
+  if (!remembers(q, box) || memo_.in_lanes) {
+    gather(q, ws.q);
+    remember_directions(ws.q, q, box);
+  }
   for (std::size_t b = 0; b < n; ++b) {
     const std::int32_t g = bead_particle_[b];
-    ws.x0[b] = delta[g].x + ws.q[b];
-    ws.x0[n + b] = delta[g].y + ws.q[n + b];
-    ws.x0[2 * n + b] = delta[g].z + ws.q[2 * n + b];
+    ws.x0[b] = delta[g].x + q[g].x;
+    ws.x0[n + b] = delta[g].y + q[g].y;
+    ws.x0[2 * n + b] = delta[g].z + q[g].z;
     ws.hw[b] = h * bead_inverse_mass_[b];
   }
-  if (!remembered) remember_directions(ws.q, box);
   status = SolverStatus{};
   ws.z.setZero(static_cast<Eigen::Index>(m));
   ws.merit = -1.0;
@@ -455,6 +468,9 @@ RodChainLanes::Group& RodChain::group_of(const RodChain* const* chains, std::siz
   }
   g.image.assign(3 * m * w, 0.0);
   for (auto* v : {&g.first_sign, &g.second_sign, &g.hw}) v->assign(n * w, 0.0);
+  // Kept for a new h (lanes stamped with their generations stay valid).
+  g.memo_u.resize(3 * m * w);
+  g.memo_r.resize(m * w);
   for (std::size_t lane = 0; lane < w; ++lane) {
     const RodChain& c = *chains[lane < count ? lane : 0];
     for (std::size_t k = 0; k < m; ++k) {
@@ -480,22 +496,29 @@ RodChainLanes::Group& RodChain::group_of(const RodChain* const* chains, std::siz
 }
 
 void RodChain::begin_across(const Vec3* q, const Vec3* delta, const Box& box, std::size_t lane,
-                            RodChainLanes& lanes) const {
+                            RodChainLanes::Group& group, RodChainLanes& lanes) const {
   constexpr std::size_t w = RodChainLanes::width;
   const std::size_t n = beads();
   const std::size_t m = rows();
   RodChainLanes::Across& a = lanes.across;
-  RodChainWorkspace& ws = lanes.lane[lane];
-  // Directions of the impulses: the rods at the start of the step, fixed.
-  if (!gather_remembered(q, ws.q, box)) remember_directions(ws.q, box);
   for (std::size_t b = 0; b < n; ++b) {
     const std::int32_t g = bead_particle_[b];
     a.x0[b * w + lane] = delta[g].x + q[g].x;
     a.x0[(n + b) * w + lane] = delta[g].y + q[g].y;
     a.x0[(2 * n + b) * w + lane] = delta[g].z + q[g].z;
   }
-  for (std::size_t k = 0; k < 3 * m; ++k) a.start_u[k * w + lane] = memo_.u[k];
-  for (std::size_t k = 0; k < m; ++k) a.start_r[k * w + lane] = memo_.r[k];
+  // Directions of the impulses: the rods at the start of the step, fixed. Usually the last
+  // projection's, already in the group's lane.
+  const bool remembered = remembers(q, box);
+  if (remembered && group.memo_generation[lane] == memo_.generation) return;
+  if (!remembered || memo_.in_lanes) {
+    RodChainWorkspace& ws = lanes.lane[lane];
+    gather(q, ws.q);
+    remember_directions(ws.q, q, box);
+  }
+  for (std::size_t k = 0; k < 3 * m; ++k) group.memo_u[k * w + lane] = memo_.u[k];
+  for (std::size_t k = 0; k < m; ++k) group.memo_r[k * w + lane] = memo_.r[k];
+  group.memo_generation[lane] = memo_.generation;
 }
 
 void RodChain::rewrap_across(const double* x, const Box& box, std::size_t lane,
@@ -538,23 +561,23 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
   a.x0.resize(3 * n * w);
   a.x.resize(3 * n * w);
   a.impulse.resize(3 * n * w);
-  a.start_u.resize(3 * m * w);
   a.u.resize(3 * m * w);
-  a.start_r.resize(m * w);
   a.r.resize(m * w);
   a.phi.resize(m * w);
   // z = 0, as solve_positions starts.
   a.z.assign(m * w, 0.0);
   size_lanes(m, lanes);
   for (std::size_t l = 0; l < count; ++l) {
-    chains[l]->begin_across(q, delta, box, l, lanes);
+    chains[l]->begin_across(q, delta, box, l, g, lanes);
     status[l] = SolverStatus{};
     solved[l] = false;
   }
   // Lanes without a chain repeat the first one (their results are never read).
   for (std::size_t l = count; l < w; ++l) {
-    for (auto* v : {&a.x0, &a.start_u, &a.start_r}) copy_lane(*v, 0, l);
+    for (auto* v : {&a.x0, &g.memo_u, &g.memo_r}) copy_lane(*v, 0, l);
   }
+  const double* start_u = g.memo_u.data();
+  const double* start_r = g.memo_r.data();
   const ImageRange range(box);
   enum class State : std::uint8_t { active, done, out };
   State state[w];
@@ -633,7 +656,7 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       }
     }
     if (!any) break;
-    rod_passes::across::bands(m, a.u.data(), a.start_u.data(), g.w_low.data(), g.w_high.data(),
+    rod_passes::across::bands(m, a.u.data(), start_u, g.w_low.data(), g.w_high.data(),
                               g.coupling.data(), h, a.phi.data(), lanes.lower.data(),
                               lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
     eliminate_lanes(m, lanes);
@@ -644,17 +667,17 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       cap[l] = (1 - 1e-4 * 1.0) * merit[l];
     }
     rod_passes::across::advance(m, a.z.data(), lanes.x.data(), trying);
-    rod_passes::across::positions(m, a.x0.data(), a.start_u.data(), a.z.data(), g.first_sign.data(),
+    rod_passes::across::positions(m, a.x0.data(), start_u, a.z.data(), g.first_sign.data(),
                                   g.second_sign.data(), g.hw.data(), a.x.data());
     evaluate(a.x.data(), false);
   }
   bool any_done = false;
   for (std::size_t l = 0; l < count; ++l) any_done = any_done || state[l] == State::done;
   if (!any_done) return;
-  rod_passes::across::impulses(m, a.start_u.data(), a.z.data(), g.first_sign.data(),
-                               g.second_sign.data(), a.impulse.data());
+  rod_passes::across::impulses(m, start_u, a.z.data(), g.first_sign.data(), g.second_sign.data(),
+                               a.impulse.data());
   double virials[w];
-  rod_passes::across::virial(m, a.z.data(), a.start_r.data(), virials);
+  rod_passes::across::virial(m, a.z.data(), start_r, virials);
   for (std::size_t l = 0; l < count; ++l) {
     if (state[l] != State::done) continue;
     status[l].converged = true;
@@ -686,7 +709,7 @@ void RodChain::begin_momenta(const Vec3* x, const Vec3* p, const Box& box,
   }
   // These positions start the next step unless the neighbour list wraps them meanwhile:
   // their directions are made where the next solve finds them.
-  remember_directions(ws.x, box);
+  remember_directions(ws.x, x, box);
   // (C^T M^-1 C) mu = -C^T M^-1 p, C^T v summed over each rod's particles in their order.
   ws.pt.resize(static_cast<Eigen::Index>(m));
   rod_passes::projections(m, memo_.u.data(), ws.v.data(), low_first_.data(), low_sign_.data(),
@@ -719,13 +742,11 @@ void RodChain::gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t l
   constexpr std::size_t w = RodChainLanes::width;
   const std::size_t n = beads();
   RodChainLanes::Across& a = lanes.across;
-  std::vector<double>& own = lanes.lane[lane].x;
-  own.resize(3 * n);
   for (std::size_t b = 0; b < n; ++b) {
     const std::int32_t g = bead_particle_[b];
-    own[b] = a.x[b * w + lane] = x[g].x;
-    own[n + b] = a.x[(n + b) * w + lane] = x[g].y;
-    own[2 * n + b] = a.x[(2 * n + b) * w + lane] = x[g].z;
+    a.x[b * w + lane] = x[g].x;
+    a.x[(n + b) * w + lane] = x[g].y;
+    a.x[(2 * n + b) * w + lane] = x[g].z;
     const Vec3 v = p[g] * bead_inverse_mass_[b];
     a.v[b * w + lane] = v.x;
     a.v[(n + b) * w + lane] = v.y;
@@ -733,18 +754,12 @@ void RodChain::gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t l
   }
 }
 
-void RodChain::remember_across(const Box& box, std::size_t lane, RodChainLanes& lanes) const {
-  constexpr std::size_t w = RodChainLanes::width;
-  const std::size_t m = rows();
-  const RodChainLanes::Across& a = lanes.across;
-  memo_.u.resize(3 * m);
-  memo_.r.resize(m);
-  for (std::size_t k = 0; k < 3 * m; ++k) memo_.u[k] = a.u[k * w + lane];
-  for (std::size_t k = 0; k < m; ++k) memo_.r[k] = a.r[k * w + lane];
-  std::swap(memo_.x, lanes.lane[lane].x);
-  memo_.period = box.period();
-  memo_.inverse_period = box.inverse_period();
-  memo_.valid = true;
+void RodChain::remember_across(const Vec3* x, const Box& box, std::size_t lane,
+                               RodChainLanes::Group& group, double largest) const {
+  remember_positions(x, box);
+  memo_.in_lanes = true;
+  memo_.largest_deviation = largest;
+  group.memo_generation[lane] = memo_.generation;
 }
 
 // project_momenta for every lane at once (begin_momenta, the solve, finish_momenta), each
@@ -781,7 +796,9 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
     if (!hold[l]) chains[l]->rewrap_across(a.x.data(), box, l, g, a);
   }
   rod_passes::normalize(m * w, a.u.data(), a.r.data());
-  for (std::size_t l = 0; l < count; ++l) chains[l]->remember_across(box, l, lanes);
+  double largest[w];
+  rod_passes::across::largest_deviation(m, a.r.data(), g.length.data(), largest);
+  for (std::size_t l = 0; l < count; ++l) chains[l]->remember_across(x, box, l, g, largest[l]);
   // (C^T M^-1 C) mu = -C^T M^-1 p.
   rod_passes::across::projections(m, a.u.data(), a.v.data(), g.low_first.data(), g.low_sign.data(),
                                   g.high_sign.data(), a.phi.data());
@@ -803,24 +820,23 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
           Vec3{a.impulse[b * w + l], a.impulse[(n + b) * w + l], a.impulse[(2 * n + b) * w + l]};
     }
   }
+  // The directions and lengths, remembered in the group's lanes for the next step's solve.
+  std::swap(a.u, g.memo_u);
+  std::swap(a.r, g.memo_r);
 }
 
 double RodChain::largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
                                             double start) const {
   const std::size_t m = rows();
-  const std::vector<double>* r = &memo_.r;
-  if (!gather_remembered(x, ws.x, box)) {
-    ws.ux.resize(3 * m);
-    ws.rx.resize(m);
-    directions(ws.x.data(), box, ws.ux.data(), ws.rx.data());
-    r = &ws.rx;
-  }
+  // The largest over the rods taken from 0, then with `start`: the same maximum (the
+  // deviations are not negative; a NaN one is passed over either way).
+  if (remembers(x, box)) return std::max(start, memo_.largest_deviation);
+  gather(x, ws.x);
+  ws.ux.resize(3 * m);
+  ws.rx.resize(m);
+  directions(ws.x.data(), box, ws.ux.data(), ws.rx.data());
   // gap_of's rod gap, norm(minimum_image(x_i - x_j)) - L: directions' length minus L.
-  double largest = start;
-  for (std::size_t k = 0; k < m; ++k) {
-    largest = std::max(largest, std::abs((*r)[k] - length_[k]) / length_[k]);
-  }
-  return largest;
+  return std::max(start, largest_deviation(ws.rx.data()));
 }
 
 }  // namespace deli

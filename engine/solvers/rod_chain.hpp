@@ -40,13 +40,18 @@ struct RodChainLanes {
     std::vector<double> forward, length, inverse_length, w_low, w_high, coupling, low_first,
         low_sign, high_sign, image;                   // rods
     std::vector<double> first_sign, second_sign, hw;  // beads
+    // The chains' remembered start directions and lengths in this layout (the momentum
+    // projection's, kept for the next step's solve); lane l holds chain l's memo while
+    // memo_generation[l] is that memo's generation (RodChain::DirectionsMemo).
+    std::vector<double> memo_u, memo_r;
+    std::uint64_t memo_generation[width] = {};
   };
   struct Across {
     // The groups met so far: the same groups come at every step.
     std::vector<Group> groups;
-    // Per solve: the free positions, the start directions and lengths, the positions, their
-    // directions (differences first), lengths and residual, the multipliers, the impulses.
-    std::vector<double> x0, start_u, start_r, x, u, r, phi, z, impulse;
+    // Per solve: the free positions, the positions, their directions (differences first),
+    // lengths and residual, the multipliers, the impulses.
+    std::vector<double> x0, x, u, r, phi, z, impulse;
     std::vector<double> v;  // the momentum projection's velocities
   } across;
   std::vector<double> lower, diagonal, upper, rhs, x, c, virial_terms;
@@ -168,17 +173,19 @@ class RodChain {
   // The group of chains[0..count) in lanes.across.groups, or null.
   static RodChainLanes::Group* find_group(const RodChain* const* chains, std::size_t count,
                                           RodChainLanes& lanes);
-  // Lane `lane` of lanes.across for the momentum projection: the positions x (also into the
-  // lane's ws.x, chain order) and velocities M^-1 p.
+  // Lane `lane` of lanes.across for the momentum projection: the positions x and velocities
+  // M^-1 p.
   void gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t lane,
                              RodChainLanes& lanes) const;
-  // remember_directions from lane `lane` of lanes.across (directions and lengths made there at
-  // the lane's ws.x).
-  void remember_across(const Box& box, std::size_t lane, RodChainLanes& lanes) const;
-  // Lane `lane` of lanes.across: the free positions x0 = q + delta and the start directions
-  // (memo_, made where not remembered) of this solve.
+  // Remembers the directions and lengths made in lane `lane` of lanes.across at positions x
+  // (global), which the caller then moves into group.memo_u and memo_r; `largest` is their
+  // largest_deviation.
+  void remember_across(const Vec3* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
+                       double largest) const;
+  // Lane `lane` of lanes.across: the free positions x0 = q + delta, and of group.memo_u and
+  // memo_r, the start directions and lengths of this solve (memo_, made where not remembered).
   void begin_across(const Vec3* q, const Vec3* delta, const Box& box, std::size_t lane,
-                    RodChainLanes& lanes) const;
+                    RodChainLanes::Group& group, RodChainLanes& lanes) const;
   // rewrap_differences for lane `lane` at positions x (lane-major), into lanes.across.
   void rewrap_across(const double* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
                      RodChainLanes::Across& across) const;
@@ -196,24 +203,36 @@ class RodChain {
   [[nodiscard]] bool solve_coupled(const double* a, const double* b, double scale,
                                    const Eigen::VectorXd& minus_rhs, Eigen::VectorXd& x,
                                    RodChainWorkspace& ws) const;
-  // Gathers positions (gather()) and tells, in the same pass, whether memo_ holds the
-  // directions at them in this box: the last momentum projection's (or solve's) when they
-  // are bit for bit the positions it had, as they are unless the neighbour list wrapped
-  // them in between.
-  bool gather_remembered(const Vec3* global, std::vector<double>& out, const Box& box) const;
   // Whether the memo is valid for this box and this chain's size.
   bool memo_in(const Box& box) const;
-  // Computes the directions and lengths at positions x into memo_, and takes x (chain-order
-  // scratch; x receives the memo's old positions).
-  void remember_directions(std::vector<double>& x, const Box& box) const;
+  // Whether memo_ holds the directions at these positions (indexed globally) in this box:
+  // the last momentum projection's (or solve's) when they are bit for bit the positions it
+  // had, as they are unless the neighbour list wrapped them in between.
+  bool remembers(const Vec3* global, const Box& box) const;
+  // The positions of the chain's particles into the memo (bead order).
+  void remember_positions(const Vec3* global, const Box& box) const;
+  // Computes the directions and lengths at positions x (chain order, gathered from `global`)
+  // into memo_.
+  void remember_directions(const std::vector<double>& x, const Vec3* global, const Box& box) const;
+  // max_k |r_k - L_k| / L_k over the lengths r (chain order), from 0 in row order.
+  double largest_deviation(const double* r) const;
 
   // The last directions computed at a step's end or start positions, with those positions
   // and the box's periods (chain order): directions() is a function of these alone.
   // Mutable: a cache, invisible in the results (a chain is solved by one thread at a time;
   // threads solve different chains).
+  // The positions are kept per bead as they lie in the global array, so that the check is a
+  // comparison of memory (one block when the chain's particles are consecutive). u and r are
+  // in chain order unless `in_lanes`: then only a group's lane holds them
+  // (RodChainLanes::Group::memo_generation), and a solve alone makes them again (the same
+  // numbers: directions() is a function of the positions and the box). Each remembering
+  // starts a new generation.
   struct DirectionsMemo {
-    bool valid = false;
-    std::vector<double> x, u, r;
+    bool valid = false, in_lanes = false;
+    std::uint64_t generation = 0;
+    std::vector<Vec3> x;
+    std::vector<double> u, r;
+    double largest_deviation = 0.0;
     Vec3 period, inverse_period;
   };
   mutable DirectionsMemo memo_;
@@ -221,6 +240,8 @@ class RodChain {
   // tried first by differences(). Mutable like memo_: a cache that never changes a number.
   mutable std::vector<double> image_;
 
+  // Whether bead b is particle bead_particle_[0] + b for every b.
+  bool consecutive_ = false;
   // Per bead (chain order: rod k joins beads k and k+1): its particle (global index), inverse
   // mass, and the signs of its rods in row order (second_sign_ 0 at the ends).
   std::vector<std::int32_t> bead_particle_;

@@ -548,6 +548,16 @@ void projections(std::size_t m, const double* u, const double* v, const double* 
   }
 }
 
+void largest_deviation(std::size_t m, const double* r, const double* length, double* per_lane) {
+  Lanes largest = broadcast(0.0);
+  for (std::size_t i = 0; i < m * w; i += w) {
+    const Lanes l = load(length + i);
+    const Lanes deviation = absolute(load(r + i) - l) / l;
+    largest = largest < deviation ? deviation : largest;  // std::max(largest, deviation)
+  }
+  store_lanes(per_lane, largest);
+}
+
 void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
   Lanes sum = broadcast(0.0);
   for (std::size_t i = 0; i < m * w; i += w) sum += load(z + i) * load(r + i);

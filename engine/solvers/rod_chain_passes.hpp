@@ -106,6 +106,8 @@ void impulses(std::size_t m, const double* u, const double* z, const double* fir
 // projections() (the layout's per-chain normalize is rod_passes::normalize with m lanes rods).
 void projections(std::size_t m, const double* u, const double* v, const double* low_first,
                  const double* low_sign, const double* high_sign, double* out);
+// Per lane, max_k |r_k - length_k| / length_k from 0 in row order, by std::max.
+void largest_deviation(std::size_t m, const double* r, const double* length, double* per_lane);
 // Per lane, 0 + sum_k z_k r_k in row order (finish_positions' virial).
 void virial(std::size_t m, const double* z, const double* r, double* per_lane);
 
