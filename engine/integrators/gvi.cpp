@@ -135,8 +135,6 @@ void Gvi::start_step(System& system) {
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
-    std::vector<Vec3>& d = ws_.displacement;
-    d.resize(n);
     ws_.predicted.resize(n);
     ws_.q.resize(n);
     // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
@@ -151,8 +149,9 @@ void Gvi::start_step(System& system) {
       for (std::size_t i = begin; i < end; ++i) {
         ws_.q[i] = P.position[i];
         ws_.p[i] = P.velocity[i] * P.mass[i];
-        d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-        ws_.predicted[i] = P.position[i] + d[i];
+        // free_displacement's d, not stored: only predict() reads it, after making it.
+        const Vec3 d = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+        ws_.predicted[i] = P.position[i] + d;
         if (listed) count += !list.keeps_valid(i, ws_.predicted[i]);
       }
       beyond[static_cast<std::size_t>(c)] = count;
@@ -408,13 +407,12 @@ double Gvi::predict_reflected(const System& system) {
   const Particles& P = system.particles;
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
-  std::vector<Vec3>& d = ws_.displacement;
   for (std::int32_t i : ws_.changed_particles) ws_.prediction_changed[i] = 0;
   ws_.changed_particles.clear();
   double largest2_bound = ws_.largest2;
   auto again = [&](std::int32_t i) {
-    d[i] = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-    const Vec3 next = P.position[i] + d[i];
+    const Vec3 d = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    const Vec3 next = P.position[i] + d;
     Vec3& now = ws_.predicted[i];
     if (next.x != now.x || next.y != now.y || next.z != now.z) {
       now = next;
@@ -513,7 +511,20 @@ void Gvi::solve_held_positions(System& system) {
   std::fill_n(ws_.equality.begin(), constraints_.equalities.size(), true);
   const std::vector<Vec3>& f_start = engine_.force();
   ws_.half.resize(n);
-  parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
+  // Verlet solves once: the free step and the zeroed impulses made in the half kick's pass.
+  const bool once = lagrangian_ == Lagrangian::verlet && !rows.empty();
+  if (once) {
+    ws_.free.resize(n);
+    ws_.impulse.resize(n);
+    parallel_for(n, [&, h](std::size_t i) {
+      const Vec3 half = ws_.p[i] + f_start[i] * (0.5 * h);
+      ws_.half[i] = half;
+      ws_.free[i] = half * (h / P.mass[i]);
+      ws_.impulse[i] = Vec3{};
+    });
+  } else {
+    parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
+  }
   // Verlet: the free step is the constrained predictor's last one (the same numbers from
   // the same momenta and forces) at the same q, so a chain no contact row joins, whose
   // free step is bit for bit the one predicted, takes the prediction's impulses.
@@ -526,9 +537,11 @@ void Gvi::solve_held_positions(System& system) {
       ws_.impulse.clear();
       return;
     }
-    ws_.impulse.assign(n, Vec3{});
-    ws_.free.resize(n);
-    parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
+    if (!once) {
+      ws_.impulse.assign(n, Vec3{});
+      ws_.free.resize(n);
+      parallel_for(n, [&, h](std::size_t i) { ws_.free[i] = ws_.half[i] * (h / P.mass[i]); });
+    }
     ws_.position_virial = solve_positions(system, rows, ws_.equality, ws_.q, ws_.free, ws_.impulse,
                                           nullptr, predicted ? &prediction : nullptr);
   };

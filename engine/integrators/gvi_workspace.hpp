@@ -16,7 +16,7 @@ struct GviWorkspace {
   std::vector<Vec3> q;                                 // positions at the start of the step
   std::vector<Vec3> p_start;                           // start momenta, where read (start_step)
   std::vector<Vec3> predicted;                         // where the step would end unconstrained
-  std::vector<Vec3> displacement;                      // the unconstrained step's displacement
+  std::vector<Vec3> displacement;                      // the unconstrained step's, predict()'s
   std::vector<Vec3> prediction_kick;                   // the constrained predictor's impulses
   std::vector<Vec3> kicked_displacement;               // the free step they were solved for
   std::vector<char> displacement_changed;              // per particle, since that solve
