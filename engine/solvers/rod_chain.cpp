@@ -584,18 +584,23 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
   for (std::size_t l = 0; l < w; ++l) state[l] = l < count ? State::active : State::out;
   double norm[w] = {}, merit[w] = {}, cap[w];
   std::uint8_t trying[w];
-  // The residual at a.x for the trying lanes (held_or_residual, then try_trial's test of the
-  // merit against cap; the first residual takes none).
+  // The residual at x for the trying lanes (held_or_residual, then try_trial's test of the
+  // merit against cap; the first residual takes none). The differences at x in a.u and a.r,
+  // hold and bound as differences() and held_bound() gave them.
+  std::uint8_t hold[w];
+  double bound[w];
   auto evaluate = [&](const double* x, bool first) {
-    std::uint8_t hold[w];
-    rod_passes::across::differences(m, x, g.forward.data(), g.image.data(), range.periods,
-                                    range.limit, a.u.data(), a.r.data(), hold);
+    bool rewrapped = false;
     for (std::size_t l = 0; l < count; ++l) {
-      if (trying[l] && !hold[l]) chains[l]->rewrap_across(x, box, l, g, a);
+      if (trying[l] && !hold[l]) {
+        chains[l]->rewrap_across(x, box, l, g, a);
+        rewrapped = true;
+      }
     }
-    double bound[w];
-    rod_passes::across::held_bound(m, a.r.data(), g.length.data(), g.inverse_length.data(),
-                                   tolerance, bound);
+    if (rewrapped) {
+      rod_passes::across::held_bound(m, a.r.data(), g.length.data(), g.inverse_length.data(),
+                                     tolerance, bound);
+    }
     // Whether x is within rounding of a finite `limit` (the estimate of the merit being off
     // by that: a relative 1e-10 is far above the rounding of a sum of a few hundred squares).
     auto unsure = [](double x, double limit) {
@@ -640,6 +645,10 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
     trying[l] = state[l] == State::active;
     cap[l] = std::numeric_limits<double>::infinity();
   }
+  rod_passes::across::differences(m, a.x0.data(), g.forward.data(), g.image.data(), range.periods,
+                                  range.limit, a.u.data(), a.r.data(), hold);
+  rod_passes::across::held_bound(m, a.r.data(), g.length.data(), g.inverse_length.data(), tolerance,
+                                 bound);
   evaluate(a.x0.data(), true);
   for (;;) {
     bool any = false;
@@ -666,9 +675,11 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       trying[l] = state[l] == State::active;
       cap[l] = (1 - 1e-4 * 1.0) * merit[l];
     }
-    rod_passes::across::advance(m, a.z.data(), lanes.x.data(), trying);
-    rod_passes::across::positions(m, a.x0.data(), start_u, a.z.data(), g.first_sign.data(),
-                                  g.second_sign.data(), g.hw.data(), a.x.data());
+    rod_passes::across::advance_and_measure(
+        m, a.z.data(), lanes.x.data(), trying, a.x0.data(), start_u, g.first_sign.data(),
+        g.second_sign.data(), g.hw.data(), g.forward.data(), g.image.data(), range.periods,
+        range.limit, g.length.data(), g.inverse_length.data(), tolerance, a.x.data(), a.u.data(),
+        a.r.data(), hold, bound);
     evaluate(a.x.data(), false);
   }
   bool any_done = false;

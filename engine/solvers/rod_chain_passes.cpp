@@ -520,6 +520,93 @@ void positions(std::size_t m, const double* x0, const double* u, const double* z
   }
 }
 
+// Bead by bead: z's entry b advanced, bead b placed (all three axes), then rod b-1 measured
+// from beads b-1 (kept in registers) and b. Each value by the operations of advance(),
+// positions(), differences() and held_bound(), in their order.
+void advance_and_measure(std::size_t m, double* z, const double* step, const std::uint8_t* take,
+                         const double* x0, const double* u, const double* first_sign,
+                         const double* second_sign, const double* hw, const double* forward,
+                         const double* image, const double* period, const double* limit,
+                         const double* length, const double* inverse_length, double tolerance,
+                         double* x, double* d, double* d2, std::uint8_t* hold, double* bound) {
+  const std::size_t n = m + 1;
+  const std::size_t all = m * w;
+  const std::size_t beads = n * w;
+  const double px = period[0], py = period[1], pz = period[2];
+  const double lx = limit[0], ly = limit[1], lz = limit[2];
+  LaneMask taken;
+  for (std::size_t l = 0; l < w; ++l) taken[l] = take[l] ? -1L : 0L;
+  LaneMask within = all_lanes, usable = all_lanes;
+  Lanes largest = broadcast(0.0);
+  Lanes z_before = broadcast(0.0), ux_before = z_before, uy_before = z_before, uz_before = z_before;
+  Lanes ax = z_before, ay = z_before, az = z_before;  // bead b-1
+  for (std::size_t b = 0; b < n; ++b) {
+    const std::size_t i = b * w;
+    Lanes ix, iy, iz;
+    if (b < m) {
+      const Lanes now = load(z + i);
+      const Lanes z_b = taken ? now + load(step + i) : now;
+      store(z + i, z_b);
+      const Lanes ux = load(u + i), uy = load(u + all + i), uz = load(u + 2 * all + i);
+      const Lanes sb = load(second_sign + i) * z_b;
+      if (b == 0) {
+        const Lanes s = load(first_sign) * z_b;
+        ix = 0.0 + ux * s;
+        iy = 0.0 + uy * s;
+        iz = 0.0 + uz * s;
+      } else {
+        const Lanes sa = load(first_sign + i) * z_before;
+        ix = (0.0 + ux_before * sa) + ux * sb;
+        iy = (0.0 + uy_before * sa) + uy * sb;
+        iz = (0.0 + uz_before * sa) + uz * sb;
+      }
+      z_before = z_b;
+      ux_before = ux;
+      uy_before = uy;
+      uz_before = uz;
+    } else {
+      const Lanes sa = load(first_sign + i) * z_before;
+      ix = 0.0 + ux_before * sa;
+      iy = 0.0 + uy_before * sa;
+      iz = 0.0 + uz_before * sa;
+    }
+    const Lanes h = load(hw + i);
+    const Lanes cx = load(x0 + i) + ix * h, cy = load(x0 + beads + i) + iy * h,
+                cz = load(x0 + 2 * beads + i) + iz * h;
+    store(x + i, cx);
+    store(x + beads + i, cy);
+    store(x + 2 * beads + i, cz);
+    if (b > 0) {
+      const std::size_t k = i - w;  // rod b-1
+      const LaneMask f = load(forward + k) > 0;
+      Lanes ex = (f ? ax : cx) - (f ? cx : ax);
+      Lanes ey = (f ? ay : cy) - (f ? cy : ay);
+      Lanes ez = (f ? az : cz) - (f ? cz : az);
+      ex -= px * load(image + k);
+      ey -= py * load(image + all + k);
+      ez -= pz * load(image + 2 * all + k);
+      within &= (absolute(ex) <= lx) & (absolute(ey) <= ly) & (absolute(ez) <= lz);
+      store(d + k, ex);
+      store(d + all + k, ey);
+      store(d + 2 * all + k, ez);
+      const Lanes r2 = ex * ex + ey * ey + ez * ez;
+      store(d2 + k, r2);
+      const Lanes l = load(length + k);
+      const Lanes relative_gap = absolute(r2 - l * l) * load(inverse_length + k);
+      const Lanes rod_bound = relative_gap * (1 + bound_slack) + l * bound_slack;
+      usable &= (relative_gap <= 0.25 * l) & (rod_bound <= tolerance);
+      largest = rod_bound > largest ? rod_bound : largest;
+    }
+    ax = cx;
+    ay = cy;
+    az = cz;
+  }
+  for (std::size_t l = 0; l < w; ++l) {
+    hold[l] = static_cast<std::uint8_t>(within[l] != 0);
+    bound[l] = usable[l] ? largest[l] : __builtin_inf();
+  }
+}
+
 void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
               const double* second_sign, double* out) {
   const std::size_t n = m + 1;

@@ -103,6 +103,15 @@ void positions(std::size_t m, const double* x0, const double* u, const double* z
                const double* first_sign, const double* second_sign, const double* hw, double* out);
 void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
               const double* second_sign, double* out);
+// advance(), positions() into x, differences() and held_bound() in one pass (the same numbers;
+// bound as held_bound's per_lane). held_bound's bound is of differences() without rewrapping:
+// where a lane's images do not hold, it is to be made again.
+void advance_and_measure(std::size_t m, double* z, const double* step, const std::uint8_t* take,
+                         const double* x0, const double* u, const double* first_sign,
+                         const double* second_sign, const double* hw, const double* forward,
+                         const double* image, const double* period, const double* limit,
+                         const double* length, const double* inverse_length, double tolerance,
+                         double* x, double* d, double* d2, std::uint8_t* hold, double* bound);
 // projections() (the layout's per-chain normalize is rod_passes::normalize with m lanes rods).
 void projections(std::size_t m, const double* u, const double* v, const double* low_first,
                  const double* low_sign, const double* high_sign, double* out);
