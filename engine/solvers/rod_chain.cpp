@@ -806,16 +806,14 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
   for (std::size_t l = 0; l < count; ++l) {
     if (!hold[l]) chains[l]->rewrap_across(a.x.data(), box, l, g, a);
   }
-  rod_passes::normalize(m * w, a.u.data(), a.r.data());
+  // Their directions and lengths (directions()), remembered where the next solve finds them,
+  // and (C^T M^-1 C) mu = -C^T M^-1 p.
   double largest[w];
-  rod_passes::across::largest_deviation(m, a.r.data(), g.length.data(), largest);
+  rod_passes::across::project_rows(
+      m, a.u.data(), a.r.data(), g.length.data(), a.v.data(), g.low_first.data(), g.low_sign.data(),
+      g.high_sign.data(), g.w_low.data(), g.w_high.data(), g.coupling.data(), largest,
+      lanes.lower.data(), lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
   for (std::size_t l = 0; l < count; ++l) chains[l]->remember_across(x, box, l, g, largest[l]);
-  // (C^T M^-1 C) mu = -C^T M^-1 p.
-  rod_passes::across::projections(m, a.u.data(), a.v.data(), g.low_first.data(), g.low_sign.data(),
-                                  g.high_sign.data(), a.phi.data());
-  rod_passes::across::bands(m, a.u.data(), a.u.data(), g.w_low.data(), g.w_high.data(),
-                            g.coupling.data(), 1.0, a.phi.data(), lanes.lower.data(),
-                            lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
   eliminate_lanes(m, lanes);
   rod_passes::across::impulses(m, a.u.data(), lanes.x.data(), g.first_sign.data(),
                                g.second_sign.data(), a.impulse.data());

@@ -478,50 +478,24 @@ void bands(std::size_t m, const double* a, const double* b, const double* w_low,
   }
 }
 
-void advance(std::size_t m, double* z, const double* step, const std::uint8_t* take) {
-  LaneMask taken;
-  for (std::size_t l = 0; l < w; ++l) taken[l] = take[l] ? -1L : 0L;
-  for (std::size_t i = 0; i < m * w; i += w) {
-    const Lanes now = load(z + i);
-    store(z + i, taken ? now + load(step + i) : now);
-  }
-}
-
 namespace {
-// One axis of impulse_components (out = the impulse) or of positions (out = x0 + impulse hw).
-template <bool moved>
+// One axis of impulse_components.
 inline void bead_axis(std::size_t m, const double* uc, const double* z, const double* first_sign,
-                      const double* second_sign, const double* x0c, const double* hw, double* oc) {
+                      const double* second_sign, double* oc) {
   const std::size_t n = m + 1;
-  auto put = [&](std::size_t i, const Lanes& impulse) {
-    if constexpr (moved) {
-      store(oc + i, load(x0c + i) + impulse * load(hw + i));
-    } else {
-      store(oc + i, impulse);
-    }
-  };
-  put(0, 0.0 + load(uc) * (load(first_sign) * load(z)));
+  store(oc, 0.0 + load(uc) * (load(first_sign) * load(z)));
   for (std::size_t i = w; i < (n - 1) * w; i += w) {
     const Lanes sa = load(first_sign + i) * load(z + i - w);
     const Lanes sb = load(second_sign + i) * load(z + i);
-    put(i, (0.0 + load(uc + i - w) * sa) + load(uc + i) * sb);
+    store(oc + i, (0.0 + load(uc + i - w) * sa) + load(uc + i) * sb);
   }
   const std::size_t i = (n - 1) * w;
-  put(i, 0.0 + load(uc + i - w) * (load(first_sign + i) * load(z + i - w)));
+  store(oc + i, 0.0 + load(uc + i - w) * (load(first_sign + i) * load(z + i - w)));
 }
 }  // namespace
 
-void positions(std::size_t m, const double* x0, const double* u, const double* z,
-               const double* first_sign, const double* second_sign, const double* hw, double* out) {
-  const std::size_t n = m + 1;
-  for (std::size_t c = 0; c < 3; ++c) {
-    bead_axis<true>(m, u + c * m * w, z, first_sign, second_sign, x0 + c * n * w, hw,
-                    out + c * n * w);
-  }
-}
-
 // Bead by bead: z's entry b advanced, bead b placed (all three axes), then rod b-1 measured
-// from beads b-1 (kept in registers) and b. Each value by the operations of advance(),
+// from beads b-1 (kept in registers) and b. Each value by the operations of the lanes' z + step,
 // positions(), differences() and held_bound(), in their order.
 void advance_and_measure(std::size_t m, double* z, const double* step, const std::uint8_t* take,
                          const double* x0, const double* u, const double* first_sign,
@@ -611,38 +585,67 @@ void impulses(std::size_t m, const double* u, const double* z, const double* fir
               const double* second_sign, double* out) {
   const std::size_t n = m + 1;
   for (std::size_t c = 0; c < 3; ++c) {
-    bead_axis<false>(m, u + c * m * w, z, first_sign, second_sign, nullptr, nullptr,
-                     out + c * n * w);
+    bead_axis(m, u + c * m * w, z, first_sign, second_sign, out + c * n * w);
   }
 }
 
-void projections(std::size_t m, const double* u, const double* v, const double* low_first,
-                 const double* low_sign, const double* high_sign, double* out) {
+void project_rows(std::size_t m, double* d, double* r, const double* length, const double* v,
+                  const double* low_first, const double* low_sign, const double* high_sign,
+                  const double* w_low, const double* w_high, const double* coupling,
+                  double* largest_deviation, double* lower, double* diagonal, double* upper,
+                  double* rhs) {
   const std::size_t n = m + 1;
   const std::size_t all = m * w;
+  constexpr double scale = 1.0;
+  Lanes largest = broadcast(0.0);
+  Lanes px = largest, py = largest, pz = largest;  // rod k-1's direction
   for (std::size_t i = 0; i < all; i += w) {
+    // normalize()
+    const Lanes l = square_root(load(r + i));
+    const Lanes inverse = 1.0 / l;
+    const LaneMask positive = l > 0;
+    store(r + i, l);
+    const Lanes ux = positive ? load(d + i) * inverse : 0.0;
+    const Lanes uy = positive ? load(d + all + i) * inverse : 0.0;
+    const Lanes uz = positive ? load(d + 2 * all + i) * inverse : 0.0;
+    store(d + i, ux);
+    store(d + all + i, uy);
+    store(d + 2 * all + i, uz);
+    // largest_deviation()
+    const Lanes length_k = load(length + i);
+    const Lanes deviation = absolute(l - length_k) / length_k;
+    largest = largest < deviation ? deviation : largest;
+    // projections()
     const LaneMask f = load(low_first + i) > 0;
     const Lanes ax = load(v + i), ay = load(v + n * w + i), az = load(v + 2 * n * w + i);
     const Lanes cx = load(v + i + w), cy = load(v + n * w + i + w),
                 cz = load(v + 2 * n * w + i + w);
-    const Lanes ux = load(u + i), uy = load(u + all + i), uz = load(u + 2 * all + i);
     const Lanes to_low = ux * (f ? ax : cx) + uy * (f ? ay : cy) + uz * (f ? az : cz);
     const Lanes to_high = ux * (f ? cx : ax) + uy * (f ? cy : ay) + uz * (f ? cz : az);
     Lanes projected = broadcast(0.0);
     projected += load(low_sign + i) * to_low;
     projected += load(high_sign + i) * to_high;
-    store(out + i, projected);
+    // bands() with a = b = u: the diagonal and right-hand side, then the entries between
+    // rods k-1 and k.
+    const Lanes dd = ux * ux + uy * uy + uz * uz;
+    Lanes entry = broadcast(0.0);
+    entry += 1.0 * load(w_low + i) * dd;
+    entry += 1.0 * load(w_high + i) * dd;
+    store(diagonal + i, entry * scale);
+    store(rhs + i, -projected);
+    if (i > 0) {
+      const std::size_t before = i - w;
+      const Lanes c = load(coupling + before);
+      const Lanes up = px * ux + py * uy + pz * uz;
+      store(upper + before, (0.0 + c * up) * scale);
+      const Lanes down = ux * px + uy * py + uz * pz;
+      store(lower + i, (0.0 + c * down) * scale);
+    }
+    px = ux;
+    py = uy;
+    pz = uz;
   }
-}
-
-void largest_deviation(std::size_t m, const double* r, const double* length, double* per_lane) {
-  Lanes largest = broadcast(0.0);
-  for (std::size_t i = 0; i < m * w; i += w) {
-    const Lanes l = load(length + i);
-    const Lanes deviation = absolute(load(r + i) - l) / l;
-    largest = largest < deviation ? deviation : largest;  // std::max(largest, deviation)
-  }
-  store_lanes(per_lane, largest);
+  store_lanes(largest_deviation, largest);
 }
 
 void virial(std::size_t m, const double* z, const double* r, double* per_lane) {

@@ -96,27 +96,28 @@ void normalize_residual(std::size_t m, double* d, double* r, const double* lengt
 void bands(std::size_t m, const double* a, const double* b, const double* w_low,
            const double* w_high, const double* coupling, double scale, const double* phi,
            double* lower, double* diagonal, double* upper, double* rhs);
-// z + step in the lanes where take[lane] (line_search's first trial: 1 step is the step).
-void advance(std::size_t m, double* z, const double* step, const std::uint8_t* take);
-// positions() and impulses().
-void positions(std::size_t m, const double* x0, const double* u, const double* z,
-               const double* first_sign, const double* second_sign, const double* hw, double* out);
+// impulses().
 void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
               const double* second_sign, double* out);
-// advance(), positions() into x, differences() and held_bound() in one pass (the same numbers;
-// bound as held_bound's per_lane). held_bound's bound is of differences() without rewrapping:
-// where a lane's images do not hold, it is to be made again.
+// A Newton trial: z + step in the lanes where take[lane] (line_search's first trial: 1 step is
+// the step), positions() of the per-chain passes into x, differences() and held_bound() in
+// one pass (the same numbers; bound as held_bound's per_lane). held_bound's bound is of
+// differences() without rewrapping: where a lane's images do not hold, it is to be made again.
 void advance_and_measure(std::size_t m, double* z, const double* step, const std::uint8_t* take,
                          const double* x0, const double* u, const double* first_sign,
                          const double* second_sign, const double* hw, const double* forward,
                          const double* image, const double* period, const double* limit,
                          const double* length, const double* inverse_length, double tolerance,
                          double* x, double* d, double* d2, std::uint8_t* hold, double* bound);
-// projections() (the layout's per-chain normalize is rod_passes::normalize with m lanes rods).
-void projections(std::size_t m, const double* u, const double* v, const double* low_first,
-                 const double* low_sign, const double* high_sign, double* out);
-// Per lane, max_k |r_k - length_k| / length_k from 0 in row order, by std::max.
-void largest_deviation(std::size_t m, const double* r, const double* length, double* per_lane);
+// The momentum projection's passes over the rods at once, from differences d and squared
+// lengths r (differences() or a rewrap): rod_passes::normalize() in place, per lane max_k |r_k -
+// length_k| / length_k (from 0 in row order, by std::max), rod_passes::projections() of the
+// velocities v and bands() of a = b = d (scale 1), each value by those passes' operations.
+void project_rows(std::size_t m, double* d, double* r, const double* length, const double* v,
+                  const double* low_first, const double* low_sign, const double* high_sign,
+                  const double* w_low, const double* w_high, const double* coupling,
+                  double* largest_deviation, double* lower, double* diagonal, double* upper,
+                  double* rhs);
 // Per lane, 0 + sum_k z_k r_k in row order (finish_positions' virial).
 void virial(std::size_t m, const double* z, const double* r, double* per_lane);
 
