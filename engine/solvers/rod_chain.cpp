@@ -665,10 +665,9 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       }
     }
     if (!any) break;
-    rod_passes::across::bands(m, a.u.data(), start_u, g.w_low.data(), g.w_high.data(),
-                              g.coupling.data(), h, a.phi.data(), lanes.lower.data(),
-                              lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
-    eliminate_lanes(m, lanes);
+    rod_passes::across::solve_bands(m, a.u.data(), start_u, g.w_low.data(), g.w_high.data(),
+                                    g.coupling.data(), h, a.phi.data(), lanes.x.data(),
+                                    lanes.c.data(), lanes.solved);
     for (std::size_t l = 0; l < w; ++l) {
       // A vanishing pivot: solve_positions redoes the chain.
       if (state[l] == State::active && !lanes.solved[l]) state[l] = State::out;

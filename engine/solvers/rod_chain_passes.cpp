@@ -266,10 +266,12 @@ inline LaneMask finite(const Lanes& v) {
 }
 }  // namespace
 
-void eliminate_lanes(std::size_t n, const double* __restrict lower,
-                     const double* __restrict diagonal, const double* __restrict upper,
-                     const double* __restrict rhs, double* __restrict x, double* __restrict c,
-                     std::uint8_t* __restrict solved) {
+namespace {
+// eliminate_lanes of the rows' entries as `rows` gives them (diagonal(k), rhs(k), lower(k) for
+// k > 0, upper(k) for k < n - 1), each asked for where the elimination first reads it.
+template <class Rows>
+inline void eliminate_rows(std::size_t n, const Rows& rows, double* __restrict x,
+                           double* __restrict c, std::uint8_t* __restrict solved) {
   constexpr std::size_t w = lanes;
   if (n == 0) {
     for (std::size_t l = 0; l < w; ++l) solved[l] = 1;
@@ -282,45 +284,45 @@ void eliminate_lanes(std::size_t n, const double* __restrict lower,
   for (std::size_t step = 0; step < meet; ++step) {
     {
       const std::size_t k = step;
-      const Lanes d = load(diagonal + k * w);
-      Lanes pivot = d, y = load(rhs + k * w);
+      const Lanes d = rows.diagonal(k);
+      Lanes pivot = d, y = rows.rhs(k);
       if (k > 0) {
-        const Lanes lo = load(lower + k * w);
+        const Lanes lo = rows.lower(k);
         pivot = d - lo * load(c + (k - 1) * w);
         y -= lo * load(x + (k - 1) * w);
       }
       regular &= keeps(pivot, d);
       const Lanes reciprocal = 1.0 / pivot;
-      store(c + k * w, load(upper + k * w) * reciprocal);
+      store(c + k * w, rows.upper(k) * reciprocal);
       store(x + k * w, y * reciprocal);
     }
     if (step < below) {
       const std::size_t k = n - 1 - step;
-      const Lanes d = load(diagonal + k * w);
-      Lanes pivot = d, y = load(rhs + k * w);
+      const Lanes d = rows.diagonal(k);
+      Lanes pivot = d, y = rows.rhs(k);
       if (k < n - 1) {
-        const Lanes up = load(upper + k * w);
+        const Lanes up = rows.upper(k);
         pivot = d - up * load(c + (k + 1) * w);
         y -= up * load(x + (k + 1) * w);
       }
       regular &= keeps(pivot, d);
       const Lanes reciprocal = 1.0 / pivot;
-      store(c + k * w, load(lower + k * w) * reciprocal);
+      store(c + k * w, rows.lower(k) * reciprocal);
       store(x + k * w, y * reciprocal);
     }
   }
   LaneMask all_finite;
   {
     const std::size_t k = meet;
-    const Lanes d = load(diagonal + k * w);
-    Lanes pivot = d, y = load(rhs + k * w);
+    const Lanes d = rows.diagonal(k);
+    Lanes pivot = d, y = rows.rhs(k);
     if (k > 0) {
-      const Lanes lo = load(lower + k * w);
+      const Lanes lo = rows.lower(k);
       pivot -= lo * load(c + (k - 1) * w);
       y -= lo * load(x + (k - 1) * w);
     }
     if (k < n - 1) {
-      const Lanes up = load(upper + k * w);
+      const Lanes up = rows.upper(k);
       pivot -= up * load(c + (k + 1) * w);
       y -= up * load(x + (k + 1) * w);
     }
@@ -343,6 +345,25 @@ void eliminate_lanes(std::size_t n, const double* __restrict lower,
   }
   const LaneMask ok = regular & all_finite;
   for (std::size_t l = 0; l < w; ++l) solved[l] = static_cast<std::uint8_t>(ok[l] != 0);
+}
+
+}  // namespace
+
+void eliminate_lanes(std::size_t n, const double* __restrict lower,
+                     const double* __restrict diagonal, const double* __restrict upper,
+                     const double* __restrict rhs, double* __restrict x, double* __restrict c,
+                     std::uint8_t* __restrict solved) {
+  struct Rows {
+    const double* __restrict lower_;
+    const double* __restrict diagonal_;
+    const double* __restrict upper_;
+    const double* __restrict rhs_;
+    Lanes lower(std::size_t k) const { return load(lower_ + k * lanes); }
+    Lanes diagonal(std::size_t k) const { return load(diagonal_ + k * lanes); }
+    Lanes upper(std::size_t k) const { return load(upper_ + k * lanes); }
+    Lanes rhs(std::size_t k) const { return load(rhs_ + k * lanes); }
+  };
+  eliminate_rows(n, Rows{lower, diagonal, upper, rhs}, x, c, solved);
 }
 
 }  // namespace deli::rod_passes
@@ -454,28 +475,40 @@ void normalize_residual(std::size_t m, double* d, double* r, const double* lengt
   }
 }
 
-void bands(std::size_t m, const double* a, const double* b, const double* w_low,
-           const double* w_high, const double* coupling, double scale, const double* phi,
-           double* lower, double* diagonal, double* upper, double* rhs) {
-  const std::size_t all = m * w;
-  for (std::size_t i = 0; i < all; i += w) {
-    const Lanes d = load(a + i) * load(b + i) + load(a + all + i) * load(b + all + i) +
-                    load(a + 2 * all + i) * load(b + 2 * all + i);
-    Lanes entry = broadcast(0.0);
-    entry += 1.0 * load(w_low + i) * d;
-    entry += 1.0 * load(w_high + i) * d;
-    store(diagonal + i, entry * scale);
-    store(rhs + i, -load(phi + i));
-  }
-  for (std::size_t i = 0; i + w < all; i += w) {
-    const std::size_t j = i + w;  // the next rod, same lane
-    const Lanes up = load(a + i) * load(b + j) + load(a + all + i) * load(b + all + j) +
-                     load(a + 2 * all + i) * load(b + 2 * all + j);
-    store(upper + i, (0.0 + load(coupling + i) * up) * scale);
-    const Lanes down = load(a + j) * load(b + i) + load(a + all + j) * load(b + all + i) +
-                       load(a + 2 * all + j) * load(b + 2 * all + i);
-    store(lower + j, (0.0 + load(coupling + i) * down) * scale);
-  }
+void solve_bands(std::size_t m, const double* a, const double* b, const double* w_low,
+                 const double* w_high, const double* coupling, double scale, const double* phi,
+                 double* x, double* c, std::uint8_t* solved) {
+  // bands()' entries, made as the elimination reaches their rows.
+  struct Rows {
+    const double* __restrict a;
+    const double* __restrict b;
+    const double* __restrict w_low;
+    const double* __restrict w_high;
+    const double* __restrict coupling;
+    const double* __restrict phi;
+    std::size_t all;
+    double scale;
+    Lanes dot(std::size_t k, std::size_t l) const {
+      const std::size_t i = k * w, j = l * w;
+      return load(a + i) * load(b + j) + load(a + all + i) * load(b + all + j) +
+             load(a + 2 * all + i) * load(b + 2 * all + j);
+    }
+    Lanes diagonal(std::size_t k) const {
+      const Lanes d = dot(k, k);
+      Lanes entry = broadcast(0.0);
+      entry += 1.0 * load(w_low + k * w) * d;
+      entry += 1.0 * load(w_high + k * w) * d;
+      return entry * scale;
+    }
+    Lanes rhs(std::size_t k) const { return -load(phi + k * w); }
+    Lanes upper(std::size_t k) const {
+      return (0.0 + load(coupling + k * w) * dot(k, k + 1)) * scale;
+    }
+    Lanes lower(std::size_t k) const {
+      return (0.0 + load(coupling + (k - 1) * w) * dot(k, k - 1)) * scale;
+    }
+  };
+  eliminate_rows(m, Rows{a, b, w_low, w_high, coupling, phi, m * w, scale}, x, c, solved);
 }
 
 namespace {

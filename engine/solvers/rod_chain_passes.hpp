@@ -92,10 +92,11 @@ void held_bound(std::size_t m, const double* d2, const double* length, const dou
 // Eigen's order: an estimate of the merit within rounding).
 void normalize_residual(std::size_t m, double* d, double* r, const double* length, double* phi,
                         double* norm, double* merit);
-// bands() (rhs = -phi), in eliminate_lanes' layout.
-void bands(std::size_t m, const double* a, const double* b, const double* w_low,
-           const double* w_high, const double* coupling, double scale, const double* phi,
-           double* lower, double* diagonal, double* upper, double* rhs);
+// rod_passes::bands() (rhs = -phi) solved by eliminate_lanes (the same numbers), each entry made as
+// the elimination reaches its row.
+void solve_bands(std::size_t m, const double* a, const double* b, const double* w_low,
+                 const double* w_high, const double* coupling, double scale, const double* phi,
+                 double* x, double* c, std::uint8_t* solved);
 // impulses().
 void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
               const double* second_sign, double* out);
