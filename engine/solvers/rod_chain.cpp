@@ -585,21 +585,24 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
   double norm[w] = {}, merit[w] = {}, cap[w];
   std::uint8_t trying[w];
   // The residual at x for the trying lanes (held_or_residual, then try_trial's test of the
-  // merit against cap; the first residual takes none). The differences at x in a.u and a.r,
-  // hold and bound as differences() and held_bound() gave them.
+  // merit against cap; the first residual takes none). Made by rod_passes::across::measure_residual
+  // or advance_and_measure: hold and bound, and the differences at x in a.u and a.r, or
+  // (`normalized`) the directions, lengths and residual with their norm and merit too.
   std::uint8_t hold[w];
-  double bound[w];
-  auto evaluate = [&](const double* x, bool first) {
-    bool rewrapped = false;
-    for (std::size_t l = 0; l < count; ++l) {
-      if (trying[l] && !hold[l]) {
-        chains[l]->rewrap_across(x, box, l, g, a);
-        rewrapped = true;
+  double bound[w], made_norm[w], made_merit[w];
+  auto evaluate = [&](const double* x, bool first, bool normalized) {
+    bool rewrap = false;
+    for (std::size_t l = 0; l < count; ++l) rewrap = rewrap || (trying[l] && !hold[l]);
+    if (rewrap) {
+      // The differences again, some rewrapped, then the rest pass by pass.
+      rod_passes::across::differences(m, x, g.forward.data(), g.image.data(), range.periods,
+                                      range.limit, a.u.data(), a.r.data(), hold);
+      for (std::size_t l = 0; l < count; ++l) {
+        if (trying[l] && !hold[l]) chains[l]->rewrap_across(x, box, l, g, a);
       }
-    }
-    if (rewrapped) {
       rod_passes::across::held_bound(m, a.r.data(), g.length.data(), g.inverse_length.data(),
                                      tolerance, bound);
+      normalized = false;
     }
     // Whether x is within rounding of a finite `limit` (the estimate of the merit being off
     // by that: a relative 1e-10 is far above the rounding of a sum of a few hundred squares).
@@ -628,9 +631,12 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       residual = true;
     }
     if (!residual) return;
-    double new_norm[w], new_merit[w];
-    rod_passes::across::normalize_residual(m, a.u.data(), a.r.data(), g.length.data(), a.phi.data(),
-                                           new_norm, new_merit);
+    double* new_norm = made_norm;
+    double* new_merit = made_merit;
+    if (!normalized) {
+      rod_passes::across::normalize_residual(m, a.u.data(), a.r.data(), g.length.data(),
+                                             a.phi.data(), new_norm, new_merit);
+    }
     for (std::size_t l = 0; l < count; ++l) {
       if (!trying[l]) continue;
       if (!first && (unsure(new_merit[l], cap[l]) || !(new_merit[l] <= cap[l]))) {
@@ -645,12 +651,26 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
     trying[l] = state[l] == State::active;
     cap[l] = std::numeric_limits<double>::infinity();
   }
-  rod_passes::across::differences(m, a.x0.data(), g.forward.data(), g.image.data(), range.periods,
-                                  range.limit, a.u.data(), a.r.data(), hold);
-  rod_passes::across::held_bound(m, a.r.data(), g.length.data(), g.inverse_length.data(), tolerance,
-                                 bound);
-  evaluate(a.x0.data(), true);
-  for (;;) {
+  rod_passes::across::Measured measured{m,
+                                        g.forward.data(),
+                                        g.image.data(),
+                                        range.periods,
+                                        range.limit,
+                                        g.length.data(),
+                                        g.inverse_length.data(),
+                                        tolerance,
+                                        a.z.data(),
+                                        lanes.x.data(),
+                                        a.x0.data(),
+                                        start_u,
+                                        g.first_sign.data(),
+                                        g.second_sign.data(),
+                                        g.hw.data(),
+                                        trying};
+  rod_passes::across::measure_residual(measured, a.x0.data(), a.u.data(), a.r.data(), hold, bound,
+                                       a.phi.data(), made_norm, made_merit);
+  evaluate(a.x0.data(), true, true);
+  for (int steps = 1;; ++steps) {
     bool any = false;
     for (std::size_t l = 0; l < count; ++l) {
       if (state[l] != State::active) continue;
@@ -674,12 +694,14 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
       trying[l] = state[l] == State::active;
       cap[l] = (1 - 1e-4 * 1.0) * merit[l];
     }
-    rod_passes::across::advance_and_measure(
-        m, a.z.data(), lanes.x.data(), trying, a.x0.data(), start_u, g.first_sign.data(),
-        g.second_sign.data(), g.hw.data(), g.forward.data(), g.image.data(), range.periods,
-        range.limit, g.length.data(), g.inverse_length.data(), tolerance, a.x.data(), a.u.data(),
-        a.r.data(), hold, bound);
-    evaluate(a.x.data(), false);
+    // The residual made in the same pass after the first step, which (from the free positions'
+    // O(h^2) residual) rarely holds the rods yet; after later steps only if the bound asks
+    // for it. The same numbers either way.
+    const bool residual_expected = steps == 1;
+    rod_passes::across::advance_and_measure(measured, a.x.data(), a.u.data(), a.r.data(), hold,
+                                            bound, residual_expected ? a.phi.data() : nullptr,
+                                            made_norm, made_merit);
+    evaluate(a.x.data(), false, residual_expected);
   }
   bool any_done = false;
   for (std::size_t l = 0; l < count; ++l) any_done = any_done || state[l] == State::done;

@@ -527,82 +527,108 @@ inline void bead_axis(std::size_t m, const double* uc, const double* z, const do
 }
 }  // namespace
 
-// Bead by bead: z's entry b advanced, bead b placed (all three axes), then rod b-1 measured
-// from beads b-1 (kept in registers) and b. Each value by the operations of the lanes' z + step,
-// positions(), differences() and held_bound(), in their order.
-void advance_and_measure(std::size_t m, double* z, const double* step, const std::uint8_t* take,
-                         const double* x0, const double* u, const double* first_sign,
-                         const double* second_sign, const double* hw, const double* forward,
-                         const double* image, const double* period, const double* limit,
-                         const double* length, const double* inverse_length, double tolerance,
-                         double* x, double* d, double* d2, std::uint8_t* hold, double* bound) {
+namespace {
+// Bead by bead: (with `place`) z's entry b advanced and bead b placed (all three axes), else
+// bead b read from x; then rod b-1 measured from beads b-1 (kept in registers) and b, and
+// (with `residual`) normalised with its residual. Each value by the operations of the lanes'
+// z + step, positions(), differences(), held_bound() and normalize_residual(), in their order.
+template <bool place, bool residual>
+void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* hold, double* bound,
+             double* phi, double* norm, double* merit) {
+  const std::size_t m = in.m;
   const std::size_t n = m + 1;
   const std::size_t all = m * w;
   const std::size_t beads = n * w;
-  const double px = period[0], py = period[1], pz = period[2];
-  const double lx = limit[0], ly = limit[1], lz = limit[2];
+  const double px = in.period[0], py = in.period[1], pz = in.period[2];
+  const double lx = in.limit[0], ly = in.limit[1], lz = in.limit[2];
   LaneMask taken;
-  for (std::size_t l = 0; l < w; ++l) taken[l] = take[l] ? -1L : 0L;
-  LaneMask within = all_lanes, usable = all_lanes;
-  Lanes largest = broadcast(0.0);
+  for (std::size_t l = 0; l < w; ++l) taken[l] = in.take && in.take[l] ? -1L : 0L;
+  LaneMask within = all_lanes, usable = all_lanes, finite = all_lanes;
+  Lanes largest = broadcast(0.0), largest_phi = largest, squares = largest;
   Lanes z_before = broadcast(0.0), ux_before = z_before, uy_before = z_before, uz_before = z_before;
   Lanes ax = z_before, ay = z_before, az = z_before;  // bead b-1
   for (std::size_t b = 0; b < n; ++b) {
     const std::size_t i = b * w;
-    Lanes ix, iy, iz;
-    if (b < m) {
-      const Lanes now = load(z + i);
-      const Lanes z_b = taken ? now + load(step + i) : now;
-      store(z + i, z_b);
-      const Lanes ux = load(u + i), uy = load(u + all + i), uz = load(u + 2 * all + i);
-      const Lanes sb = load(second_sign + i) * z_b;
-      if (b == 0) {
-        const Lanes s = load(first_sign) * z_b;
-        ix = 0.0 + ux * s;
-        iy = 0.0 + uy * s;
-        iz = 0.0 + uz * s;
+    Lanes cx, cy, cz;
+    if constexpr (place) {
+      const double* z = in.z;
+      const double* u = in.u;
+      Lanes ix, iy, iz;
+      if (b < m) {
+        const Lanes now = load(z + i);
+        const Lanes z_b = taken ? now + load(in.step + i) : now;
+        store(in.z + i, z_b);
+        const Lanes ux = load(u + i), uy = load(u + all + i), uz = load(u + 2 * all + i);
+        const Lanes sb = load(in.second_sign + i) * z_b;
+        if (b == 0) {
+          const Lanes s = load(in.first_sign) * z_b;
+          ix = 0.0 + ux * s;
+          iy = 0.0 + uy * s;
+          iz = 0.0 + uz * s;
+        } else {
+          const Lanes sa = load(in.first_sign + i) * z_before;
+          ix = (0.0 + ux_before * sa) + ux * sb;
+          iy = (0.0 + uy_before * sa) + uy * sb;
+          iz = (0.0 + uz_before * sa) + uz * sb;
+        }
+        z_before = z_b;
+        ux_before = ux;
+        uy_before = uy;
+        uz_before = uz;
       } else {
-        const Lanes sa = load(first_sign + i) * z_before;
-        ix = (0.0 + ux_before * sa) + ux * sb;
-        iy = (0.0 + uy_before * sa) + uy * sb;
-        iz = (0.0 + uz_before * sa) + uz * sb;
+        const Lanes sa = load(in.first_sign + i) * z_before;
+        ix = 0.0 + ux_before * sa;
+        iy = 0.0 + uy_before * sa;
+        iz = 0.0 + uz_before * sa;
       }
-      z_before = z_b;
-      ux_before = ux;
-      uy_before = uy;
-      uz_before = uz;
+      const Lanes h = load(in.hw + i);
+      cx = load(in.x0 + i) + ix * h;
+      cy = load(in.x0 + beads + i) + iy * h;
+      cz = load(in.x0 + 2 * beads + i) + iz * h;
+      store(x + i, cx);
+      store(x + beads + i, cy);
+      store(x + 2 * beads + i, cz);
     } else {
-      const Lanes sa = load(first_sign + i) * z_before;
-      ix = 0.0 + ux_before * sa;
-      iy = 0.0 + uy_before * sa;
-      iz = 0.0 + uz_before * sa;
+      cx = load(x + i);
+      cy = load(x + beads + i);
+      cz = load(x + 2 * beads + i);
     }
-    const Lanes h = load(hw + i);
-    const Lanes cx = load(x0 + i) + ix * h, cy = load(x0 + beads + i) + iy * h,
-                cz = load(x0 + 2 * beads + i) + iz * h;
-    store(x + i, cx);
-    store(x + beads + i, cy);
-    store(x + 2 * beads + i, cz);
     if (b > 0) {
       const std::size_t k = i - w;  // rod b-1
-      const LaneMask f = load(forward + k) > 0;
+      const LaneMask f = load(in.forward + k) > 0;
       Lanes ex = (f ? ax : cx) - (f ? cx : ax);
       Lanes ey = (f ? ay : cy) - (f ? cy : ay);
       Lanes ez = (f ? az : cz) - (f ? cz : az);
-      ex -= px * load(image + k);
-      ey -= py * load(image + all + k);
-      ez -= pz * load(image + 2 * all + k);
+      ex -= px * load(in.image + k);
+      ey -= py * load(in.image + all + k);
+      ez -= pz * load(in.image + 2 * all + k);
       within &= (absolute(ex) <= lx) & (absolute(ey) <= ly) & (absolute(ez) <= lz);
-      store(d + k, ex);
-      store(d + all + k, ey);
-      store(d + 2 * all + k, ez);
       const Lanes r2 = ex * ex + ey * ey + ez * ez;
-      store(d2 + k, r2);
-      const Lanes l = load(length + k);
-      const Lanes relative_gap = absolute(r2 - l * l) * load(inverse_length + k);
+      const Lanes l = load(in.length + k);
+      const Lanes relative_gap = absolute(r2 - l * l) * load(in.inverse_length + k);
       const Lanes rod_bound = relative_gap * (1 + bound_slack) + l * bound_slack;
-      usable &= (relative_gap <= 0.25 * l) & (rod_bound <= tolerance);
+      usable &= (relative_gap <= 0.25 * l) & (rod_bound <= in.tolerance);
       largest = rod_bound > largest ? rod_bound : largest;
+      if constexpr (residual) {
+        const Lanes length = square_root(r2);
+        const Lanes inverse = 1.0 / length;
+        const LaneMask positive = length > 0;
+        store(r + k, length);
+        store(d + k, positive ? ex * inverse : 0.0);
+        store(d + all + k, positive ? ey * inverse : 0.0);
+        store(d + 2 * all + k, positive ? ez * inverse : 0.0);
+        const Lanes p = length - l;
+        store(phi + k, p);
+        finite &= (p - p) == 0;
+        const Lanes magnitude_p = absolute(p);
+        largest_phi = magnitude_p > largest_phi ? magnitude_p : largest_phi;
+        squares += p * p;
+      } else {
+        store(d + k, ex);
+        store(d + all + k, ey);
+        store(d + 2 * all + k, ez);
+        store(r + k, r2);
+      }
     }
     ax = cx;
     ay = cy;
@@ -611,7 +637,26 @@ void advance_and_measure(std::size_t m, double* z, const double* step, const std
   for (std::size_t l = 0; l < w; ++l) {
     hold[l] = static_cast<std::uint8_t>(within[l] != 0);
     bound[l] = usable[l] ? largest[l] : __builtin_inf();
+    if constexpr (residual) {
+      norm[l] = finite[l] ? largest_phi[l] : __builtin_inf();
+      merit[l] = squares[l];
+    }
   }
+}
+}  // namespace
+
+void advance_and_measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* hold,
+                         double* bound, double* phi, double* norm, double* merit) {
+  if (phi) {
+    measure<true, true>(in, x, d, r, hold, bound, phi, norm, merit);
+  } else {
+    measure<true, false>(in, x, d, r, hold, bound, phi, norm, merit);
+  }
+}
+
+void measure_residual(const Measured& in, const double* x, double* d, double* r, std::uint8_t* hold,
+                      double* bound, double* phi, double* norm, double* merit) {
+  measure<false, true>(in, const_cast<double*>(x), d, r, hold, bound, phi, norm, merit);
 }
 
 void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,

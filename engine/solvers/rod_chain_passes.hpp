@@ -100,16 +100,28 @@ void solve_bands(std::size_t m, const double* a, const double* b, const double* 
 // impulses().
 void impulses(std::size_t m, const double* u, const double* z, const double* first_sign,
               const double* second_sign, double* out);
+// What measure_residual and advance_and_measure read: the group's constants (per rod:
+// forward, image, length, inverse_length; per bead: first_sign, second_sign, hw), the box's
+// periods and image limits, the tolerance; for advance_and_measure also the multipliers z (made
+// z + step in the lanes where take[lane]), the free positions x0 and the start directions u.
+struct Measured {
+  std::size_t m;
+  const double *forward, *image, *period, *limit, *length, *inverse_length;
+  double tolerance;
+  double* z;
+  const double *step, *x0, *u, *first_sign, *second_sign, *hw;
+  const std::uint8_t* take;
+};
+// differences() at positions x into d and r, hold and held_bound()'s bound, then
+// normalize_residual() (d, r, phi, norm, merit) in one pass, the same numbers. Where a lane's
+// images do not hold, its differences are to be made again (rewrapped) and all of it after them.
+void measure_residual(const Measured& in, const double* x, double* d, double* r, std::uint8_t* hold,
+                      double* bound, double* phi, double* norm, double* merit);
 // A Newton trial: z + step in the lanes where take[lane] (line_search's first trial: 1 step is
-// the step), positions() of the per-chain passes into x, differences() and held_bound() in
-// one pass (the same numbers; bound as held_bound's per_lane). held_bound's bound is of
-// differences() without rewrapping: where a lane's images do not hold, it is to be made again.
-void advance_and_measure(std::size_t m, double* z, const double* step, const std::uint8_t* take,
-                         const double* x0, const double* u, const double* first_sign,
-                         const double* second_sign, const double* hw, const double* forward,
-                         const double* image, const double* period, const double* limit,
-                         const double* length, const double* inverse_length, double tolerance,
-                         double* x, double* d, double* d2, std::uint8_t* hold, double* bound);
+// the step), positions() of the per-chain passes into x, then as measure_residual, or without
+// phi (null) only differences() and held_bound().
+void advance_and_measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* hold,
+                         double* bound, double* phi, double* norm, double* merit);
 // The momentum projection's passes over the rods at once, from differences d and squared
 // lengths r (differences() or a rewrap): rod_passes::normalize() in place, per lane max_k |r_k -
 // length_k| / length_k (from 0 in row order, by std::max), rod_passes::projections() of the
