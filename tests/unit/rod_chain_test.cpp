@@ -404,5 +404,96 @@ TEST(RodChain, AShortGroupSolvedAgainGivesTheChainKernelsNumbers) {
   }
 }
 
+// The directions a lockstep projection remembers stay in its group's lanes. Whoever meets
+// the chains next gives the numbers of chains that never remembered anything: the largest
+// deviation, a subset solved in another group, a chain solved alone (which makes its
+// directions again), and the first group again (lanes remembered in it, alone and in the
+// other group). Four of the chains cross the periodic boundary.
+TEST(RodChain, DirectionsRememberedInLanesGiveFreshChainsNumbers) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const double h = 0.005, tolerance = 1e-12;
+  const SolverLimits limits;
+  constexpr std::size_t count = RodChainLanes::width, beads = 30;
+  std::vector<Vec3> q, delta, p;
+  std::vector<LocalCluster> clusters;
+  for (std::size_t c = 0; c < count; ++c) {
+    Chain chain = random_chain(beads, box, 60 + c);
+    for (std::size_t k = 0; k < beads; ++k) {
+      chain.cluster.particles[k] += static_cast<std::int32_t>(c * beads);
+      // Half the chains moved away from the boundary.
+      if (c % 2) chain.q[k] = box.minimum_image(chain.q[k] - Vec3{2.5, 0, 0});
+    }
+    q.insert(q.end(), chain.q.begin(), chain.q.end());
+    delta.insert(delta.end(), chain.delta.begin(), chain.delta.end());
+    p.insert(p.end(), chain.p.begin(), chain.p.end());
+    clusters.push_back(chain.cluster);
+  }
+  std::vector<std::unique_ptr<RodChain>> owned;
+  std::vector<const RodChain*> chains;
+  for (const LocalCluster& cluster : clusters) {
+    owned.push_back(RodChain::make(cluster));
+    chains.push_back(owned.back().get());
+  }
+  RodChainWorkspace work;
+  RodChainLanes lanes;
+  bool solved[count];
+  // The start positions are where the projection left them, as at every step of a run.
+  RodChain::project_momenta_lanes(chains.data(), count, q.data(), p.data(), box, lanes, solved);
+  for (std::size_t c = 0; c < count; ++c) ASSERT_TRUE(solved[c]);
+
+  for (std::size_t c = 0; c < count; ++c) {
+    const std::unique_ptr<RodChain> fresh = RodChain::make(clusters[c]);
+    EXPECT_EQ(chains[c]->largest_relative_deviation(q.data(), box, work, 0.0),
+              fresh->largest_relative_deviation(q.data(), box, work, 0.0))
+        << "chain " << c;
+  }
+  // Each chain's position solve by a chain that remembers nothing.
+  std::vector<Vec3> impulse_fresh(q.size());
+  double virial_fresh[count];
+  for (std::size_t c = 0; c < count; ++c) {
+    const std::unique_ptr<RodChain> fresh = RodChain::make(clusters[c]);
+    SolverStatus status;
+    virial_fresh[c] = 0.0;
+    ASSERT_TRUE(fresh->solve_positions(q.data(), delta.data(), h, box, tolerance, limits.newton,
+                                       limits.line_search, work, impulse_fresh.data(),
+                                       virial_fresh[c], status));
+  }
+  auto expect_fresh = [&](const std::vector<Vec3>& impulse, std::size_t first, std::size_t end) {
+    for (std::size_t k = first * beads; k < end * beads; ++k) {
+      EXPECT_EQ(impulse[k].x, impulse_fresh[k].x) << "bead " << k;
+      EXPECT_EQ(impulse[k].y, impulse_fresh[k].y) << "bead " << k;
+      EXPECT_EQ(impulse[k].z, impulse_fresh[k].z) << "bead " << k;
+    }
+  };
+  double virial[count];
+  SolverStatus status[count];
+  // Chains 0-3 in another group.
+  std::vector<Vec3> impulse(q.size());
+  RodChain::solve_positions_lanes(chains.data(), 4, q.data(), delta.data(), h, box, tolerance,
+                                  limits.newton, lanes, impulse.data(), virial, status, solved);
+  for (std::size_t c = 0; c < 4; ++c) {
+    ASSERT_TRUE(solved[c]) << "chain " << c;
+    EXPECT_EQ(virial[c], virial_fresh[c]) << "chain " << c;
+  }
+  expect_fresh(impulse, 0, 4);
+  // Chain 5 alone.
+  double alone_virial = 0.0;
+  SolverStatus alone_status;
+  ASSERT_TRUE(chains[5]->solve_positions(q.data(), delta.data(), h, box, tolerance, limits.newton,
+                                         limits.line_search, work, impulse.data(), alone_virial,
+                                         alone_status));
+  EXPECT_EQ(alone_virial, virial_fresh[5]);
+  expect_fresh(impulse, 5, 6);
+  // All of them in the first group again.
+  std::fill(impulse.begin(), impulse.end(), Vec3{});
+  RodChain::solve_positions_lanes(chains.data(), count, q.data(), delta.data(), h, box, tolerance,
+                                  limits.newton, lanes, impulse.data(), virial, status, solved);
+  for (std::size_t c = 0; c < count; ++c) {
+    ASSERT_TRUE(solved[c]) << "chain " << c;
+    EXPECT_EQ(virial[c], virial_fresh[c]) << "chain " << c;
+  }
+  expect_fresh(impulse, 0, count);
+}
+
 }  // namespace
 }  // namespace deli
