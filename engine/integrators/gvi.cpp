@@ -645,18 +645,20 @@ void Gvi::update_momenta(System& system, bool tally) {
   const bool landed = !ws_.landed.empty();
   const double target_energy =
       feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
-  parallel_for(n, [&](std::size_t i) {
-    P.position[i] = ws_.x[i];
-    p[i] = ws_.half[i] + held_impulse(ws_, i);
-  });
+  parallel_for(n, [&](std::size_t i) { P.position[i] = ws_.x[i]; });
   system.step += 1;
   system.time += h;
   // The list's test at x may be known from displaced() (no rebuild since x was made).
   const bool listed = ws_.x_listed && ws_.x_builds == engine_.neighbors().builds();
   engine_.compute(system, tally || (feasibility_ == Feasibility::restore && landed), listed);
-  // The second half kick: F(x) for Verlet, the midpoint force again for midpoint.
+  // The second half kick: F(x) for Verlet, the midpoint force again for midpoint, added to
+  // the momenta before the forces, half + impulse (made here: nothing reads them earlier).
   const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
-  parallel_for(n, [&, h](std::size_t i) { p[i] += f[i] * (0.5 * h); });
+  parallel_for(n, [&, h](std::size_t i) {
+    Vec3 momentum = ws_.half[i] + held_impulse(ws_, i);
+    momentum += f[i] * (0.5 * h);
+    p[i] = momentum;
+  });
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   ws_.momentum_rows.clear();
   for (const Constraint& c : ws_.held) {
