@@ -280,8 +280,9 @@ double ConstrainedIntegrator::solve_positions(
       for (std::int32_t i : cluster.particles) changed = changed || (*delta_changed)[i];
       if (!changed) return nullptr;
     }
-    for (std::int32_t r : cluster.rows) {
-      if (!equality[r]) return nullptr;
+    // Row numbers as unsigned: the bit's word and position without a signed division.
+    for (const std::int32_t r : cluster.rows) {
+      if (!equality[static_cast<std::uint32_t>(r)]) return nullptr;
     }
     const auto own = static_cast<std::size_t>(prepared - equality_clusters_.all().data());
     if (solved_equalities && own < equality_chain_solved_.size() && equality_chain_solved_[own] &&
