@@ -111,9 +111,10 @@ class RodChain {
                                     Vec3* p, const Box& box, RodChainLanes& lanes, bool* solved);
 
   // max_k |r_k - L_k| / L_k over the rods at positions x (indexed globally), at least
-  // `start`: the number a loop over the rows with gap_of would give, bit for bit. The lengths
-  // are those last computed at these positions (the momentum projection's, at the end of a
-  // step) when x is bit for bit where they were computed, else computed.
+  // `start` (not negative): the number a loop over the rows with gap_of would give, bit for
+  // bit. Remembered with the directions last computed at these positions (the momentum
+  // projection's, at the end of a step) when x is bit for bit where they were computed, else
+  // computed.
   double largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
                                     double start) const;
 
@@ -218,15 +219,13 @@ class RodChain {
   double largest_deviation(const double* r) const;
 
   // The last directions computed at a step's end or start positions, with those positions
-  // and the box's periods (chain order): directions() is a function of these alone.
+  // and the box's periods: directions() is a function of these alone. The positions per bead
+  // as they lie in the global array, so that the check is a comparison of memory (one block
+  // when the chain's particles are consecutive). u and r in chain order unless `in_lanes`:
+  // then only a group's lane holds them (RodChainLanes::Group::memo_generation), and a solve
+  // alone makes them again (the same numbers). Each remembering starts a new generation.
   // Mutable: a cache, invisible in the results (a chain is solved by one thread at a time;
   // threads solve different chains).
-  // The positions are kept per bead as they lie in the global array, so that the check is a
-  // comparison of memory (one block when the chain's particles are consecutive). u and r are
-  // in chain order unless `in_lanes`: then only a group's lane holds them
-  // (RodChainLanes::Group::memo_generation), and a solve alone makes them again (the same
-  // numbers: directions() is a function of the positions and the box). Each remembering
-  // starts a new generation.
   struct DirectionsMemo {
     bool valid = false, in_lanes = false;
     std::uint64_t generation = 0;
