@@ -408,24 +408,27 @@ TEST(RodChain, AShortGroupSolvedAgainGivesTheChainKernelsNumbers) {
 // the chains next gives the numbers of chains that never remembered anything: the largest
 // deviation, a subset solved in another group, a chain solved alone (which makes its
 // directions again), and the first group again (lanes remembered in it, alone and in the
-// other group). Four of the chains cross the periodic boundary.
+// other group). Four of the chains cross the periodic boundary; one has its particles
+// numbered backwards.
 TEST(RodChain, DirectionsRememberedInLanesGiveFreshChainsNumbers) {
   const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
   const double h = 0.005, tolerance = 1e-12;
   const SolverLimits limits;
   constexpr std::size_t count = RodChainLanes::width, beads = 30;
-  std::vector<Vec3> q, delta, p;
+  std::vector<Vec3> q(count * beads), delta(count * beads), p(count * beads);
   std::vector<LocalCluster> clusters;
   for (std::size_t c = 0; c < count; ++c) {
     Chain chain = random_chain(beads, box, 60 + c);
     for (std::size_t k = 0; k < beads; ++k) {
-      chain.cluster.particles[k] += static_cast<std::int32_t>(c * beads);
+      // Chain 2's particles numbered backwards (not consecutive).
+      const std::size_t particle = c * beads + (c == 2 ? beads - 1 - k : k);
+      chain.cluster.particles[k] = static_cast<std::int32_t>(particle);
       // Half the chains moved away from the boundary.
       if (c % 2) chain.q[k] = box.minimum_image(chain.q[k] - Vec3{2.5, 0, 0});
+      q[particle] = chain.q[k];
+      delta[particle] = chain.delta[k];
+      p[particle] = chain.p[k];
     }
-    q.insert(q.end(), chain.q.begin(), chain.q.end());
-    delta.insert(delta.end(), chain.delta.begin(), chain.delta.end());
-    p.insert(p.end(), chain.p.begin(), chain.p.end());
     clusters.push_back(chain.cluster);
   }
   std::vector<std::unique_ptr<RodChain>> owned;
@@ -493,6 +496,14 @@ TEST(RodChain, DirectionsRememberedInLanesGiveFreshChainsNumbers) {
     EXPECT_EQ(virial[c], virial_fresh[c]) << "chain " << c;
   }
   expect_fresh(impulse, 0, count);
+  // One bead of each of chains 1 and 2 (backwards) moved: their memos no longer hold.
+  for (const std::size_t c : {std::size_t{1}, std::size_t{2}}) {
+    q[c * beads + 5].x += 1e-3;
+    const std::unique_ptr<RodChain> fresh = RodChain::make(clusters[c]);
+    EXPECT_EQ(chains[c]->largest_relative_deviation(q.data(), box, work, 0.0),
+              fresh->largest_relative_deviation(q.data(), box, work, 0.0))
+        << "chain " << c;
+  }
 }
 
 }  // namespace
