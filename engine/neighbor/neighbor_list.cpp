@@ -293,18 +293,18 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     const double* const at_y = member_y_.data();
     const double* const at_z = member_z_.data();
     const std::int32_t* const moved_key = member_moved_key_.data();
+    double shifts[27][3];
+    for (int code = 0; code < 27; ++code) {
+      for (int a = 0; a < 3; ++a) shifts[code][a] = image_shifts_[code][a];
+    }
+    const StencilRuns runs{cell_start.data(), stencil_cells_.data(), stencil_ends_.data(),
+                           stencil_codes_.data(), shifts};
     for (std::size_t slot = begin; slot < end; ++slot) {
       const std::int32_t i = member[slot];
       const Vec3 xi = at[slot];
       std::size_t hits = 0;
       auto scan = [&](std::size_t first, std::size_t last, int code) {
         const Vec3 origin = xi - image_shifts_[code];
-        if (shifted) {
-          hits = scan_candidates(at_x, at_y, at_z, first, last, origin.x, origin.y, origin.z,
-                                 within2, static_cast<std::uint8_t>(code), hit_slot.data(),
-                                 hit_code.data(), hits);
-          return;
-        }
         std::int32_t* slot_out = hit_slot.data();
         std::uint8_t* code_out = hit_code.data();
         for (std::size_t m = first; m < last; ++m) {
@@ -323,10 +323,13 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
             stencil_codes_[s] == kNoShift) {
           last = cell_start[stencil_ends_[s++]];
         }
-        scan(slot + 1, last, kNoShift);
-      }
-      for (; s < stencil_offsets_[c + 1]; ++s) {
-        scan(cell_start[stencil_cells_[s]], cell_start[stencil_ends_[s]], stencil_codes_[s]);
+        hits = scan_stencil(at_x, at_y, at_z, runs, slot + 1, last, kNoShift, s,
+                            stencil_offsets_[c + 1], xi.x, xi.y, xi.z, within2, hit_slot.data(),
+                            hit_code.data());
+      } else {
+        for (; s < stencil_offsets_[c + 1]; ++s) {
+          scan(cell_start[stencil_cells_[s]], cell_start[stencil_ends_[s]], stencil_codes_[s]);
+        }
       }
       // i's excluded partners (a chain bead's one or two bonded neighbours): a
       // linear scan.
