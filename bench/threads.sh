@@ -19,10 +19,14 @@ rounds=${ROUNDS:-3}
 read -r -a counts <<< "${THREADS:-1 2}"
 source "$top/bench/peers/locate.sh"
 mpirun=${MPIRUN:-$(command -v mpirun || true)}
-# Threads waiting at a barrier sleep: on a shared machine a spinning thread takes the core
-# its partner needs (a 4000-atom LJ run 30x slower, measured). OMP_WAIT_POLICY=active
-# (libgomp spins a while first) suits a machine of one's own.
-wait=${OMP_WAIT_POLICY:-passive}
+# OpenMP's wait policy as a user gets it: libgomp's default (a waiting thread spins briefly,
+# then sleeps) unless OMP_WAIT_POLICY is set. Measured on this project's idle 2-core machine,
+# a parallel region costs about 4 us with the default and 22 us with OMP_WAIT_POLICY=passive
+# (waking a sleeping virtual CPU), which the GVI inputs, a dozen regions a step, feel. On a
+# machine shared with other work the default's spinning thread takes the core its partner
+# needs (a 4000-atom LJ run 30x slower, measured): run this on an idle machine, or set
+# OMP_WAIT_POLICY=passive there. The load before and after is printed.
+wait=${OMP_WAIT_POLICY:-}
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000)
@@ -60,7 +64,7 @@ PY
 )
 work=$(mktemp -d /tmp/deli-bench-threads.XXXXXX)
 trap 'rm -rf "$work"' EXIT
-echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=$wait"
+echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=${wait:-unset (libgomp default)}"
 echo "thread/rank counts: ${counts[*]}; peers: ${peers:-none}; mpirun: ${mpirun:-none}"
 for spec in "${cases[@]}"; do
   input=${spec%%:*} steps=${spec#*:}
@@ -91,10 +95,10 @@ for spec in "${cases[@]}"; do
       read -r engine threads <<< "$v"
       case $engine in
         old-deli)
-          line=$(cd "$dir" && OMP_WAIT_POLICY=$wait OMP_NUM_THREADS=$threads "$old" run input.toml |
+          line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$old" run input.toml |
             grep "^loop time") ;;
         deli)
-          line=$(cd "$dir" && OMP_WAIT_POLICY=$wait OMP_NUM_THREADS=$threads "$deli" run input.toml \
+          line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run input.toml \
             --threads "$threads" | grep "^loop time") ;;
         openmm)
           line=$(cd "$dir" && "$peers" input.toml "$steps" openmm 1e-4 "$threads") ||

@@ -25,6 +25,14 @@ class ChunkedForceLoopOf {
   // energy. Returns the sum of the energies; forces added to `force`, virial to `virial`.
   template <class Body>
   double run(std::size_t items, std::vector<Force>& force, SymTensor& virial, Body&& body) {
+    return run(items, force, virial, body, [](std::size_t) {});
+  }
+  // run(), then finish(i) for every particle i once its force is complete, in the pass that
+  // adds the buffers (one parallel region and one pass over the forces fewer than a loop of
+  // its own after run()).
+  template <class Body, class Finish>
+  double run(std::size_t items, std::vector<Force>& force, SymTensor& virial, Body&& body,
+             Finish&& finish) {
     const int chunks = chunks_for(items);
     const auto extra = static_cast<std::size_t>(chunks - 1);
     buffers_.resize(extra);
@@ -42,9 +50,13 @@ class ChunkedForceLoopOf {
       virials_[k - 1] = SymTensor{};
       energies_[k] = body(begin, end, buffer.data(), virials_[k - 1]);
     });
-    if (extra == 0) return energies_[0];
+    if (extra == 0) {
+      parallel_for(force.size(), finish);
+      return energies_[0];
+    }
     parallel_for(force.size(), [&](std::size_t i) {
       for (const std::vector<Force>& b : buffers_) force[i] += b[i];
+      finish(i);
     });
     double energy = energies_[0];
     for (std::size_t c = 1; c < energies_.size(); ++c) {

@@ -20,4 +20,24 @@ std::size_t scan_candidates(const double* x, const double* y, const double* z, s
                             std::uint8_t code, std::int32_t* slot_out, std::uint8_t* code_out,
                             std::size_t hits);
 
+// One particle's whole scan: its home run [home_first, home_last) with image `home_code`, then
+// the runs s in [run_begin, run_end) of its cell's stencil, run s covering the slots
+// cell_start[cells[s]] to cell_start[ends[s]] with image codes[s]; each run as
+// scan_candidates with the origin (xi, yi, zi) minus shifts[code] (x, y, z of 27 shifts).
+// Appends from position 0 and returns the hit count: the hits of those scan_candidates calls,
+// in their order. The outputs need room for all the runs' candidates and kScanSlack more. One call
+// per particle rather than per run: a run holds a dozen candidates, and the runs' test latencies
+// overlap only within a call.
+struct StencilRuns {
+  const std::size_t* cell_start;
+  const std::int32_t* cells;
+  const std::int32_t* ends;
+  const std::uint8_t* codes;
+  const double (*shifts)[3];
+};
+std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
+                         std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
+                         std::size_t run_begin, std::size_t run_end, double xi, double yi,
+                         double zi, double within2, std::int32_t* slot_out, std::uint8_t* code_out);
+
 }  // namespace deli

@@ -186,7 +186,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   std::vector<std::int32_t>& cell_of = cell_of_;
   std::vector<std::size_t>& cell_start = cell_start_;
   cell_of.resize(static_cast<std::size_t>(n));
-  cell_start.assign(static_cast<std::size_t>(cells) + 1, 0);
+  cell_start.resize(static_cast<std::size_t>(cells) + 1);
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
     int k[3];
     for (int a = 0; a < 3; ++a) {
@@ -197,8 +197,6 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     }
     cell_of[i] = (k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0];
   });
-  for (std::int32_t i = 0; i < n; ++i) ++cell_start[cell_of[i] + 1];
-  std::partial_sum(cell_start.begin(), cell_start.end(), cell_start.begin());
   // Particles by slot (cell order), with their wrapped positions, periods moved and cells.
   std::vector<std::int32_t>& member = member_;
   std::vector<Vec3>& member_position = member_position_;
@@ -214,24 +212,48 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   member_cell.resize(static_cast<std::size_t>(n));
   member_moved_key_.resize(static_cast<std::size_t>(n));
   slot_of.resize(static_cast<std::size_t>(n));
-  {
-    std::vector<std::size_t>& fill = cell_fill_;
-    fill.assign(cell_start.begin(), cell_start.end() - 1);
-    for (std::int32_t i = 0; i < n; ++i) {
-      const std::size_t s = fill[cell_of[i]]++;
-      slot_of[i] = s;
-      member_position[s] = inside[i];
-      member_x_[s] = inside[i].x;
-      member_y_[s] = inside[i].y;
-      member_z_[s] = inside[i].z;
-      member_moved[s] = moved[i];
-      const std::array<int, 3>& k = moved[i];
-      const bool small = std::abs(k[0]) <= 1 && std::abs(k[1]) <= 1 && std::abs(k[2]) <= 1;
-      member_moved_key_[s] = small ? code_of(k[0], k[1], k[2]) : 27 + static_cast<std::int32_t>(s);
-      member_cell[s] = cell_of[i];
-      member[s] = i;
+  auto place = [&](std::int32_t i, std::size_t s) {
+    slot_of[i] = s;
+    member_position[s] = inside[i];
+    member_x_[s] = inside[i].x;
+    member_y_[s] = inside[i].y;
+    member_z_[s] = inside[i].z;
+    member_moved[s] = moved[i];
+    const std::array<int, 3>& k = moved[i];
+    const bool small = std::abs(k[0]) <= 1 && std::abs(k[1]) <= 1 && std::abs(k[2]) <= 1;
+    member_moved_key_[s] = small ? code_of(k[0], k[1], k[2]) : 27 + static_cast<std::int32_t>(s);
+    member_cell[s] = cell_of[i];
+    member[s] = i;
+  };
+  // Chunks of consecutive indices count their particles per cell; a cell's slots then hold
+  // chunk 0's particles, then chunk 1's...: ascending index within a cell, the same slots
+  // on any number of threads.
+  const int sort_chunks = chunks_for(static_cast<std::size_t>(n));
+  chunk_cell_fill_.resize(static_cast<std::size_t>(sort_chunks));
+  for_each_chunk(static_cast<std::size_t>(n), sort_chunks,
+                 [&](int c, std::size_t begin, std::size_t end) {
+                   std::vector<std::size_t>& count = chunk_cell_fill_[static_cast<std::size_t>(c)];
+                   count.assign(static_cast<std::size_t>(cells), 0);
+                   std::size_t* const in_cell = count.data();
+                   for (std::size_t i = begin; i < end; ++i) ++in_cell[cell_of[i]];
+                 });
+  std::size_t filled = 0;
+  for (int cell = 0; cell < cells; ++cell) {
+    cell_start[cell] = filled;
+    for (std::vector<std::size_t>& fill : chunk_cell_fill_) {
+      const std::size_t count = fill[cell];
+      fill[cell] = filled;
+      filled += count;
     }
   }
+  cell_start[cells] = filled;
+  for_each_chunk(static_cast<std::size_t>(n), sort_chunks,
+                 [&](int c, std::size_t begin, std::size_t end) {
+                   std::size_t* const fill = chunk_cell_fill_[static_cast<std::size_t>(c)].data();
+                   for (std::size_t i = begin; i < end; ++i) {
+                     place(static_cast<std::int32_t>(i), fill[cell_of[i]]++);
+                   }
+                 });
 
   // A pair found through stencil shift s (periods) between wrapped positions has, in the
   // caller's positions, the shift s + moved_i - moved_j; codes hold -1..1 periods per
@@ -293,18 +315,18 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     const double* const at_y = member_y_.data();
     const double* const at_z = member_z_.data();
     const std::int32_t* const moved_key = member_moved_key_.data();
+    double shifts[27][3];
+    for (int code = 0; code < 27; ++code) {
+      for (int a = 0; a < 3; ++a) shifts[code][a] = image_shifts_[code][a];
+    }
+    const StencilRuns runs{cell_start.data(), stencil_cells_.data(), stencil_ends_.data(),
+                           stencil_codes_.data(), shifts};
     for (std::size_t slot = begin; slot < end; ++slot) {
       const std::int32_t i = member[slot];
       const Vec3 xi = at[slot];
       std::size_t hits = 0;
       auto scan = [&](std::size_t first, std::size_t last, int code) {
         const Vec3 origin = xi - image_shifts_[code];
-        if (shifted) {
-          hits = scan_candidates(at_x, at_y, at_z, first, last, origin.x, origin.y, origin.z,
-                                 within2, static_cast<std::uint8_t>(code), hit_slot.data(),
-                                 hit_code.data(), hits);
-          return;
-        }
         std::int32_t* slot_out = hit_slot.data();
         std::uint8_t* code_out = hit_code.data();
         for (std::size_t m = first; m < last; ++m) {
@@ -323,10 +345,13 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
             stencil_codes_[s] == kNoShift) {
           last = cell_start[stencil_ends_[s++]];
         }
-        scan(slot + 1, last, kNoShift);
-      }
-      for (; s < stencil_offsets_[c + 1]; ++s) {
-        scan(cell_start[stencil_cells_[s]], cell_start[stencil_ends_[s]], stencil_codes_[s]);
+        hits = scan_stencil(at_x, at_y, at_z, runs, slot + 1, last, kNoShift, s,
+                            stencil_offsets_[c + 1], xi.x, xi.y, xi.z, within2, hit_slot.data(),
+                            hit_code.data());
+      } else {
+        for (; s < stencil_offsets_[c + 1]; ++s) {
+          scan(cell_start[stencil_cells_[s]], cell_start[stencil_ends_[s]], stencil_codes_[s]);
+        }
       }
       // i's excluded partners (a chain bead's one or two bonded neighbours): a
       // linear scan.

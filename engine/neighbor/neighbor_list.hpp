@@ -108,7 +108,9 @@ class NeighborList {
   // Per slot: the periods moved as a code 0..26 where each is -1..1, else 27 + slot (unique):
   // equal keys mean equal moves.
   std::vector<std::int32_t> member_moved_key_;
-  std::vector<std::size_t> cell_start_, cell_fill_, slot_of_;
+  std::vector<std::size_t> cell_start_, slot_of_;
+  // Per chunk of particles of the counting sort: its particles per cell, then its next slots.
+  std::vector<std::vector<std::size_t>> chunk_cell_fill_;
   // The joined list by slot (cell order), before it is rearranged by particle.
   std::vector<std::size_t> slot_offsets_;
   std::vector<std::int32_t> slot_neighbors_;

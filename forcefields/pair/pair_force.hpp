@@ -207,23 +207,23 @@ class PairForce final : public ForceTerm {
         padded_force_[s] = PaddedVec3{};
       });
       const Vec3* shifts = neighbors.image_shifts().data();
-      const double energy =
-          padded_chunked_.run(n, padded_force_, virial,
-                              [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
-                                const VectorPairChunk chunk{padded_position_.data(),
-                                                            f,
-                                                            list,
-                                                            codes,
-                                                            offsets,
-                                                            shifts,
-                                                            static_cast<std::int32_t>(begin),
-                                                            static_cast<std::int32_t>(end)};
-                                return Evaluator::vector_loop(table_[0], chunk, tally, w);
-                              });
-      parallel_for(n, [&](std::size_t s) {
-        const PaddedVec3& f = padded_force_[s];
-        force[at(s)] += Vec3{f.x, f.y, f.z};
-      });
+      const double energy = padded_chunked_.run(
+          n, padded_force_, virial,
+          [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
+            const VectorPairChunk chunk{padded_position_.data(),
+                                        f,
+                                        list,
+                                        codes,
+                                        offsets,
+                                        shifts,
+                                        static_cast<std::int32_t>(begin),
+                                        static_cast<std::int32_t>(end)};
+            return Evaluator::vector_loop(table_[0], chunk, tally, w);
+          },
+          [&](std::size_t s) {
+            const PaddedVec3& f = padded_force_[s];
+            force[at(s)] += Vec3{f.x, f.y, f.z};
+          });
       return energy;
     }
     return 0.0;

@@ -2,11 +2,13 @@
 // candidates a plain loop finds, in slot order, with the run's code: on runs of every length
 // around the vector width, at offsets that leave partial vectors, with candidates exactly at
 // the reach (not within: the test is strict), NaN positions (never within) and hits appended
-// after earlier ones.
+// after earlier ones. A particle's whole stencil scanned in one call (scan_stencil) finds what
+// the reference finds run after run, each run against the origin less its image shift.
 #include "neighbor/candidate_scan.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -72,6 +74,69 @@ TEST(CandidateScan, SameHitsInSameOrderAsOneAtATime) {
   // The cases exercised: hits found, and the edge candidates scanned in many runs.
   EXPECT_EQ(runs, 12u * 41u);
   EXPECT_GT(found, 1000u);
+}
+
+TEST(CandidateScan, StencilScanFindsEveryRunsHitsInRunOrder) {
+  // 12 cells of 0 to 19 candidates (runs of 0 to 38 candidates: empty runs, partial vectors
+  // and runs past the two vectors scan_stencil always tests), positions around the origin.
+  constexpr int cells = 12;
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> count(0, 19);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  std::vector<std::size_t> cell_start(cells + 1, 0);
+  for (int c = 0; c < cells; ++c) cell_start[c + 1] = cell_start[c] + count(rng);
+  const std::size_t n = cell_start.back();
+  std::vector<double> x(n), y(n), z(n);
+  for (std::size_t m = 0; m < n; ++m) x[m] = u(rng), y[m] = u(rng), z[m] = u(rng);
+  double shifts[27][3];
+  for (int code = 0; code < 27; ++code) {
+    shifts[code][0] = 0.25 * (code % 3 - 1);
+    shifts[code][1] = 0.5 * ((code / 3) % 3 - 1);
+    shifts[code][2] = -0.375 * (code / 9 - 1);
+  }
+  // Runs of one or two cells, with several image codes, the last one empty.
+  const std::vector<std::int32_t> run_cells = {2, 4, 5, 7, 9, 0, 11, 3};
+  const std::vector<std::int32_t> run_ends = {4, 5, 7, 8, 11, 1, 12, 3};
+  const std::vector<std::uint8_t> run_codes = {13, 14, 0, 26, 13, 5, 22, 13};
+  const StencilRuns runs{cell_start.data(), run_cells.data(), run_ends.data(), run_codes.data(),
+                         shifts};
+  // The case holds a run past two vectors.
+  std::size_t longest = 0;
+  for (std::size_t s = 0; s < run_cells.size(); ++s) {
+    longest = std::max(longest, cell_start[run_ends[s]] - cell_start[run_cells[s]]);
+  }
+  EXPECT_GT(longest, 16u);
+  const double xi[3] = {0.125, -0.25, 0.0625};
+  const double within2 = 1.21;
+  for (std::size_t home_first = 0; home_first <= cell_start[2]; ++home_first) {
+    for (std::size_t begin = 0; begin <= run_cells.size(); begin += 3) {
+      const std::size_t home_last = cell_start[2];
+      Hits expected;
+      auto reference_run = [&](std::size_t first, std::size_t last, std::uint8_t code) {
+        const double o[3] = {xi[0] - shifts[code][0], xi[1] - shifts[code][1],
+                             xi[2] - shifts[code][2]};
+        reference_scan(x, y, z, first, last, o, within2, code, expected);
+      };
+      reference_run(home_first, home_last, 13);
+      for (std::size_t s = begin; s < run_cells.size(); ++s) {
+        reference_run(cell_start[run_cells[s]], cell_start[run_ends[s]], run_codes[s]);
+      }
+      std::vector<std::int32_t> slot(n + kScanSlack, -7);
+      std::vector<std::uint8_t> code(n + kScanSlack, 99);
+      const std::size_t hits =
+          scan_stencil(x.data(), y.data(), z.data(), runs, home_first, home_last, 13, begin,
+                       run_cells.size(), xi[0], xi[1], xi[2], within2, slot.data(), code.data());
+      ASSERT_EQ(hits, expected.slot.size())
+          << "home from " << home_first << ", runs from " << begin;
+      for (std::size_t h = 0; h < hits; ++h) {
+        ASSERT_EQ(slot[h], expected.slot[h]) << "hit " << h;
+        ASSERT_EQ(code[h], expected.code[h]) << "hit " << h;
+      }
+      if (home_first == 0 && begin == 0) {
+        EXPECT_GE(hits, 10u);  // the case has hits
+      }
+    }
+  }
 }
 
 }  // namespace
