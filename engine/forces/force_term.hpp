@@ -48,9 +48,10 @@ class ForceTerm {
                              std::vector<PairHessian>& /*out*/) const {
     return false;
   }
-  // Adds v^T H v = sum over blocks of (v_a - v_b)^T B (v_a - v_b) to `sum`, block by block
-  // in pair_hessians' order (the same sum as from its blocks, bit for bit). This default
-  // goes through pair_hessians; pair styles override it to skip storing the blocks.
+  // Adds v^T H v = sum over blocks of (v_a - v_b)^T B (v_a - v_b) to `sum`, in
+  // pair_hessians' order. This default goes through pair_hessians (the same sum as from its
+  // blocks, bit for bit); pair styles override it with each block's term in closed form,
+  // without building the blocks (the blocks' sum to round-off).
   virtual bool pair_curvature(const System& system, const NeighborList& neighbors,
                               const std::vector<Vec3>& velocity, double& sum) const;
 };
