@@ -101,42 +101,47 @@ namespace {
 }
 }  // namespace
 
-std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
-                         std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
-                         std::size_t run_begin, std::size_t run_end, double xi, double yi,
-                         double zi, double within2, std::int32_t* slot_out,
-                         std::uint8_t* code_out) {
-  const __m512d reach = _mm512_set1_pd(within2);
-  const double* shift = runs.shifts[home_code];
-  std::size_t hits = scan_run(x, y, z, home_first, home_last, xi - shift[0], yi - shift[1],
-                              zi - shift[2], reach, home_code, slot_out, code_out, 0);
-  for (std::size_t s = run_begin; s < run_end; ++s) {
-    const std::uint8_t code = runs.codes[s];
-    shift = runs.shifts[code];
-    hits = scan_run(x, y, z, runs.cell_start[runs.cells[s]], runs.cell_start[runs.ends[s]],
-                    xi - shift[0], yi - shift[1], zi - shift[2], reach, code, slot_out, code_out,
-                    hits);
-  }
-  return hits;
-}
-#else
-std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
-                         std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
-                         std::size_t run_begin, std::size_t run_end, double xi, double yi,
-                         double zi, double within2, std::int32_t* slot_out,
-                         std::uint8_t* code_out) {
-  const double* shift = runs.shifts[home_code];
-  std::size_t hits = scan_candidates(x, y, z, home_first, home_last, xi - shift[0], yi - shift[1],
-                                     zi - shift[2], within2, home_code, slot_out, code_out, 0);
-  for (std::size_t s = run_begin; s < run_end; ++s) {
-    const std::uint8_t code = runs.codes[s];
-    shift = runs.shifts[code];
-    hits = scan_candidates(x, y, z, runs.cell_start[runs.cells[s]], runs.cell_start[runs.ends[s]],
-                           xi - shift[0], yi - shift[1], zi - shift[2], within2, code, slot_out,
-                           code_out, hits);
-  }
-  return hits;
-}
 #endif
+
+namespace {
+// The particle's home run, then its stencil's runs s in [run_begin, run_end), each handed to
+// scan(first, last, ox, oy, oz, code, hits) with the origin less the run's image shift.
+template <class Scan>
+std::size_t walk_stencil(const StencilRuns& runs, std::size_t home_first, std::size_t home_last,
+                         std::uint8_t home_code, std::size_t run_begin, std::size_t run_end,
+                         double xi, double yi, double zi, Scan&& scan) {
+  const double* shift = runs.shifts[home_code];
+  std::size_t hits = scan(home_first, home_last, xi - shift[0], yi - shift[1], zi - shift[2],
+                          home_code, std::size_t{0});
+  for (std::size_t s = run_begin; s < run_end; ++s) {
+    const std::uint8_t code = runs.codes[s];
+    shift = runs.shifts[code];
+    hits = scan(runs.cell_start[runs.cells[s]], runs.cell_start[runs.ends[s]], xi - shift[0],
+                yi - shift[1], zi - shift[2], code, hits);
+  }
+  return hits;
+}
+}  // namespace
+
+std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
+                         std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
+                         std::size_t run_begin, std::size_t run_end, double xi, double yi,
+                         double zi, double within2, std::int32_t* slot_out,
+                         std::uint8_t* code_out) {
+#ifdef DELI_SCAN_AVX512
+  const __m512d reach = _mm512_set1_pd(within2);
+  auto scan = [&](std::size_t first, std::size_t last, double ox, double oy, double oz,
+                  std::uint8_t code, std::size_t hits) {
+    return scan_run(x, y, z, first, last, ox, oy, oz, reach, code, slot_out, code_out, hits);
+  };
+#else
+  auto scan = [&](std::size_t first, std::size_t last, double ox, double oy, double oz,
+                  std::uint8_t code, std::size_t hits) {
+    return scan_candidates(x, y, z, first, last, ox, oy, oz, within2, code, slot_out, code_out,
+                           hits);
+  };
+#endif
+  return walk_stencil(runs, home_first, home_last, home_code, run_begin, run_end, xi, yi, zi, scan);
+}
 
 }  // namespace deli
