@@ -12,36 +12,53 @@
 namespace deli {
 
 #ifdef DELI_SCAN_AVX512
-// Eight candidates a vector, the last, partial one through masked loads (lanes past `last`
-// read nothing and never hit). The hits' slots are compressed in a register and stored
-// whole (a compressing store to memory is microcoded and slow on AMD's Zen 4); the code,
-// the same for the whole run, is stored as eight bytes. Separate multiplies and adds in
-// the scalar order: the same sums bit for bit (no contraction).
+namespace {
+// The eight candidates from m on, lanes past `last` masked (they read nothing and never
+// hit), tested against the origin (px, py, pz); appends the hits at `hits` and returns the
+// new count. The hits' slots are compressed in a register and stored whole (a compressing
+// store to memory is microcoded and slow on AMD's Zen 4); the run's code is stored as eight
+// bytes (`codes`). Separate multiplies and adds in the scalar order: the same sums bit for
+// bit (no contraction).
+[[gnu::always_inline]] inline std::size_t scan_block(const double* x, const double* y,
+                                                     const double* z, std::size_t m,
+                                                     std::size_t last, __m512d px, __m512d py,
+                                                     __m512d pz, __m512d reach, std::uint64_t codes,
+                                                     std::int32_t* slot_out, std::uint8_t* code_out,
+                                                     std::size_t hits) {
+  const auto left = static_cast<std::ptrdiff_t>(last) - static_cast<std::ptrdiff_t>(m);
+  const auto count = static_cast<unsigned>(std::clamp<std::ptrdiff_t>(left, 0, 8));
+  const auto lanes = static_cast<__mmask8>((1u << count) - 1u);
+  const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x + m), px);
+  const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, y + m), py);
+  const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, z + m), pz);
+  const __m512d r2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
+                                   _mm512_mul_pd(dz, dz));
+  const __mmask8 within = _mm512_mask_cmp_pd_mask(lanes, r2, reach, _CMP_LT_OQ);
+  const __m256i slots = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(m)),
+                                         _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(slot_out + hits),
+                      _mm256_maskz_compress_epi32(within, slots));
+  std::memcpy(code_out + hits, &codes, sizeof codes);
+  return hits + static_cast<std::size_t>(__builtin_popcount(within));
+}
+
+std::uint64_t repeated(std::uint8_t code) {
+  std::uint64_t codes;
+  std::memset(&codes, code, sizeof codes);
+  return codes;
+}
+}  // namespace
+
+// Eight candidates a vector (scan_block), the last one partial.
 std::size_t scan_candidates(const double* x, const double* y, const double* z, std::size_t first,
                             std::size_t last, double ox, double oy, double oz, double within2,
                             std::uint8_t code, std::int32_t* slot_out, std::uint8_t* code_out,
                             std::size_t hits) {
   const __m512d px = _mm512_set1_pd(ox), py = _mm512_set1_pd(oy), pz = _mm512_set1_pd(oz);
   const __m512d reach = _mm512_set1_pd(within2);
-  const __m256i step = _mm256_set1_epi32(8);
-  __m256i slots = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(first)),
-                                   _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-  std::uint64_t codes;
-  std::memset(&codes, code, sizeof codes);
+  const std::uint64_t codes = repeated(code);
   for (std::size_t m = first; m < last; m += 8) {
-    const std::size_t left = last - m;
-    const auto lanes = static_cast<__mmask8>(left >= 8 ? 0xffu : (1u << left) - 1);
-    const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x + m), px);
-    const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, y + m), py);
-    const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, z + m), pz);
-    const __m512d r2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
-                                     _mm512_mul_pd(dz, dz));
-    const __mmask8 within = _mm512_mask_cmp_pd_mask(lanes, r2, reach, _CMP_LT_OQ);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(slot_out + hits),
-                        _mm256_maskz_compress_epi32(within, slots));
-    std::memcpy(code_out + hits, &codes, sizeof codes);
-    hits += static_cast<std::size_t>(__builtin_popcount(within));
-    slots = _mm256_add_epi32(slots, step);
+    hits = scan_block(x, y, z, m, last, px, py, pz, reach, codes, slot_out, code_out, hits);
   }
   return hits;
 }
@@ -75,24 +92,9 @@ namespace {
                                                    std::int32_t* slot_out, std::uint8_t* code_out,
                                                    std::size_t hits) {
   const __m512d px = _mm512_set1_pd(ox), py = _mm512_set1_pd(oy), pz = _mm512_set1_pd(oz);
-  std::uint64_t codes;
-  std::memset(&codes, code, sizeof codes);
+  const std::uint64_t codes = repeated(code);
   auto block = [&](std::size_t m) {
-    const auto left = static_cast<std::ptrdiff_t>(last) - static_cast<std::ptrdiff_t>(m);
-    const auto count = static_cast<unsigned>(std::clamp<std::ptrdiff_t>(left, 0, 8));
-    const auto lanes = static_cast<__mmask8>((1u << count) - 1u);
-    const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x + m), px);
-    const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, y + m), py);
-    const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, z + m), pz);
-    const __m512d r2 = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
-                                     _mm512_mul_pd(dz, dz));
-    const __mmask8 within = _mm512_mask_cmp_pd_mask(lanes, r2, reach, _CMP_LT_OQ);
-    const __m256i slots = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(m)),
-                                           _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(slot_out + hits),
-                        _mm256_maskz_compress_epi32(within, slots));
-    std::memcpy(code_out + hits, &codes, sizeof codes);
-    hits += static_cast<std::size_t>(__builtin_popcount(within));
+    hits = scan_block(x, y, z, m, last, px, py, pz, reach, codes, slot_out, code_out, hits);
   };
   block(first);
   block(first + 8);
