@@ -61,8 +61,13 @@ struct LennardJones {
   // portable build's vector_loop, and PairForce's loop for one type wherever it runs).
   static double lane_order_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                                 SymTensor& virial);
+  // The shadow energy's curvature sum eight pairs at a time (AVX-512 where built; false
+  // otherwise, and PairForce sums it pair by pair).
+  static bool curvature_loop_built();
+  static double curvature_loop(const Params& p, const CurvatureChunk& chunk);
 };
 static_assert(PairEvaluator<LennardJones>);
 static_assert(VectorPairEvaluator<LennardJones>);
+static_assert(VectorCurvatureEvaluator<LennardJones>);
 
 }  // namespace deli

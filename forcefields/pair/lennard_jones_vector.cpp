@@ -1,4 +1,5 @@
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #include "pair/lennard_jones.hpp"
@@ -253,5 +254,103 @@ double LennardJones::lane_order_loop(const Params& p, const VectorPairChunk& c, 
   if (tally) virial += w;
   return energy;
 }
+
+#if defined(DELI_LJ_AVX512) && defined(__AVX512DQ__)
+namespace {
+
+// Box::round_to_integer by lane: half away from zero where |x| < 2^52 (the conversion
+// truncates, as static_cast does), x itself elsewhere (NaN too).
+inline __m512d round_to_integer(__m512d x) {
+  const __m512i sign = _mm512_set1_epi64(static_cast<long long>(0x8000000000000000ULL));
+  const __m512i bits = _mm512_castpd_si512(x);
+  const __m512d magnitude = _mm512_castsi512_pd(_mm512_andnot_si512(sign, bits));
+  const __m512d half = _mm512_castsi512_pd(
+      _mm512_or_si512(_mm512_castpd_si512(_mm512_set1_pd(0.5)), _mm512_and_si512(sign, bits)));
+  const __mmask8 convertible = _mm512_cmp_pd_mask(magnitude, _mm512_set1_pd(0x1p52), _CMP_LT_OQ);
+  const __m512d whole = _mm512_cvtepi64_pd(_mm512_cvttpd_epi64(_mm512_add_pd(x, half)));
+  return _mm512_mask_blend_pd(convertible, x, whole);
+}
+
+// Component `axis` of the partners' Vec3s (lanes outside `lanes` get 0).
+inline __m512d gather_axis(const Vec3* v, __m512i index3, __mmask8 lanes, int axis) {
+  return _mm512_mask_i64gather_pd(_mm512_setzero_pd(), lanes, index3,
+                                  reinterpret_cast<const double*>(v) + axis, 8);
+}
+
+}  // namespace
+
+bool LennardJones::curvature_loop_built() {
+  return true;
+}
+
+// PairForce::curvature_term's operations in its order by lane (no contraction: the build
+// has -ffp-contract=off and these are separate multiplies and adds), then the lanes added
+// to the sum one at a time in list order.
+double LennardJones::curvature_loop(const Params& p, const CurvatureChunk& c) {
+  const __m512d cutoff2 = _mm512_set1_pd(p.cutoff2);
+  const __m512d lj1 = _mm512_set1_pd(p.lj1), lj2 = _mm512_set1_pd(p.lj2);
+  const __m512d lj1_13 = _mm512_set1_pd(13.0 * p.lj1), lj2_7 = _mm512_set1_pd(7.0 * p.lj2);
+  const __m512d one = _mm512_set1_pd(1.0);
+  const __m512d period[3] = {_mm512_set1_pd(c.period.x), _mm512_set1_pd(c.period.y),
+                             _mm512_set1_pd(c.period.z)};
+  const __m512d inverse[3] = {_mm512_set1_pd(c.inverse_period.x),
+                              _mm512_set1_pd(c.inverse_period.y),
+                              _mm512_set1_pd(c.inverse_period.z)};
+  double sum = 0.0;
+  alignas(64) double terms[8];
+  for (std::size_t i = c.first; i < c.last; ++i) {
+    const __m512d xi[3] = {_mm512_set1_pd(c.x[i].x), _mm512_set1_pd(c.x[i].y),
+                           _mm512_set1_pd(c.x[i].z)};
+    const __m512d vi[3] = {_mm512_set1_pd(c.v[i].x), _mm512_set1_pd(c.v[i].y),
+                           _mm512_set1_pd(c.v[i].z)};
+    const std::size_t end = c.offsets[i + 1];
+    for (std::size_t k = c.offsets[i]; k < end; k += 8) {
+      const std::size_t count = end - k < 8 ? end - k : 8;
+      const __mmask8 lanes = static_cast<__mmask8>((1u << count) - 1u);
+      const __m512i j = _mm512_cvtepi32_epi64(_mm256_maskz_loadu_epi32(lanes, c.list + k));
+      const __m512i j3 = _mm512_add_epi64(_mm512_slli_epi64(j, 1), j);
+      __m512d d[3], w[3];
+      for (int a = 0; a < 3; ++a) {
+        d[a] = _mm512_sub_pd(xi[a], gather_axis(c.x, j3, lanes, a));
+        d[a] = _mm512_sub_pd(
+            d[a], _mm512_mul_pd(period[a], round_to_integer(_mm512_mul_pd(d[a], inverse[a]))));
+        w[a] = _mm512_sub_pd(vi[a], gather_axis(c.v, j3, lanes, a));
+      }
+      const __m512d r2 =
+          _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(d[0], d[0]), _mm512_mul_pd(d[1], d[1])),
+                        _mm512_mul_pd(d[2], d[2]));
+      // In reach as the scalar term decides it: not r2 >= cutoff2.
+      const __mmask8 inside = _mm512_mask_cmp_pd_mask(lanes, r2, cutoff2, _CMP_NGE_UQ);
+      const __m512d r2inv = _mm512_div_pd(one, r2);
+      const __m512d r6inv = _mm512_mul_pd(_mm512_mul_pd(r2inv, r2inv), r2inv);
+      const __m512d f_over_r =
+          _mm512_mul_pd(_mm512_mul_pd(r6inv, _mm512_sub_pd(_mm512_mul_pd(lj1, r6inv), lj2)), r2inv);
+      const __m512d curvature = _mm512_mul_pd(
+          _mm512_mul_pd(r6inv, _mm512_sub_pd(_mm512_mul_pd(lj1_13, r6inv), lj2_7)), r2inv);
+      const __m512d along =
+          _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(d[0], w[0]), _mm512_mul_pd(d[1], w[1])),
+                        _mm512_mul_pd(d[2], w[2]));
+      const __m512d along2 = _mm512_div_pd(_mm512_mul_pd(along, along), r2);
+      const __m512d w2 =
+          _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(w[0], w[0]), _mm512_mul_pd(w[1], w[1])),
+                        _mm512_mul_pd(w[2], w[2]));
+      const __m512d term = _mm512_sub_pd(_mm512_mul_pd(curvature, along2),
+                                         _mm512_mul_pd(f_over_r, _mm512_sub_pd(w2, along2)));
+      // Out of reach: the scalar term's +0, which leaves the sum as it is.
+      _mm512_store_pd(terms, _mm512_maskz_mov_pd(inside, term));
+      for (std::size_t l = 0; l < count; ++l) sum += terms[l];
+    }
+  }
+  return sum;
+}
+#else
+bool LennardJones::curvature_loop_built() {
+  return false;
+}
+
+double LennardJones::curvature_loop(const Params&, const CurvatureChunk&) {
+  throw std::logic_error("LennardJones::curvature_loop: not built (check curvature_loop_built)");
+}
+#endif
 
 }  // namespace deli

@@ -157,6 +157,19 @@ class PairForce final : public ForceTerm {
                           std::size_t end) const {
     const auto& list = neighbors.neighbors();
     const auto& offsets = neighbors.offsets();
+    if constexpr (VectorCurvatureEvaluator<Evaluator>) {
+      if (type_count_ == 1 && Evaluator::curvature_loop_built()) {
+        const CurvatureChunk chunk{system.particles.position.data(),
+                                   velocity.data(),
+                                   list.data(),
+                                   offsets.data(),
+                                   system.box.period(),
+                                   system.box.inverse_period(),
+                                   begin,
+                                   end};
+        return Evaluator::curvature_loop(table_[0], chunk);
+      }
+    }
     double sum = 0.0;
     for (std::size_t i = begin; i < end; ++i) {
       for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {

@@ -41,4 +41,26 @@ concept VectorPairEvaluator = requires(const typename E::Params& p, const Vector
   { E::vector_loop(p, chunk, true, w) } -> std::same_as<double>;
 };
 
+// One chunk of a half list in list order for the shadow energy's curvature sum: particles
+// first..last-1 with their listed partners, separations by minimum-image rounding (as
+// Box::minimum_image) in a box of the given periods.
+struct CurvatureChunk {
+  const Vec3* x;
+  const Vec3* v;
+  const std::int32_t* list;
+  const std::size_t* offsets;
+  Vec3 period, inverse_period;
+  std::size_t first, last;
+};
+
+// An evaluator with a vector form of PairForce's curvature sum for one type pair:
+// curvature_loop() returns the sum over the chunk's pairs in reach of phi'' (u.w)^2 -
+// (f/r) (|w|^2 - (u.w)^2) (w = v_i - v_j), each term the scalar one's bits, added one at a
+// time in list order from +0 (the scalar sum's bits), where curvature_loop_built().
+template <class E>
+concept VectorCurvatureEvaluator = requires(const typename E::Params& p, const CurvatureChunk& c) {
+  { E::curvature_loop_built() } -> std::same_as<bool>;
+  { E::curvature_loop(p, c) } -> std::same_as<double>;
+};
+
 }  // namespace deli

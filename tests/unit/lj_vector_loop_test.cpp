@@ -291,5 +291,85 @@ TEST(LjVectorLoop, SeveralTypesFallBackToTheScalarLoop) {
   }
 }
 
+// The shadow energy's curvature sum, v^T H v over the listed pairs (PairForce::pair_curvature):
+// with one type LennardJones::curvature_loop (eight pairs at a time where built), with the
+// same model as a two-type table PairForce's pair-by-pair sum. Each term is the scalar one's
+// bits and the terms are added in list order, so the two sums are equal bit for bit; both
+// agree with the definition (every pair by minimum image, its Hessian block's closed form
+// phi'' (u.w)^2 - (f/r) (|w|^2 - (u.w)^2)) to round-off. Lists of every length modulo 8,
+// pairs through periodic images, a non-periodic axis, and pairs at and just inside the cutoff.
+TEST(LjVectorLoop, CurvatureSumIsThePairByPairSumsBits) {
+  const LennardJones::Params lj = LennardJones::make(1.0, 1.0, kCutoff);
+  const PairForce<LennardJones> one_type = make_term(1, {lj});
+  const PairForce<LennardJones> two_types = make_term(2, {lj, lj, lj, lj});
+  auto curvature = [](const PairForce<LennardJones>& term, const System& system,
+                      const std::vector<Vec3>& v) {
+    NeighborList list(kCutoff, kSkin);
+    list.build(system.particles.position, system.box);
+    double sum = 0.0;
+    EXPECT_TRUE(term.pair_curvature(system, list, v, sum));
+    return sum;
+  };
+  auto definition_sum = [&](const System& system, const std::vector<Vec3>& v, double& magnitude) {
+    const std::vector<Vec3>& x = system.particles.position;
+    double sum = 0.0;
+    magnitude = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      for (std::size_t j = i + 1; j < x.size(); ++j) {
+        const Vec3 d = system.box.minimum_image(x[i] - x[j]);
+        const double r2 = norm2(d);
+        if (!(r2 < lj.cutoff2)) continue;
+        double f_over_r, e;
+        LennardJones::evaluate(lj, r2, f_over_r, e);
+        const Vec3 w = v[i] - v[j];
+        const double along2 = dot(d, w) * dot(d, w) / r2;
+        const double term =
+            LennardJones::second_derivative(lj, r2) * along2 - f_over_r * (norm2(w) - along2);
+        sum += term;
+        magnitude += std::abs(term);
+      }
+    }
+    return sum;
+  };
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> gauss;
+  auto velocities = [&](std::size_t n) {
+    std::vector<Vec3> v(n);
+    for (Vec3& u : v) u = {gauss(rng), gauss(rng), gauss(rng)};
+    return v;
+  };
+  for (const bool periodic_z : {true, false}) {
+    for (const double vacancy : {0.0, 0.3}) {
+      System system = lattice_liquid(7, vacancy);
+      if (!periodic_z) {
+        system.box = Box(system.box.lo(), system.box.hi(), {true, true, false});
+      }
+      const std::vector<Vec3> v = velocities(system.particles.size());
+      const double vector = curvature(one_type, system, v);
+      EXPECT_EQ(vector, curvature(two_types, system, v)) << "periodic z " << periodic_z;
+      double magnitude = 0.0;
+      const double exact = definition_sum(system, v, magnitude);
+      ASSERT_GT(magnitude, 0.0);
+      EXPECT_NEAR(vector, exact, 1e-12 * magnitude) << "periodic z " << periodic_z;
+    }
+  }
+  // Pairs at the cutoff (out) and 2^-40 inside it, directly and through the boundary.
+  System edge;
+  edge.box = Box({0, 0, 0}, {10, 10, 10}, {true, true, true});
+  const double inside = kCutoff - 0x1p-40;
+  edge.particles.resize(8);
+  edge.particles.position = {{1.0, 1.0, 1.0},           {1.0 + kCutoff, 1.0, 1.0},
+                             {1.0, 4.0, 1.0},           {1.0 + inside, 4.0, 1.0},
+                             {0.5, 7.0, 1.0},           {8.0, 7.0, 1.0},
+                             {2.0 - 0x1p-40, 7.0, 5.0}, {9.5, 7.0, 5.0}};
+  const std::vector<Vec3> v = velocities(8);
+  const double at_edge = curvature(one_type, edge, v);
+  EXPECT_EQ(at_edge, curvature(two_types, edge, v));
+  double magnitude = 0.0;
+  EXPECT_EQ(at_edge, definition_sum(edge, v, magnitude));  // two terms: the same two additions
+  EXPECT_NE(at_edge, 0.0);
+  if (!LennardJones::curvature_loop_built()) GTEST_SKIP() << "no vector curvature in this build";
+}
+
 }  // namespace
 }  // namespace deli
