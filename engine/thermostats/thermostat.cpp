@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
+#include "thermostats/normal_triples.hpp"
 #include "thermostats/random_stream.hpp"
 
 namespace deli {
@@ -25,14 +26,29 @@ PhiloxCounter draw_counter(std::uint64_t id, std::int64_t step, Stream stream, i
 void LangevinThermostat::apply(Particles& p, std::int64_t step, int half, double duration) {
   const double c = std::exp(-duration / settings_.damping);
   const double noise = std::sqrt((1.0 - c * c) * settings_.temperature);
-  // Each atom's draws depend on its id and the step alone: any number of threads.
-  parallel_for(p.size(), [&](std::size_t i) {
-    RandomStream random(settings_.seed, draw_counter(static_cast<std::uint64_t>(p.id[i]), step,
-                                                     Stream::langevin, half));
-    const double sd = noise / std::sqrt(p.mass[i]);
-    Vec3& v = p.velocity[i];
-    const double x = random.normal(), y = random.normal(), z = random.normal();
-    v = {c * v.x + sd * x, c * v.y + sd * y, c * v.z + sd * z};
+  // Each atom's draws depend on its id and the step alone: any number of threads, any
+  // chunks. Drawn a block of atoms at a time (normal_triples: eight streams at once where
+  // the build has AVX-512; the draws were 80 % of an NVT melt's thermostat).
+  const std::size_t n = p.size();
+  for_each_chunk(n, chunks_for(n), [&, c, noise](int, std::size_t begin, std::size_t end) {
+    constexpr std::size_t block = 64;
+    PhiloxCounter start[block];
+    Vec3 normal[block];
+    for (std::size_t first = begin; first < end; first += block) {
+      const std::size_t count = std::min(block, end - first);
+      for (std::size_t k = 0; k < count; ++k) {
+        start[k] =
+            draw_counter(static_cast<std::uint64_t>(p.id[first + k]), step, Stream::langevin, half);
+      }
+      normal_triples(settings_.seed, start, count, normal);
+      for (std::size_t k = 0; k < count; ++k) {
+        const std::size_t i = first + k;
+        const double sd = noise / std::sqrt(p.mass[i]);
+        Vec3& v = p.velocity[i];
+        const Vec3& r = normal[k];
+        v = {c * v.x + sd * r.x, c * v.y + sd * r.y, c * v.z + sd * r.z};
+      }
+    }
   });
 }
 

@@ -1,0 +1,143 @@
+#include "thermostats/normal_triples.hpp"
+
+#include <cmath>
+
+#if defined(__AVX512F__) && defined(__AVX512DQ__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#define DELI_NORMALS_AVX512 1
+// GCC 12 warns that the intrinsics' own _mm512_undefined_*() is (or may be) used
+// uninitialized inside the conversions (a false positive: GCC PR 105593).
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+namespace deli {
+
+void normal_triples_by_stream(std::uint64_t seed, const PhiloxCounter* start, std::size_t count,
+                              Vec3* out) {
+  for (std::size_t k = 0; k < count; ++k) {
+    RandomStream random(seed, start[k]);
+    const double x = random.normal(), y = random.normal(), z = random.normal();
+    out[k] = {x, y, z};
+  }
+}
+
+#ifdef DELI_NORMALS_AVX512
+namespace {
+
+// Philox4x32-10 (philox4x32_10) on eight counters: each 32-bit word in the low half of a
+// 64-bit lane, so that one vpmuludq gives the round's full 64-bit products.
+struct Block8 {
+  __m512i w[4];
+};
+
+Block8 philox8(Block8 c, std::uint32_t key0, std::uint32_t key1) {
+  const __m512i low = _mm512_set1_epi64(0xffffffffLL);
+  const __m512i multiplier0 = _mm512_set1_epi64(0xD2511F53),
+                multiplier1 = _mm512_set1_epi64(0xCD9E8D57);
+  for (int round = 0; round < 10; ++round) {
+    if (round > 0) key0 += 0x9E3779B9u, key1 += 0xBB67AE85u;
+    const __m512i p0 = _mm512_mul_epu32(multiplier0, c.w[0]);
+    const __m512i p1 = _mm512_mul_epu32(multiplier1, c.w[2]);
+    const __m512i k0 = _mm512_set1_epi64(key0), k1 = _mm512_set1_epi64(key1);
+    c.w[0] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c.w[1]), k0);
+    c.w[1] = _mm512_and_si512(p1, low);
+    c.w[2] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c.w[3]), k1);
+    c.w[3] = _mm512_and_si512(p0, low);
+  }
+  return c;
+}
+
+// RandomStream::symmetric_uniform of a word: (int32 + 0.5) 2^-31, exact in doubles.
+__m512d symmetric(__m512i word) {
+  const __m256i as_int = _mm512_cvtepi64_epi32(word);  // the low 32 bits, as int32
+  return _mm512_mul_pd(_mm512_add_pd(_mm512_cvtepi32_pd(as_int), _mm512_set1_pd(0.5)),
+                       _mm512_set1_pd(0x1.0p-31));
+}
+
+// The polar method's factor sqrt(-2 log(s) / s), in RandomStream::normal's operations; the
+// logarithm lane by lane from libm (its bits).
+__m512d polar_factor(__m512d s) {
+  alignas(64) double lanes[8];
+  _mm512_store_pd(lanes, s);
+  for (double& x : lanes) x = std::log(x);
+  const __m512d log_s = _mm512_load_pd(lanes);
+  return _mm512_sqrt_pd(_mm512_div_pd(_mm512_mul_pd(_mm512_set1_pd(-2.0), log_s), s));
+}
+
+}  // namespace
+
+bool normal_triples_vectorised() {
+  return true;
+}
+
+void normal_triples(std::uint64_t seed, const PhiloxCounter* start, std::size_t count, Vec3* out) {
+  const auto key0 = static_cast<std::uint32_t>(seed), key1 = static_cast<std::uint32_t>(seed >> 32);
+  std::size_t k = 0;
+  for (; k + 8 <= count; k += 8) {
+    alignas(64) std::uint64_t word[4][8];
+    for (int l = 0; l < 8; ++l) {
+      for (int q = 0; q < 4; ++q) word[q][l] = start[k + l][q];
+    }
+    Block8 counter;
+    for (int q = 0; q < 4; ++q) counter.w[q] = _mm512_load_si512(word[q]);
+    const Block8 first = philox8(counter, key0, key1);
+    // The next block: the counter's last word plus one (RandomStream::refill), in 32 bits.
+    counter.w[3] = _mm512_and_si512(_mm512_add_epi64(counter.w[3], _mm512_set1_epi64(1)),
+                                    _mm512_set1_epi64(0xffffffffLL));
+    const Block8 second = philox8(counter, key0, key1);
+    // The stream's first four pairs (u, v) and whether each is accepted (s < 1).
+    __m512d u[4], v[4], s[4];
+    __mmask8 accepted[4];
+    for (int q = 0; q < 4; ++q) {
+      const Block8& b = q < 2 ? first : second;
+      u[q] = symmetric(b.w[2 * (q % 2)]);
+      v[q] = symmetric(b.w[2 * (q % 2) + 1]);
+      s[q] = _mm512_add_pd(_mm512_mul_pd(u[q], u[q]), _mm512_mul_pd(v[q], v[q]));
+      accepted[q] = _mm512_cmp_pd_mask(s[q], _mm512_set1_pd(1.0), _CMP_LT_OQ);
+    }
+    // The first accepted pair, then the next accepted one after it; lanes with fewer than two
+    // accepted among the four are drawn by RandomStream below.
+    __m512d u1 = u[3], v1 = v[3], s1 = s[3];
+    __m512d u2 = u[3], s2 = s[3];
+    __mmask8 none_before = 0xff;  // no accepted pair among those looked at so far
+    __mmask8 one_before = 0;      // exactly one
+    __mmask8 second_found = 0;
+    for (int q = 0; q < 4; ++q) {
+      const __mmask8 first_here = none_before & accepted[q];
+      const __mmask8 second_here = one_before & accepted[q];
+      u1 = _mm512_mask_blend_pd(first_here, u1, u[q]);
+      v1 = _mm512_mask_blend_pd(first_here, v1, v[q]);
+      s1 = _mm512_mask_blend_pd(first_here, s1, s[q]);
+      u2 = _mm512_mask_blend_pd(second_here, u2, u[q]);
+      s2 = _mm512_mask_blend_pd(second_here, s2, s[q]);
+      second_found |= second_here;
+      one_before = (one_before & ~accepted[q]) | first_here;
+      none_before &= ~accepted[q];
+    }
+    const __m512d f1 = polar_factor(s1), f2 = polar_factor(s2);
+    alignas(64) double x[8], y[8], z[8];
+    _mm512_store_pd(x, _mm512_mul_pd(u1, f1));
+    _mm512_store_pd(y, _mm512_mul_pd(v1, f1));
+    _mm512_store_pd(z, _mm512_mul_pd(u2, f2));
+    for (int l = 0; l < 8; ++l) {
+      if (second_found >> l & 1) {
+        out[k + l] = {x[l], y[l], z[l]};
+      } else {
+        normal_triples_by_stream(seed, start + k + l, 1, out + k + l);
+      }
+    }
+  }
+  normal_triples_by_stream(seed, start + k, count - k, out + k);
+}
+#else
+bool normal_triples_vectorised() {
+  return false;
+}
+
+void normal_triples(std::uint64_t seed, const PhiloxCounter* start, std::size_t count, Vec3* out) {
+  normal_triples_by_stream(seed, start, count, out);
+}
+#endif
+
+}  // namespace deli
