@@ -7,6 +7,10 @@
 #if defined(__AVX512F__) && defined(__AVX512VL__)
 #include <immintrin.h>
 #define DELI_SCAN_AVX512 1
+// GCC 12 warns that the intrinsics' own _mm512_undefined_*() is (or may be) used
+// uninitialized inside the conversions (a false positive: GCC PR 105593).
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 
 namespace deli {
@@ -145,5 +149,102 @@ std::size_t scan_stencil(const double* x, const double* y, const double* z, cons
 #endif
   return walk_stencil(runs, home_first, home_last, home_code, run_begin, run_end, xi, yi, zi, scan);
 }
+
+namespace {
+std::size_t keep_hits_one_by_one(const std::int32_t* member, const std::int32_t* moved_key,
+                                 std::int32_t key, const std::int32_t* hit_slot,
+                                 const std::uint8_t* hit_code, std::size_t hits,
+                                 const std::int32_t* excluded, std::size_t excluded_count,
+                                 std::int32_t* j_out, std::uint8_t* code_out,
+                                 std::uint32_t* recode_kept, std::uint32_t* recode_hit,
+                                 std::size_t* recode_count) {
+  std::size_t kept = 0, recode = 0;
+  const std::int32_t* const excluded_end = excluded + excluded_count;
+  for (std::size_t h = 0; h < hits; ++h) {
+    const auto m = static_cast<std::size_t>(hit_slot[h]);
+    const std::int32_t j = member[m];
+    if (std::find(excluded, excluded_end, j) != excluded_end) continue;
+    if (moved_key[m] != key) {
+      recode_kept[recode] = static_cast<std::uint32_t>(kept);
+      recode_hit[recode++] = static_cast<std::uint32_t>(h);
+    }
+    code_out[kept] = hit_code[h];
+    j_out[kept++] = j;
+  }
+  *recode_count = recode;
+  return kept;
+}
+}  // namespace
+
+#ifdef DELI_SCAN_AVX512
+// Sixteen hits a vector: the members and moved keys gathered, the excluded partners compared,
+// the kept lanes compressed in registers and stored whole (the outputs have slack), the codes
+// widened to 32 bits to be compressed alike and narrowed back.
+std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
+                      const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
+                      const std::int32_t* excluded, std::size_t excluded_count, std::int32_t* j_out,
+                      std::uint8_t* code_out, std::uint32_t* recode_kept, std::uint32_t* recode_hit,
+                      std::size_t* recode_count) {
+  if (excluded_count > kVectorExcluded) {
+    return keep_hits_one_by_one(member, moved_key, key, hit_slot, hit_code, hits, excluded,
+                                excluded_count, j_out, code_out, recode_kept, recode_hit,
+                                recode_count);
+  }
+  __m512i partner[kVectorExcluded];
+  for (std::size_t e = 0; e < kVectorExcluded; ++e) {
+    // Unused places repeat a partner: the same test again.
+    partner[e] = _mm512_set1_epi32(excluded_count ? excluded[e < excluded_count ? e : 0] : -1);
+  }
+  const __m512i key_v = _mm512_set1_epi32(key);
+  const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  std::size_t kept = 0, recode = 0;
+  for (std::size_t h = 0; h < hits; h += 16) {
+    const std::size_t count = hits - h < 16 ? hits - h : 16;
+    const auto lanes = static_cast<__mmask16>((1u << count) - 1u);
+    const __m512i slot = _mm512_maskz_loadu_epi32(lanes, hit_slot + h);
+    const __m512i j = _mm512_mask_i32gather_epi32(_mm512_set1_epi32(-1), lanes, slot, member, 4);
+    const __m512i moved = _mm512_mask_i32gather_epi32(key_v, lanes, slot, moved_key, 4);
+    __mmask16 keep = lanes;
+    if (excluded_count) {
+      for (std::size_t e = 0; e < kVectorExcluded; ++e) {
+        keep &= _mm512_cmpneq_epi32_mask(j, partner[e]);
+      }
+    }
+    // Sixteen codes read whole: hit_code has room for kScanSlack past the hits (the lanes
+    // past them are not kept).
+    const __m512i code =
+        _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(hit_code + h)));
+    _mm512_storeu_si512(j_out + kept, _mm512_maskz_compress_epi32(keep, j));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(code_out + kept),
+                     _mm512_cvtepi32_epi8(_mm512_maskz_compress_epi32(keep, code)));
+    const auto kept_here = static_cast<unsigned>(__builtin_popcount(keep));
+    if (keep & _mm512_cmpneq_epi32_mask(moved, key_v)) {
+      // In the kept lanes' order: their places in j_out and hit numbers, for those to recode.
+      const __m512i place = _mm512_add_epi32(_mm512_set1_epi32(static_cast<int>(kept)), iota);
+      const __m512i kept_hit = _mm512_maskz_compress_epi32(
+          keep, _mm512_add_epi32(_mm512_set1_epi32(static_cast<int>(h)), iota));
+      const __mmask16 kept_differs =
+          _mm512_mask_cmpneq_epi32_mask(static_cast<__mmask16>((1u << kept_here) - 1u),
+                                        _mm512_maskz_compress_epi32(keep, moved), key_v);
+      _mm512_mask_compressstoreu_epi32(recode_kept + recode, kept_differs, place);
+      _mm512_mask_compressstoreu_epi32(recode_hit + recode, kept_differs, kept_hit);
+      recode += static_cast<std::size_t>(__builtin_popcount(kept_differs));
+    }
+    kept += kept_here;
+  }
+  *recode_count = recode;
+  return kept;
+}
+#else
+std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
+                      const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
+                      const std::int32_t* excluded, std::size_t excluded_count, std::int32_t* j_out,
+                      std::uint8_t* code_out, std::uint32_t* recode_kept, std::uint32_t* recode_hit,
+                      std::size_t* recode_count) {
+  return keep_hits_one_by_one(member, moved_key, key, hit_slot, hit_code, hits, excluded,
+                              excluded_count, j_out, code_out, recode_kept, recode_hit,
+                              recode_count);
+}
+#endif
 
 }  // namespace deli

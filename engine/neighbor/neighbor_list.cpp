@@ -311,6 +311,10 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     std::vector<std::uint8_t> hit_code = std::move(chunk_hit_codes_[k]);
     hit_slot.resize(static_cast<std::size_t>(n) + 1 + kScanSlack);
     hit_code.resize(static_cast<std::size_t>(n) + 1 + kScanSlack);
+    // keep_hits' hits to recode: their places in the list and hit numbers.
+    thread_local std::vector<std::uint32_t> recode_kept, recode_hit;
+    recode_kept.resize(static_cast<std::size_t>(n) + 1);
+    recode_hit.resize(static_cast<std::size_t>(n) + 1);
     const double* const at_x = member_x_.data();
     const double* const at_y = member_y_.data();
     const double* const at_z = member_z_.data();
@@ -361,27 +365,39 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       // Room for every hit, written through pointers (no capacity test per partner), then
       // cut to those kept.
       const std::size_t listed = out.size();
+      if (shifted) {
+        // keep_hits stores whole vectors: room for kScanSlack more, cut below.
+        out.resize(listed + hits + kScanSlack);
+        out_codes.resize(listed + hits + kScanSlack);
+        std::size_t recode = 0;
+        const std::size_t kept = keep_hits(
+            member.data(), moved_key, moved_key[slot], hit_slot.data(), hit_code.data(), hits,
+            partners, static_cast<std::size_t>(partners_end - partners), out.data() + listed,
+            out_codes.data() + listed, recode_kept.data(), recode_hit.data(), &recode);
+        // Both particles moved by the same periods into the box (nearly always: none), so
+        // the stencil's shift stands; else the pair's own code.
+        for (std::size_t r = 0; r < recode; ++r) {
+          const std::size_t h = recode_hit[r];
+          out_codes[listed + recode_kept[r]] =
+              pair_code(hit_code[h], slot, static_cast<std::size_t>(hit_slot[h]), coded);
+        }
+        out.resize(listed + kept);
+        out_codes.resize(listed + kept);
+        slot_offsets_[slot + 1] = out.size();
+        continue;
+      }
+      // Without image codes (a box too narrow for them) each pair is met from both sides:
+      // kept from its lower particle.
       out.resize(listed + hits);
-      if (shifted) out_codes.resize(listed + hits);
       std::int32_t* const kept_j = out.data() + listed;
-      std::uint8_t* const kept_code = shifted ? out_codes.data() + listed : nullptr;
       std::size_t kept = 0;
       for (std::size_t h = 0; h < hits; ++h) {
-        const auto m = static_cast<std::size_t>(hit_slot[h]);
-        const std::int32_t j = member[m];
-        if (!shifted && j <= i) continue;
+        const std::int32_t j = member[static_cast<std::size_t>(hit_slot[h])];
+        if (j <= i) continue;
         if (std::find(partners, partners_end, j) != partners_end) continue;
-        if (shifted) {
-          // Both particles moved by the same periods into the box (nearly always: none),
-          // so the stencil's shift stands.
-          kept_code[kept] = moved_key[m] == moved_key[slot]
-                                ? hit_code[h]
-                                : pair_code(hit_code[h], slot, m, coded);
-        }
         kept_j[kept++] = j;
       }
       out.resize(listed + kept);
-      if (shifted) out_codes.resize(listed + kept);
       // Counts within the chunk for now; made global offsets below.
       slot_offsets_[slot + 1] = out.size();
     }
