@@ -13,7 +13,8 @@
 #
 # Usage: bench/constrained.sh [slit|harmonic|rigid|spheres ...] (default: all), with
 # STEPS=n to override every input's step count, DELI=path to pick deli's binary, PEERS=0 to
-# run deli alone (old/new comparisons), TABLES=1 to print every deli run's timing table.
+# run deli alone (old/new comparisons), TABLES=1 to print every deli run's timing table,
+# SHARE_ROUNDS=n for the rounds of the rods' cost on the melt at the end (0: none).
 # Not a test: numbers depend on the (shared) machine; compare ratios from one run.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -82,3 +83,46 @@ done
 echo
 printf '%-58s %-34s %10s %8s\n' "system" "engine" "atom-st/s" "deli/it"
 printf '%s\n' "${summary[@]}"
+
+# The rods' cost on the melt as issue 10 measures it ("the rods cost deli 83 % of its step;
+# OpenMM pays about 15 %"): 1 - rigid / harmonic throughput, each engine against its own
+# harmonic run. Both runs of a pair are taken back to back and the pairs are alternated
+# (SHARE_ROUNDS, default 3), since this machine's speed drifts by tens of percent between
+# minutes; the median pair is the figure.
+melt=$top/inputs/lj_chains
+rounds=${SHARE_ROUNDS:-3}
+if [[ " ${*:-harmonic rigid} " == *" harmonic "* && " ${*:-harmonic rigid} " == *" rigid "* &&
+      $rounds -gt 0 ]]; then
+  dir=$work/share
+  mkdir -p "$dir"
+  cp "$melt"/chains_4000.data "$dir"/
+  for name in harmonic rigid; do
+    sed "s/^steps = .*/steps = ${STEPS:-1000}/" "$melt/chains_4000_$name.toml" > "$dir/$name.toml"
+  done
+  share() { awk -v r="$1" -v h="$2" 'BEGIN { printf "%.1f", 100 * (1 - r / h) }'; }
+  median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
+  deli_shares=() openmm4_shares=() openmm10_shares=()
+  echo
+  echo "== rods' cost on the melt: 1 - rigid / harmonic throughput, $rounds alternated rounds"
+  for ((k = 1; k <= rounds; ++k)); do
+    h=$(cd "$dir" && "$deli" run harmonic.toml --threads 1 | rate)
+    r=$(cd "$dir" && "$deli" run rigid.toml --threads 1 | rate)
+    deli_shares+=("$(share "$r" "$h")")
+    line="round $k: deli $h -> $r (${deli_shares[-1]} %)"
+    if [[ -n $peers ]]; then
+      oh=$(cd "$dir" && "$peers" harmonic.toml "${STEPS:-1000}" openmm | rate)
+      o4=$(cd "$dir" && "$peers" rigid.toml "${STEPS:-1000}" openmm 1e-4 | rate)
+      o10=$(cd "$dir" && "$peers" rigid.toml "${STEPS:-1000}" openmm 1e-10 | rate)
+      openmm4_shares+=("$(share "$o4" "$oh")")
+      openmm10_shares+=("$(share "$o10" "$oh")")
+      line+="; OpenMM $oh -> CCMA 1e-4 $o4 (${openmm4_shares[-1]} %), 1e-10 $o10"
+      line+=" (${openmm10_shares[-1]} %)"
+    fi
+    echo "$line"
+  done
+  echo "rods' cost, median of $rounds: deli GVI (rods to 1e-10) $(median "${deli_shares[@]}") %"
+  if [[ -n $peers ]]; then
+    echo "                      OpenMM CCMA 1e-4 $(median "${openmm4_shares[@]}") %," \
+      "CCMA 1e-10 $(median "${openmm10_shares[@]}") %"
+  fi
+fi

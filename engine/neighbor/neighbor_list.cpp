@@ -294,8 +294,14 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     const auto k = static_cast<std::size_t>(chunk);
     std::vector<std::int32_t> out = std::move(chunk_neighbors_[k]);
     std::vector<std::uint8_t> out_codes = std::move(chunk_codes_[k]);
-    out.clear();
-    out_codes.clear();
+    // The entries in use; the vectors keep the last build's size, so that room for a
+    // particle's hits is made without zeroing it again (resize() value-initialises what it
+    // adds: 2 % of an LJ liquid's samples when made per particle), and are cut at the end.
+    std::size_t used = 0;
+    auto make_room = [&](std::size_t needed, bool codes) {
+      if (out.size() < needed) out.resize(needed);
+      if (codes && out_codes.size() < needed) out_codes.resize(needed);
+    };
     bool coded = grid.shifted;
     // Copies of what the scan reads on every candidate: through this body's captured
     // references they would be reloaded after each store of a (uint8, may alias
@@ -362,13 +368,12 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       const std::int32_t* partners = partners_.data() + (any_exclusions ? partner_offsets_[i] : 0);
       const std::int32_t* partners_end =
           partners_.data() + (any_exclusions ? partner_offsets_[i + 1] : 0);
-      // Room for every hit, written through pointers (no capacity test per partner), then
-      // cut to those kept.
-      const std::size_t listed = out.size();
+      // Room for every hit, written through pointers (no capacity test per partner), of
+      // which those kept are used.
+      const std::size_t listed = used;
       if (shifted) {
-        // keep_hits stores whole vectors: room for kScanSlack more, cut below.
-        out.resize(listed + hits + kScanSlack);
-        out_codes.resize(listed + hits + kScanSlack);
+        // keep_hits stores whole vectors: room for kScanSlack more.
+        make_room(listed + hits + kScanSlack, true);
         std::size_t recode = 0;
         const std::size_t kept = keep_hits(
             member.data(), moved_key, moved_key[slot], hit_slot.data(), hit_code.data(), hits,
@@ -381,14 +386,13 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
           out_codes[listed + recode_kept[r]] =
               pair_code(hit_code[h], slot, static_cast<std::size_t>(hit_slot[h]), coded);
         }
-        out.resize(listed + kept);
-        out_codes.resize(listed + kept);
-        slot_offsets_[slot + 1] = out.size();
+        used = listed + kept;
+        slot_offsets_[slot + 1] = used;
         continue;
       }
       // Without image codes (a box too narrow for them) each pair is met from both sides:
       // kept from its lower particle.
-      out.resize(listed + hits);
+      make_room(listed + hits, false);
       std::int32_t* const kept_j = out.data() + listed;
       std::size_t kept = 0;
       for (std::size_t h = 0; h < hits; ++h) {
@@ -397,10 +401,12 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
         if (std::find(partners, partners_end, j) != partners_end) continue;
         kept_j[kept++] = j;
       }
-      out.resize(listed + kept);
+      used = listed + kept;
       // Counts within the chunk for now; made global offsets below.
-      slot_offsets_[slot + 1] = out.size();
+      slot_offsets_[slot + 1] = used;
     }
+    out.resize(used);
+    out_codes.resize(shifted ? used : 0);
     chunk_coded[k] = coded;
     chunk_neighbors_[k] = std::move(out);
     chunk_codes_[k] = std::move(out_codes);
