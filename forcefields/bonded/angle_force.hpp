@@ -35,8 +35,15 @@ class AngleForce final : public ForceTerm {
   std::string name() const override { return "angle"; }
 
   // Chunks of consecutive angles.
+  // Energy and virial only when tallied (the force term's contract).
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
-                 SymTensor& virial, bool /*tally*/) const override {
+                 SymTensor& virial, bool tally) const override {
+    return tally ? compute<true>(system, force, virial) : compute<false>(system, force, virial);
+  }
+
+ private:
+  template <bool Tally>
+  double compute(const System& system, std::vector<Vec3>& force, SymTensor& virial) const {
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<Angle>& angles = system.topology.angles;
     return chunked_.run(angles.size(), force, virial,
@@ -51,7 +58,7 @@ class AngleForce final : public ForceTerm {
                             const double r1 = std::sqrt(r1sq), r2 = std::sqrt(r2sq);
                             const double cos_theta = std::clamp(dot(d1, d2) / (r1 * r2), -1.0, 1.0);
                             double g;  // dE/d(cos theta)
-                            energy += Evaluator::evaluate(by_type_[a.type], cos_theta, g);
+                            const double e = Evaluator::evaluate(by_type_[a.type], cos_theta, g);
                             const double a11 = g * cos_theta / r1sq, a12 = -g / (r1 * r2);
                             const double a22 = g * cos_theta / r2sq;
                             const Vec3 f1 = d1 * a11 + d2 * a12;
@@ -59,14 +66,16 @@ class AngleForce final : public ForceTerm {
                             f[a.i] += f1;
                             f[a.j] -= f1 + f3;
                             f[a.k] += f3;
-                            w.add_outer(d1, f1);
-                            w.add_outer(d2, f3);
+                            if constexpr (Tally) {
+                              energy += e;
+                              w.add_outer(d1, f1);
+                              w.add_outer(d2, f3);
+                            }
                           }
                           return energy;
                         });
   }
 
- private:
   std::vector<Params> by_type_;
   std::vector<char> own_types_;       // empty: every type
   mutable ChunkedForceLoop chunked_;  // scratch of compute()

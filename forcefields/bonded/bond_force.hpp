@@ -42,10 +42,17 @@ class BondForce final : public ForceTerm {
     return true;
   }
 
-  // Energy and virial are always tallied (bonds cost little next to pairs). Chunks of
-  // consecutive bonds.
+  // Energy and virial only when tallied (the force term's contract): summing them on every
+  // step, through the caller's virial in memory, was half of a chain melt's bond time.
+  // Chunks of consecutive bonds.
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
-                 SymTensor& virial, bool /*tally*/) const override {
+                 SymTensor& virial, bool tally) const override {
+    return tally ? compute<true>(system, force, virial) : compute<false>(system, force, virial);
+  }
+
+ private:
+  template <bool Tally>
+  double compute(const System& system, std::vector<Vec3>& force, SymTensor& virial) const {
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<Bond>& bonds = system.topology.bonds;
     return chunked_.run(bonds.size(), force, virial,
@@ -62,14 +69,15 @@ class BondForce final : public ForceTerm {
                             const Vec3 fb = d * f_over_r;
                             f[b.i] += fb;
                             f[b.j] -= fb;
-                            energy += e;
-                            w.add_outer(d, fb);
+                            if constexpr (Tally) {
+                              energy += e;
+                              w.add_outer(d, fb);
+                            }
                           }
                           return energy;
                         });
   }
 
- private:
   // A bond beyond where its potential is defined (FENE past r0) stops the run.
   [[noreturn]] void stretched(const System& system, const Bond& b, const Vec3& d) const {
     throw SimulationError(

@@ -35,9 +35,16 @@ class DihedralForce final : public ForceTerm {
 
   std::string name() const override { return "dihedral"; }
 
-  // Chunks of consecutive dihedrals.
+  // Chunks of consecutive dihedrals; energy and virial only when tallied (the force term's
+  // contract).
   double compute(const System& system, const NeighborList&, std::vector<Vec3>& force,
-                 SymTensor& virial, bool /*tally*/) const override {
+                 SymTensor& virial, bool tally) const override {
+    return tally ? compute<true>(system, force, virial) : compute<false>(system, force, virial);
+  }
+
+ private:
+  template <bool Tally>
+  double compute(const System& system, std::vector<Vec3>& force, SymTensor& virial) const {
     const std::vector<Dihedral>& dihedrals = system.topology.dihedrals;
     return chunked_.run(dihedrals.size(), force, virial,
                         [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
@@ -45,14 +52,15 @@ class DihedralForce final : public ForceTerm {
                           for (std::size_t k = begin; k < end; ++k) {
                             const Dihedral& t = dihedrals[k];
                             if (!own_types_.empty() && !own_types_[t.type]) continue;
-                            energy += add_dihedral(system, t, f, w);
+                            const double e = add_dihedral<Tally>(system, t, f, w);
+                            if constexpr (Tally) energy += e;
                           }
                           return energy;
                         });
   }
 
- private:
-  // One dihedral's forces added to f and its virial to w; returns its energy.
+  // One dihedral's forces added to f and (Tally) its virial to w; returns its energy.
+  template <bool Tally>
   double add_dihedral(const System& system, const Dihedral& t, Vec3* f, SymTensor& w) const {
     const std::vector<Vec3>& x = system.particles.position;
     const Vec3 b1 = system.box.minimum_image(x[t.j] - x[t.i]);
@@ -80,10 +88,12 @@ class DihedralForce final : public ForceTerm {
     f[t.j] += f_j;
     f[t.k] += f_k;
     f[t.l] += f_l;
-    // Positions relative to j: -b1, b2 and b2 + b3.
-    w.add_outer(b1 * -1.0, f_i);
-    w.add_outer(b2, f_k);
-    w.add_outer(b2 + b3, f_l);
+    if constexpr (Tally) {
+      // Positions relative to j: -b1, b2 and b2 + b3.
+      w.add_outer(b1 * -1.0, f_i);
+      w.add_outer(b2, f_k);
+      w.add_outer(b2 + b3, f_l);
+    }
     return energy;
   }
 

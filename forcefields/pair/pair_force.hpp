@@ -115,7 +115,8 @@ class PairForce final : public ForceTerm {
       energy = loops(system.box, neighbors, listed, n, ordered_force_, virial, tally);
       parallel_for(n, [&](std::size_t s) { force[particle[s]] += ordered_force_[s]; });
     }
-    return energy + scaled_pairs(system, force, virial);
+    return energy + (tally ? scaled_pairs<true>(system, force, virial)
+                           : scaled_pairs<false>(system, force, virial));
   }
 
  private:
@@ -354,6 +355,8 @@ class PairForce final : public ForceTerm {
     return energy;
   }
 
+  // The special pairs (scaled, outside the list); energy and virial only when tallied.
+  template <bool Tally>
   double scaled_pairs(const System& system, std::vector<Vec3>& force, SymTensor& virial) const {
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<int>& type = system.particles.type;
@@ -368,8 +371,10 @@ class PairForce final : public ForceTerm {
       const Vec3 fs = d * (s.factor * f_over_r);
       force[s.i] += fs;
       force[s.j] -= fs;
-      energy += s.factor * (e - p.energy_shift);
-      virial.add_outer(d, fs);
+      if constexpr (Tally) {
+        energy += s.factor * (e - p.energy_shift);
+        virial.add_outer(d, fs);
+      }
     }
     return energy;
   }

@@ -132,6 +132,24 @@ TEST_P(FiniteDifference, ForcesSumToZero) {
   EXPECT_LT(norm(sum), 1e-12 * scale * static_cast<double>(r.force.size()));
 }
 
+// A step that does not tally (most steps) gets the same forces, bit for bit, and neither
+// energy nor virial (ForceTerm::compute's contract: the terms skip those sums then).
+TEST_P(FiniteDifference, UntalliedStepHasTheSameForcesAndNoSums) {
+  const RunInput input = input_from(GetParam().toml);
+  const auto tallied = evaluate(input);
+  const auto untallied = evaluate(input, 0.5, false);
+  ASSERT_EQ(untallied.force.size(), tallied.force.size());
+  for (std::size_t i = 0; i < tallied.force.size(); ++i) {
+    ASSERT_EQ(untallied.force[i].x, tallied.force[i].x) << i;
+    ASSERT_EQ(untallied.force[i].y, tallied.force[i].y) << i;
+    ASSERT_EQ(untallied.force[i].z, tallied.force[i].z) << i;
+  }
+  EXPECT_NE(tallied.evaluation.potential, 0.0);
+  EXPECT_EQ(untallied.evaluation.potential, 0.0);
+  EXPECT_EQ(untallied.evaluation.virial.trace(), 0.0);
+  EXPECT_EQ(untallied.evaluation.virial.xy, 0.0);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllForces, FiniteDifference, ::testing::ValuesIn(cases()),
                          [](const auto& info) { return info.param.name; });
 

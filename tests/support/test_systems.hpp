@@ -19,7 +19,7 @@ struct Evaluated {
   ForceEvaluation evaluation;
   std::vector<Vec3> force;
 };
-inline Evaluated evaluate(const RunInput& input, double skin = 0.5) {
+inline Evaluated evaluate(const RunInput& input, double skin = 0.5, bool tally = true) {
   NeighborList list(input.force_field->neighbor_cutoff(), skin);
   list.set_exclusions({});
   Evaluated out;
@@ -33,7 +33,7 @@ inline Evaluated evaluate(const RunInput& input, double skin = 0.5) {
   }
   list.set_exclusions(excluded);
   list.build(input.system.particles.position, input.system.box);
-  out.evaluation = input.force_field->compute(input.system, list, out.force);
+  out.evaluation = input.force_field->compute(input.system, list, out.force, tally);
   return out;
 }
 
