@@ -76,38 +76,43 @@ TEST(RandomStream, SameCounterSameNumbersOtherSeedOthers) {
 }
 
 // The Langevin thermostat's draws (normal_triples: eight streams at a time where the build
-// has AVX-512) are three RandomStream::normal() calls per stream, bit for bit, the streams
-// RandomStream draws itself (fewer than two of their first four pairs accepted) included.
+// has AVX-512) are three RandomStream::normal() calls per stream, bit for bit: streams whose
+// two accepted pairs lie in their first two Philox blocks, in the third, and those
+// RandomStream draws itself (fewer than two of their first six pairs accepted) all occur.
 // 4099 counters (a tail shorter than eight), ids and steps over their 32-bit halves, a last
-// word at 2^32 - 1 (the next block's counter wraps), two seeds with both halves set.
+// word near 2^32 - 1 (the next blocks' counters wrap), two seeds with both halves set.
 TEST(RandomStream, NormalTriplesAreThreeNormalCallsBitForBit) {
   std::vector<PhiloxCounter> start(4099);
   for (std::size_t k = 0; k < start.size(); ++k) {
     const auto w = static_cast<std::uint32_t>(k);
     start[k] = {w * 2654435761u, w >> 3, 0x9e3779b9u * (w % 7),
-                k % 97 == 0 ? 0xffffffffu : w << 16};
+                k % 97 == 0 ? 0xffffffffu - (w % 2) : w << 16};
   }
   for (const std::uint64_t seed : {std::uint64_t{7}, std::uint64_t{0x123456789abcdef0}}) {
-    // Streams with fewer than two accepted pairs (s < 1) among their first four: the
-    // vector path's fallback, which must occur here (about 3 % of streams).
+    // Per stream, the accepted pairs (s < 1) among its first six: two in the first four
+    // (the common case), two only with the fifth and sixth (the third block), or fewer.
     const PhiloxKey key{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32)};
-    std::size_t fallback = 0;
+    std::size_t third_block = 0, fallback = 0;
     for (const PhiloxCounter& c : start) {
-      PhiloxCounter next = c;
-      ++next[3];
-      int accepted = 0;
-      for (const PhiloxCounter& block : {philox4x32_10(c, key), philox4x32_10(next, key)}) {
+      int accepted_in_four = 0, accepted_in_six = 0;
+      PhiloxCounter counter = c;
+      for (int b = 0; b < 3; ++b, ++counter[3]) {
+        const PhiloxCounter block = philox4x32_10(counter, key);
         for (int pair = 0; pair < 2; ++pair) {
           auto symmetric = [&](int word) {
             return (static_cast<double>(static_cast<std::int32_t>(block[word])) + 0.5) * 0x1.0p-31;
           };
           const double u = symmetric(2 * pair), v = symmetric(2 * pair + 1);
-          accepted += u * u + v * v < 1.0;
+          const bool accepted = u * u + v * v < 1.0;
+          accepted_in_six += accepted;
+          accepted_in_four += accepted && b < 2;
         }
       }
-      fallback += accepted < 2;
+      third_block += accepted_in_four < 2 && accepted_in_six >= 2;
+      fallback += accepted_in_six < 2;
     }
-    EXPECT_GT(fallback, 40u) << "seed " << seed;
+    EXPECT_GT(third_block, 40u) << "seed " << seed;
+    EXPECT_GT(fallback, 0u) << "seed " << seed;
     std::vector<Vec3> fast(start.size()), reference(start.size());
     normal_triples(seed, start.data(), start.size(), fast.data());
     normal_triples_by_stream(seed, start.data(), start.size(), reference.data());
