@@ -28,7 +28,7 @@ void LangevinThermostat::apply(Particles& p, std::int64_t step, int half, double
   const double noise = std::sqrt((1.0 - c * c) * settings_.temperature);
   // Each atom's draws depend on its id and the step alone: any number of threads, any
   // chunks. Drawn a block of atoms at a time (normal_triples: eight streams at once where
-  // the build has AVX-512; the draws were 80 % of an NVT melt's thermostat).
+  // the build has AVX-512; drawn one by one, they were most of the thermostat's time).
   const std::size_t n = p.size();
   for_each_chunk(n, chunks_for(n), [&, c, noise](int, std::size_t begin, std::size_t end) {
     constexpr std::size_t block = 64;
