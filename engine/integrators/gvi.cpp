@@ -196,6 +196,9 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
   ws_.nearby_refreshed = false;
+  // Inequality rows are hard-sphere pairs and walls: without either there is none to find
+  // (ws_.nearby stays empty), and no displacement need be measured for them.
+  if (!has_inequalities()) return ws_.nearby;
   if (particle_reaches()) {
     // Whether ws_.x is covered was found when it was made (displaced()).
     const bool covered =
@@ -238,6 +241,10 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
     ws_.nearby_refreshed = true;
   }
   return ws_.nearby;
+}
+
+bool Gvi::has_inequalities() const {
+  return constraints_.hard_spheres || !constraints_.walls.empty();
 }
 
 bool Gvi::particle_reaches() const {
@@ -326,6 +333,7 @@ void Gvi::find_active_set(System& system) {
   const double gap_tolerance = constraints_.tolerances.gap;
   std::vector<Constraint>& active = ws_.active;
   active.clear();
+  if (!has_inequalities()) return;  // no row can be active
   // Without equality rows a Verlet prediction is the free step, particle by particle: after a
   // reflection only the reflected particles' predictions can change, and only theirs are
   // made again (the same numbers a whole prediction would give).

@@ -124,6 +124,8 @@ class Gvi final : public ConstrainedIntegrator {
   const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
                                                 double largest2_bound = -1.0, bool exact = false,
                                                 const std::vector<std::int32_t>* moved = nullptr);
+  // Whether the system has inequality rows at all (hard spheres or walls).
+  bool has_inequalities() const;
   // Candidates by a reach per particle (the paper's contact treatment without linearised
   // rows) instead of one reach from the step's largest displacement.
   bool particle_reaches() const;
