@@ -653,7 +653,14 @@ void Gvi::update_momenta(System& system, bool tally) {
   const bool landed = !ws_.landed.empty();
   const double target_energy =
       feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
-  parallel_for(n, [&](std::size_t i) { P.position[i] = ws_.x[i]; });
+  // Without inequality rows nothing reads x after this (the checks have no candidates, no
+  // row lands), and the next step makes it anew: its buffer becomes the positions' and the
+  // old positions' buffer the next x, instead of a copy.
+  if (has_inequalities()) {
+    parallel_for(n, [&](std::size_t i) { P.position[i] = ws_.x[i]; });
+  } else {
+    std::swap(P.position, ws_.x);
+  }
   system.step += 1;
   system.time += h;
   // The list's test at x may be known from displaced() (no rebuild since x was made).
