@@ -177,19 +177,17 @@ std::size_t keep_hits_one_by_one(const std::int32_t* member, const std::int32_t*
 }  // namespace
 
 #ifdef DELI_SCAN_AVX512
-// Sixteen hits a vector: the members and moved keys gathered, the excluded partners compared,
-// the kept lanes compressed in registers and stored whole (the outputs have slack), the codes
-// widened to 32 bits to be compressed alike and narrowed back.
-std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
-                      const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
-                      const std::int32_t* excluded, std::size_t excluded_count, std::int32_t* j_out,
-                      std::uint8_t* code_out, std::uint32_t* recode_kept, std::uint32_t* recode_hit,
-                      std::size_t* recode_count) {
-  if (excluded_count > kVectorExcluded) {
-    return keep_hits_one_by_one(member, moved_key, key, hit_slot, hit_code, hits, excluded,
-                                excluded_count, j_out, code_out, recode_kept, recode_hit,
-                                recode_count);
-  }
+namespace {
+// Sixteen hits a vector: the members and moved keys gathered, the excluded partners (at most
+// kVectorExcluded) compared, the kept lanes compressed in registers and stored whole (the
+// outputs have slack), the codes widened to 32 bits to be compressed alike and narrowed back.
+std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* moved_key,
+                                std::int32_t key, const std::int32_t* hit_slot,
+                                const std::uint8_t* hit_code, std::size_t hits,
+                                const std::int32_t* excluded, std::size_t excluded_count,
+                                std::int32_t* j_out, std::uint8_t* code_out,
+                                std::uint32_t* recode_kept, std::uint32_t* recode_hit,
+                                std::size_t* recode_count) {
   __m512i partner[kVectorExcluded];
   for (std::size_t e = 0; e < kVectorExcluded; ++e) {
     // Unused places repeat a partner: the same test again.
@@ -235,16 +233,24 @@ std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key,
   *recode_count = recode;
   return kept;
 }
-#else
+}  // namespace
+#endif
+
 std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
                       const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
                       const std::int32_t* excluded, std::size_t excluded_count, std::int32_t* j_out,
                       std::uint8_t* code_out, std::uint32_t* recode_kept, std::uint32_t* recode_hit,
                       std::size_t* recode_count) {
+#ifdef DELI_SCAN_AVX512
+  if (excluded_count <= kVectorExcluded) {
+    return keep_hits_by_vector(member, moved_key, key, hit_slot, hit_code, hits, excluded,
+                               excluded_count, j_out, code_out, recode_kept, recode_hit,
+                               recode_count);
+  }
+#endif
   return keep_hits_one_by_one(member, moved_key, key, hit_slot, hit_code, hits, excluded,
                               excluded_count, j_out, code_out, recode_kept, recode_hit,
                               recode_count);
 }
-#endif
 
 }  // namespace deli
