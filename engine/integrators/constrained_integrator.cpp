@@ -40,6 +40,13 @@ std::size_t ConstrainedIntegrator::cluster_rows(const std::vector<Constraint>& r
   return found_clusters_.size();
 }
 
+bool ConstrainedIntegrator::equalities_hold_every_particle(const Particles& particles) {
+  if (!equality_clusters_.prepared_for(particles.size())) {
+    equality_clusters_.prepare(constraints_.equalities, particles.mass);
+  }
+  return equality_clusters_.hold_every_particle();
+}
+
 const PreparedCluster* ConstrainedIntegrator::prepared_cluster(const std::vector<Constraint>& rows,
                                                                std::size_t index) const {
   if (&rows == &constraints_.equalities) return &equality_clusters_.all()[index];
@@ -110,6 +117,43 @@ const Cluster& ConstrainedIntegrator::cluster_at(const std::vector<Constraint>& 
   return found_clusters_[index];
 }
 
+template <class Solve>
+void ConstrainedIntegrator::around_clusters(const std::vector<Constraint>& rows,
+                                            const ClusterPasses* passes, int chunk,
+                                            std::size_t begin, std::size_t end,
+                                            const Solve& solve) const {
+  if (!passes) {
+    solve();
+    return;
+  }
+  // The clusters' particles as runs: a cluster whose particles are consecutive (they are
+  // ascending) joins a run of consecutive particles the last one left; any other is a list.
+  auto runs = [&](const std::function<void(int, const ParticleRun&)>& pass) {
+    ParticleRun run{nullptr, 0, 0};
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::vector<std::int32_t>& particles = cluster_at(rows, k).particles;
+      const auto first = static_cast<std::size_t>(particles.front());
+      const bool consecutive =
+          static_cast<std::size_t>(particles.back()) - first + 1 == particles.size();
+      if (consecutive && run.count > 0 && run.first + run.count == first) {
+        run.count += particles.size();
+        continue;
+      }
+      if (run.count > 0) pass(chunk, run);
+      run = consecutive ? ParticleRun{nullptr, first, particles.size()}
+                        : ParticleRun{particles.data(), 0, particles.size()};
+      if (!consecutive) {
+        pass(chunk, run);
+        run.count = 0;
+      }
+    }
+    if (run.count > 0) pass(chunk, run);
+  };
+  runs(passes->before);
+  solve();
+  runs(passes->after);
+}
+
 namespace {
 // A cluster's position update that did not converge, thrown out of the cluster loop: the
 // report (the problem written to a file, then the message) is made once, for the cluster a
@@ -154,7 +198,8 @@ void by_chain_runs(std::size_t begin, std::size_t end, const ChainOf& chain_of, 
 double ConstrainedIntegrator::solve_positions(
     System& system, const std::vector<Constraint>& rows, const std::vector<bool>& equality,
     const std::vector<Vec3>& q, const std::vector<Vec3>& delta, std::vector<Vec3>& impulse,
-    const std::vector<char>* delta_changed, const SolvedEqualities* solved_equalities) {
+    const std::vector<char>* delta_changed, const SolvedEqualities* solved_equalities,
+    const ClusterPasses* passes) {
   const Particles& particles = system.particles;
   const std::size_t cluster_count = cluster_rows(rows, particles);
   const bool equality_rows = &rows == &constraints_.equalities;
@@ -324,7 +369,8 @@ double ConstrainedIntegrator::solve_positions(
           }
         }
       };
-      by_chain_runs(begin, end, chain_to_solve, alone, together);
+      around_clusters(rows, passes, c, begin, end,
+                      [&] { by_chain_runs(begin, end, chain_to_solve, alone, together); });
     });
   } catch (const UnconvergedCluster& failure) {
     const PositionProblem& problem = failure.problem;
@@ -343,7 +389,8 @@ double ConstrainedIntegrator::solve_positions(
 }
 
 double ConstrainedIntegrator::project_momenta(System& system, const std::vector<Constraint>& rows,
-                                              const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+                                              const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                                              const ClusterPasses* passes) {
   const std::size_t cluster_count = cluster_rows(rows, system.particles);
   virial_terms_.reset(cluster_count,
                       [&](std::size_t k) { return cluster_at(rows, k).rows.size(); });
@@ -411,7 +458,8 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
         std::copy_n(lanes.virial_terms.data() + l * m, m, virial_terms_.take(indices[l], m));
       }
     };
-    by_chain_runs(begin, end, chain_of, alone, together);
+    around_clusters(rows, passes, c, begin, end,
+                    [&] { by_chain_runs(begin, end, chain_of, alone, together); });
   });
   double virial = 0.0;
   virial_terms_.add_to(virial);

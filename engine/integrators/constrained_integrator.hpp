@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <limits>
 
 #include "constraints/clusters.hpp"
@@ -87,16 +88,40 @@ class ConstrainedIntegrator : public Integrator {
   // chain of rods left a cluster of its own whose delta equals, particle for particle and
   // bit for bit, the delta that call solved it for takes that call's impulses
   // (`solved->impulse`), virial and iteration count instead of being solved again.
-  // A chain's virial is summed on its own, then added.
+  // A chain's virial is summed on its own, then added. Every particle of the rows' clusters
+  // gets its impulse written (or, with `delta_changed`, kept); the others' are not touched.
   struct SolvedEqualities {
     const std::vector<Vec3>& delta;
     const std::vector<Vec3>& impulse;
+  };
+  // Per-particle passes made with the cluster solves, chunk by chunk on the thread that
+  // solves the chunk's clusters (no parallel region, and no pass over every particle, of
+  // their own): before(chunk, particles) for each of the chunk's clusters before any of them
+  // is solved (it makes what their solves read), after(chunk, particles) for each once all
+  // are (it reads what they wrote). Chunks are numbered from 0, below thread_count().
+  // The particles of one or more clusters: list[0..count) where list is not null, else
+  // first..first+count-1 (consecutive clusters joined into one run, a loop that vectorises).
+  struct ParticleRun {
+    const std::int32_t* list;
+    std::size_t first, count;
+    template <class Body>
+    void for_each(Body&& body) const {
+      if (list) {
+        for (std::size_t k = 0; k < count; ++k) body(static_cast<std::size_t>(list[k]));
+        return;
+      }
+      for (std::size_t i = first, end = first + count; i < end; ++i) body(i);
+    }
+  };
+  struct ClusterPasses {
+    std::function<void(int, const ParticleRun&)> before, after;
   };
   double solve_positions(System& system, const std::vector<Constraint>& rows,
                          const std::vector<bool>& equality, const std::vector<Vec3>& q,
                          const std::vector<Vec3>& delta, std::vector<Vec3>& impulse,
                          const std::vector<char>* delta_changed = nullptr,
-                         const SolvedEqualities* solved = nullptr);
+                         const SolvedEqualities* solved = nullptr,
+                         const ClusterPasses* passes = nullptr);
   // The pair Hessian blocks touching the clusters marked `reflected`, in one scan; then
   // shadow_operator(..., c, p) is cluster c's shadow-energy operator.
   void gather_hessian_blocks(const System& system, const std::vector<Cluster>& clusters,
@@ -118,8 +143,11 @@ class ConstrainedIntegrator : public Integrator {
                            std::vector<Vec3>& p);
   void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
                             const std::vector<Vec3>& x, std::vector<Vec3>& p);
+  // Projects the momenta p onto the rows' tangent space at x, cluster by cluster (`passes`
+  // as for solve_positions); returns the projection's virial.
   double project_momenta(System& system, const std::vector<Constraint>& rows,
-                         const std::vector<Vec3>& x, std::vector<Vec3>& p);
+                         const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                         const ClusterPasses* passes = nullptr);
   // The inequality rows a step from q (the system's positions) towards x (the
   // unconstrained end, say) can close: those within four times its largest displacement.
   // Rebuilds the neighbour list first if x leaves it, which wraps the positions into a
@@ -154,8 +182,15 @@ class ConstrainedIntegrator : public Integrator {
   std::size_t cluster_rows(const std::vector<Constraint>& rows, const Particles& particles);
   const PreparedCluster* prepared_cluster(const std::vector<Constraint>& rows,
                                           std::size_t index) const;
+  // Whether every particle is in an equality row's cluster: then solve_positions on rows
+  // that include the equality rows writes every particle's impulse.
+  bool equalities_hold_every_particle(const Particles& particles);
   // Cluster k of the last cluster_rows(rows, ...).
   const Cluster& cluster_at(const std::vector<Constraint>& rows, std::size_t index) const;
+  // solve() (the clusters begin..end-1 of one chunk) between the passes' before and after.
+  template <class Solve>
+  void around_clusters(const std::vector<Constraint>& rows, const ClusterPasses* passes, int chunk,
+                       std::size_t begin, std::size_t end, const Solve& solve) const;
   // Adds this step's statistics and virial to every sampler's.
   void finish_step();
 

@@ -132,32 +132,43 @@ void Gvi::start_step(System& system) {
   // and the start positions q copied in the same pass.
   bool prediction_covered = false;  // known to be covered (else asked below)
   bool q_copied = false;            // ws_.q holds P.position
+  bool prediction_known = false;    // prediction_covered is neighbors_cover's answer
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
-    ws_.predicted.resize(n);
     ws_.q.resize(n);
     // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
     // test, particle by particle), counted per chunk.
     const NeighborList& list = engine_.neighbors();
     const bool listed = list.built_for(n);
-    const int chunks = chunks_for_cheap(n);
+    // Only the contact rows' search and the impact-time step read the prediction; otherwise
+    // (rods alone) it decides the list's cover here and is not stored.
+    const bool keep =
+        has_inequalities() || constrained_predictor_ || contact_ == ContactTreatment::impact_time;
+    if (keep) ws_.predicted.resize(n);
+    // By cluster, each thread's particles are those whose clusters it solves (a partition by
+    // clusters of equal size is this one): their data stay in its cache.
+    const int chunks = steps_by_cluster(P) ? chunks_for(n) : chunks_for_cheap(n);
     std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
     beyond.assign(static_cast<std::size_t>(chunks), 0);
-    for_each_chunk(n, chunks, [&, h, listed](int c, std::size_t begin, std::size_t end) {
+    for_each_chunk(n, chunks, [&, h, listed, keep](int c, std::size_t begin, std::size_t end) {
       std::size_t count = 0;
       for (std::size_t i = begin; i < end; ++i) {
         ws_.q[i] = P.position[i];
         ws_.p[i] = P.velocity[i] * P.mass[i];
         // free_displacement's d, not stored: only predict() reads it, after making it.
         const Vec3 d = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-        ws_.predicted[i] = P.position[i] + d;
-        if (listed) count += !list.keeps_valid(i, ws_.predicted[i]);
+        const Vec3 x = P.position[i] + d;
+        if (keep) ws_.predicted[i] = x;
+        if (listed) count += !list.keeps_valid(i, x);
       }
       beyond[static_cast<std::size_t>(c)] = count;
     });
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
+    // neighbors_cover's answer for the prediction: its test, made above (a list not built for
+    // these particles covers nothing).
+    prediction_known = true;
     q_copied = true;
   } else {
     parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
@@ -165,7 +176,8 @@ void Gvi::start_step(System& system) {
   }
   // Without pair forces or hard spheres no pair is ever looked up: any motion is fine.
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
-  if (pairs_matter && !prediction_covered && !engine_.neighbors_cover(ws_.predicted)) {
+  if (pairs_matter && !prediction_covered &&
+      (prediction_known || !engine_.neighbors_cover(ws_.predicted))) {
     engine_.ensure_neighbors(system, true);  // may wrap P.position
     q_copied = false;
     predict(system, ws_.p, ws_.predicted, false);
@@ -519,16 +531,18 @@ void Gvi::solve_held_positions(System& system) {
   std::fill_n(ws_.equality.begin(), constraints_.equalities.size(), true);
   const std::vector<Vec3>& f_start = engine_.force();
   ws_.half.resize(n);
-  // Verlet solves once: the free step and the zeroed impulses made in the half kick's pass.
+  // Verlet solves once: the free step and the zeroed impulses made in the half kick's pass;
+  // the solve writes every impulse itself when every particle is in a rod's cluster.
   const bool once = lagrangian_ == Lagrangian::verlet && !rows.empty();
   if (once) {
     ws_.free.resize(n);
     ws_.impulse.resize(n);
-    parallel_for(n, [&, h](std::size_t i) {
+    const bool zero = !equalities_hold_every_particle(P);
+    parallel_for(n, [&, h, zero](std::size_t i) {
       const Vec3 half = ws_.p[i] + f_start[i] * (0.5 * h);
       ws_.half[i] = half;
       ws_.free[i] = half * (h / P.mass[i]);
-      ws_.impulse[i] = Vec3{};
+      if (zero) ws_.impulse[i] = Vec3{};
     });
   } else {
     parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
@@ -572,6 +586,68 @@ void Gvi::solve_held_positions(System& system) {
   });
 }
 
+bool Gvi::steps_by_cluster(const Particles& particles) {
+  return lagrangian_ == Lagrangian::verlet && !has_inequalities() && !constrained_predictor_ &&
+         !constraints_.equalities.empty() && equalities_hold_every_particle(particles);
+}
+
+// On the thread that solves the clusters: their particles' half kicks and free steps are made
+// just before, their end positions just after, and the two passes over every particle (two
+// parallel regions) are gone. The largest displacement is exact in any order, and the list's
+// test at x is counted per chunk, as displaced() makes them.
+void Gvi::held_positions_by_cluster(System& system) {
+  const Particles& P = system.particles;
+  const std::size_t n = P.size();
+  const double h = dt_;
+  const std::vector<Vec3>& f = engine_.force();
+  ws_.half.resize(n);
+  ws_.free.resize(n);
+  ws_.impulse.resize(n);  // every one written by the solves
+  ws_.x.resize(n);
+  ws_.equality.assign(constraints_.equalities.size(), true);
+  const auto slots = static_cast<std::size_t>(thread_count());
+  ws_.chunk_largest2.assign(slots, 0.0);
+  ws_.chunk_unlisted.assign(slots, 0);
+  const NeighborList& list = engine_.neighbors();
+  const bool built = list.built_for(n);
+  ClusterPasses passes;
+  const Vec3* p = ws_.p.data();
+  const Vec3* q = ws_.q.data();
+  const double* mass = P.mass.data();
+  Vec3* half = ws_.half.data();
+  Vec3* free = ws_.free.data();
+  const Vec3* impulse = ws_.impulse.data();
+  Vec3* x = ws_.x.data();
+  passes.before = [&, h](int, const ParticleRun& run) {
+    run.for_each([&, h](std::size_t i) {
+      half[i] = p[i] + f[i] * (0.5 * h);
+      free[i] = half[i] * (h / mass[i]);
+    });
+  };
+  passes.after = [&, h, built](int chunk, const ParticleRun& run) {
+    const auto c = static_cast<std::size_t>(chunk);
+    double largest = ws_.chunk_largest2[c];
+    std::size_t unlisted = ws_.chunk_unlisted[c];
+    run.for_each([&, h, built](std::size_t i) {
+      x[i] = q[i] + (half[i] + impulse[i]) * (h / mass[i]);
+      largest = std::max(largest, norm2(x[i] - q[i]));
+      if (built) unlisted += !list.keeps_valid(i, x[i]);
+    });
+    ws_.chunk_largest2[c] = largest;
+    ws_.chunk_unlisted[c] = unlisted;
+  };
+  ws_.position_virial = solve_positions(system, constraints_.equalities, ws_.equality, ws_.q,
+                                        ws_.free, ws_.impulse, nullptr, nullptr, &passes);
+  ws_.x_builds = list.builds();
+  ws_.x_cover_known = false;
+  ws_.x_largest2 = 0.0;
+  ws_.x_listed = built;
+  for (std::size_t c = 0; c < slots; ++c) {
+    ws_.x_largest2 = std::max(ws_.x_largest2, ws_.chunk_largest2[c]);
+    ws_.x_listed = ws_.x_listed && ws_.chunk_unlisted[c] == 0;
+  }
+}
+
 // Position update, then the feasibility guard: inequality rows that would still end the step
 // overlapped join the complementarity set and the step is solved again.
 void Gvi::update_positions(System& system) {
@@ -580,9 +656,14 @@ void Gvi::update_positions(System& system) {
   // DSI: no reflections; every row of the extended active set is a complementarity row.
   ws_.held = reflections_ ? ws_.smooth : ws_.active;
   ws_.landed.clear();  // rows added by the guard this step
+  const bool by_cluster = steps_by_cluster(system.particles);
   for (int round = 0;; ++round) {
-    solve_held_positions(system);
-    displaced(system.particles);
+    if (by_cluster) {
+      held_positions_by_cluster(system);
+    } else {
+      solve_held_positions(system);
+      displaced(system.particles);
+    }
     ws_.violated.clear();
     ws_.x_smallest_gap_known = false;
     if (feasibility_ != Feasibility::none) {
@@ -669,6 +750,30 @@ void Gvi::update_momenta(System& system, bool tally) {
   // The second half kick: F(x) for Verlet, the midpoint force again for midpoint, added to
   // the momenta before the forces, half + impulse (made here: nothing reads them earlier).
   const std::vector<Vec3>& f = lagrangian_ == Lagrangian::verlet ? engine_.force() : ws_.f_mid;
+  if (steps_by_cluster(P)) {
+    // The kick before a chunk's projections, the velocities after, on their thread (the
+    // held rows are the rods alone, and nothing lands).
+    ClusterPasses passes;
+    const Vec3* half = ws_.half.data();
+    const Vec3* impulse = ws_.impulse.data();
+    const Vec3* force = f.data();
+    const double* mass = P.mass.data();
+    Vec3* momenta = p.data();
+    Vec3* velocity = P.velocity.data();
+    passes.before = [&, h](int, const ParticleRun& run) {
+      run.for_each([&, h](std::size_t i) {
+        Vec3 momentum = half[i] + impulse[i];
+        momentum += force[i] * (0.5 * h);
+        momenta[i] = momentum;
+      });
+    };
+    passes.after = [&](int, const ParticleRun& run) {
+      run.for_each([&](std::size_t i) { velocity[i] = momenta[i] * (1.0 / mass[i]); });
+    };
+    step_virial_ += project_momenta(system, constraints_.equalities, P.position, p, &passes);
+    step_virial_ += ws_.position_virial;
+    return;
+  }
   parallel_for(n, [&, h](std::size_t i) {
     Vec3 momentum = ws_.half[i] + held_impulse(ws_, i);
     momentum += f[i] * (0.5 * h);

@@ -5,11 +5,13 @@ namespace deli {
 void EqualityClusters::prepare(const std::vector<Constraint>& equalities,
                                const std::vector<double>& mass) {
   particles_ = mass.size();
+  held_particles_ = 0;
   clusters_.clear();
   cluster_from_first_particle_.assign(mass.size(), -1);
   for (Cluster& cluster : find_clusters(equalities, mass.size())) {
     PreparedCluster& prepared = clusters_.emplace_back();
     prepared.local = localize(cluster, equalities, mass);
+    held_particles_ += cluster.particles.size();
     prepared.cluster = std::move(cluster);
   }
   // The structures refer to their clusters: made once the vector no longer moves.

@@ -25,6 +25,8 @@ class EqualityClusters {
  public:
   void prepare(const std::vector<Constraint>& equalities, const std::vector<double>& mass);
   bool prepared_for(std::size_t particle_count) const { return particles_ == particle_count; }
+  // Whether every particle is in one of the clusters (a melt of rigid chains).
+  bool hold_every_particle() const { return held_particles_ == particles_; }
   // In find_clusters' order.
   const std::vector<PreparedCluster>& all() const { return clusters_; }
   // The prepared cluster with the same particles and, row for row, the same constraints as
@@ -35,6 +37,7 @@ class EqualityClusters {
   std::vector<PreparedCluster> clusters_;
   std::vector<std::int32_t> cluster_from_first_particle_;  // -1: no cluster starts there
   std::size_t particles_ = static_cast<std::size_t>(-1);
+  std::size_t held_particles_ = 0;  // in the clusters (disjoint)
 };
 
 }  // namespace deli
