@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/parallel.hpp"
+#include "solvers/tridiagonal.hpp"
 
 namespace deli {
 
@@ -163,6 +164,58 @@ std::optional<ShadowCorrection> shadow_correction_on_rods(
   return shadow_correction_along(engine, system, h, p, d, &rods, &*terms);
 }
 
+namespace {
+
+// The multipliers of (G M^-1 G^T) mu = G M^-1 F over rods numbered along their chains (every
+// particle in at most two rods, and those two consecutive), where G M^-1 G^T is tridiagonal:
+// solved in O(m) without assembling it. None where the rods are not so numbered or a pivot
+// vanishes (then the sparse factorisation decides).
+std::optional<Eigen::VectorXd> chain_multipliers(const Particles& P,
+                                                 const std::vector<Constraint>& rods,
+                                                 const std::vector<Vec3>& grad,
+                                                 const Eigen::VectorXd& rhs) {
+  const auto m = static_cast<Eigen::Index>(rods.size());
+  std::vector<std::int32_t> first(P.size(), -1), second(P.size(), -1);
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    for (const std::int32_t s : {rods[k].i, rods[k].j}) {
+      const auto at = static_cast<std::size_t>(s);
+      if (first[at] < 0) {
+        first[at] = static_cast<std::int32_t>(k);
+      } else if (second[at] < 0 && static_cast<std::size_t>(first[at]) + 1 == k) {
+        second[at] = static_cast<std::int32_t>(k);
+      } else {
+        return std::nullopt;
+      }
+    }
+  }
+  // Entry (k, l) as the sparse assembly makes it: sign_k sign_l / m_s grad_k . grad_l, over
+  // the particles s the two rods share, summed in the order i, j of rod k.
+  auto sign = [](const Constraint& c, std::size_t s) {
+    return static_cast<std::size_t>(c.i) == s ? 1.0 : -1.0;
+  };
+  Tridiagonal a;
+  a.resize_zero(m);
+  for (std::size_t k = 0; k < rods.size(); ++k) {
+    const Constraint& c = rods[k];
+    const auto ai = static_cast<std::size_t>(c.i), aj = static_cast<std::size_t>(c.j);
+    const double d = dot(grad[k], grad[k]);
+    a.diagonal(static_cast<Eigen::Index>(k)) = 1.0 / P.mass[ai] * d + 1.0 / P.mass[aj] * d;
+    if (k + 1 == rods.size()) continue;
+    const Constraint& next = rods[k + 1];
+    for (const std::size_t s : {ai, aj}) {
+      if (static_cast<std::size_t>(next.i) != s && static_cast<std::size_t>(next.j) != s) continue;
+      const double coupling = sign(c, s) * sign(next, s) / P.mass[s] * dot(grad[k], grad[k + 1]);
+      a.upper(static_cast<Eigen::Index>(k)) = coupling;
+      a.lower(static_cast<Eigen::Index>(k + 1)) = coupling;
+    }
+  }
+  Eigen::VectorXd mu(m), scratch(m);
+  if (!solve_tridiagonal(a, rhs, mu, scratch)) return std::nullopt;
+  return mu;
+}
+
+}  // namespace
+
 std::optional<double> verlet_shadow_energy_on_rods(const ForceEngine& engine, const System& system,
                                                    double h, const std::vector<Constraint>& rods) {
   if (!engine.last().tallied) return std::nullopt;
@@ -170,37 +223,44 @@ std::optional<double> verlet_shadow_energy_on_rods(const ForceEngine& engine, co
   const std::vector<Vec3>& force = engine.force();
   const auto m = static_cast<Eigen::Index>(rods.size());
   std::vector<Vec3> grad(rods.size());
-  std::vector<std::vector<std::size_t>> rods_of(P.size());
+  Eigen::VectorXd rhs(m);
   for (std::size_t k = 0; k < rods.size(); ++k) {
     const Constraint& c = rods[k];
     if (c.kind != ConstraintKind::rod) return std::nullopt;
-    grad[k] = system.box.minimum_image(P.position[c.i] - P.position[c.j]);
-    rods_of[static_cast<std::size_t>(c.i)].push_back(k);
-    rods_of[static_cast<std::size_t>(c.j)].push_back(k);
-  }
-  // Row k of G M^-1 G^T: grad_k (1/m_i + 1/m_j) grad_k on the diagonal, +-grad_k / m_s grad_l
-  // with a rod l sharing particle s.
-  std::vector<Eigen::Triplet<double>> entries;
-  Eigen::VectorXd rhs(m);
-  for (std::size_t k = 0; k < rods.size(); ++k) {
-    const Constraint& a = rods[k];
-    const auto ai = static_cast<std::size_t>(a.i), aj = static_cast<std::size_t>(a.j);
+    const auto ai = static_cast<std::size_t>(c.i), aj = static_cast<std::size_t>(c.j);
+    grad[k] = system.box.minimum_image(P.position[ai] - P.position[aj]);
     rhs(static_cast<Eigen::Index>(k)) =
         dot(grad[k], force[ai] * (1.0 / P.mass[ai]) - force[aj] * (1.0 / P.mass[aj]));
-    for (const auto& [s, sign_a] : {std::pair{ai, 1.0}, std::pair{aj, -1.0}}) {
-      for (std::size_t l : rods_of[s]) {
-        const Constraint& b = rods[l];
-        const double sign_b = static_cast<std::size_t>(b.i) == s ? 1.0 : -1.0;
-        entries.emplace_back(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(l),
-                             sign_a * sign_b / P.mass[s] * dot(grad[k], grad[l]));
+  }
+  std::optional<Eigen::VectorXd> multipliers = chain_multipliers(P, rods, grad, rhs);
+  if (!multipliers) {
+    // Row k of G M^-1 G^T: grad_k (1/m_i + 1/m_j) grad_k on the diagonal, +-grad_k / m_s
+    // grad_l with a rod l sharing particle s.
+    std::vector<std::vector<std::size_t>> rods_of(P.size());
+    for (std::size_t k = 0; k < rods.size(); ++k) {
+      rods_of[static_cast<std::size_t>(rods[k].i)].push_back(k);
+      rods_of[static_cast<std::size_t>(rods[k].j)].push_back(k);
+    }
+    std::vector<Eigen::Triplet<double>> entries;
+    for (std::size_t k = 0; k < rods.size(); ++k) {
+      const Constraint& a = rods[k];
+      const auto ai = static_cast<std::size_t>(a.i), aj = static_cast<std::size_t>(a.j);
+      for (const auto& [s, sign_a] : {std::pair{ai, 1.0}, std::pair{aj, -1.0}}) {
+        for (std::size_t l : rods_of[s]) {
+          const Constraint& b = rods[l];
+          const double sign_b = static_cast<std::size_t>(b.i) == s ? 1.0 : -1.0;
+          entries.emplace_back(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(l),
+                               sign_a * sign_b / P.mass[s] * dot(grad[k], grad[l]));
+        }
       }
     }
+    Eigen::SparseMatrix<double> normal(m, m);
+    normal.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    if (solver.info() != Eigen::Success) return std::nullopt;
+    multipliers = solver.solve(rhs);
   }
-  Eigen::SparseMatrix<double> normal(m, m);
-  normal.setFromTriplets(entries.begin(), entries.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
-  if (solver.info() != Eigen::Success) return std::nullopt;
-  const Eigen::VectorXd mu = solver.solve(rhs);
+  const Eigen::VectorXd& mu = *multipliers;
   std::vector<Vec3> projected = force;
   for (std::size_t k = 0; k < rods.size(); ++k) {
     const Vec3 along = grad[k] * mu(static_cast<Eigen::Index>(k));
