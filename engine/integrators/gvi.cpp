@@ -586,9 +586,14 @@ void Gvi::solve_held_positions(System& system) {
   });
 }
 
+// On one thread the passes over every particle are as fast (measured on the rigid melt:
+// contiguous loops the compiler vectorises); on two the clusters' passes keep each
+// thread's particles in its own cache and open no region of their own (position update
+// 0.107-0.115 -> 0.065-0.073 s per 1000 steps).
 bool Gvi::steps_by_cluster(const Particles& particles) {
-  return lagrangian_ == Lagrangian::verlet && !has_inequalities() && !constrained_predictor_ &&
-         !constraints_.equalities.empty() && equalities_hold_every_particle(particles);
+  return thread_count() > 1 && lagrangian_ == Lagrangian::verlet && !has_inequalities() &&
+         !constrained_predictor_ && !constraints_.equalities.empty() &&
+         equalities_hold_every_particle(particles);
 }
 
 // On the thread that solves the clusters: their particles' half kicks and free steps are made

@@ -137,9 +137,9 @@ class Gvi final : public ConstrainedIntegrator {
   double predict_reflected(const System& system);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   void solve_held_positions(System& system);
-  // Whether the step's per-particle passes go with the cluster solves: Verlet, every particle
-  // in a cluster of rods (strings), no contact rows and the free predictor (a melt of rigid
-  // chains).
+  // Whether the step's per-particle passes go with the cluster solves: on several threads,
+  // Verlet, every particle in a cluster of rods (strings), no contact rows and the free
+  // predictor (a melt of rigid chains).
   bool steps_by_cluster(const Particles& particles);
   // solve_held_positions and displaced() with the half kick and free step of a chunk's
   // clusters made before their solves and their end positions after (the same numbers).
