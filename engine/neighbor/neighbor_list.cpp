@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 
 #include "core/parallel.hpp"
@@ -444,32 +445,16 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
         });
   }
 
-  // The list by particle: each particle's partners moved from its slot.
-  offsets_.resize(static_cast<std::size_t>(n) + 1);
-  offsets_[0] = 0;
-  for (std::int32_t i = 0; i < n; ++i) {
-    const std::size_t s = slot_of[i];
-    offsets_[i + 1] = offsets_[i] + (slot_offsets_[s + 1] - slot_offsets_[s]);
-  }
-  neighbors_.resize(pairs);
-  image_codes_.resize(coded ? pairs : 0);
-  // A particle's partners (some 40 on a liquid) are a substantial item: split as the scan,
-  // not from cheap_loop_minimum() on (the rigid melt's 4000 particles moved on one thread).
-  for_each_chunk(static_cast<std::size_t>(n), chunks, [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t s = slot_of[i];
-      const auto from = static_cast<std::ptrdiff_t>(slot_offsets_[s]);
-      const auto to = static_cast<std::ptrdiff_t>(slot_offsets_[s + 1]);
-      std::copy(slot_neighbors_.begin() + from, slot_neighbors_.begin() + to,
-                neighbors_.begin() + static_cast<std::ptrdiff_t>(offsets_[i]));
-      if (coded) {
-        std::copy(slot_codes_.begin() + from, slot_codes_.begin() + to,
-                  image_codes_.begin() + static_cast<std::ptrdiff_t>(offsets_[i]));
-      }
-    }
-  });
-  if (cell_order_) {
-    // The list by slot, partners renamed by slot.
+  pairs_ = pairs;
+  coded_ = coded;
+  if (!cell_order_) {
+    by_particle_.stale.store(false, std::memory_order_relaxed);
+    rearrange_by_particle(slot_of.data(), slot_offsets_.data(), slot_neighbors_.data(), nullptr,
+                          slot_codes_.data(), static_cast<std::size_t>(n));
+  } else {
+    // The list by slot, partners renamed by slot. The list by particle is made from it when
+    // first asked for (the force loop reads this one; the thermo's curvature, contact rows
+    // and Hessians that one): for an LJ liquid most builds are never asked.
     cell_ordered_.particle = member;
     cell_ordered_.offsets.swap(slot_offsets_);
     cell_ordered_.neighbors.swap(slot_neighbors_);
@@ -478,12 +463,58 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     parallel_for(list.size(), [&](std::size_t k) {
       list[k] = static_cast<std::int32_t>(slot_of[static_cast<std::size_t>(list[k])]);
     });
+    by_particle_.stale.store(true, std::memory_order_release);
   }
   position_at_build_ = position;
   ++builds_;
 }
 
+// Each particle's partners moved from its slot (as particles, or with `slot_particle` as
+// slots renamed to their particles).
+void NeighborList::rearrange_by_particle(const std::size_t* slot_of,
+                                         const std::size_t* slot_offsets,
+                                         const std::int32_t* slot_neighbors,
+                                         const std::int32_t* slot_particle,
+                                         const std::uint8_t* slot_codes, std::size_t n) const {
+  offsets_.resize(n + 1);
+  offsets_[0] = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t s = slot_of[i];
+    offsets_[i + 1] = offsets_[i] + (slot_offsets[s + 1] - slot_offsets[s]);
+  }
+  neighbors_.resize(pairs_);
+  image_codes_.resize(coded_ ? pairs_ : 0);
+  // A particle's partners (some 40 on a liquid) are a substantial item: split as the scan,
+  // not from cheap_loop_minimum() on (the rigid melt's 4000 particles moved on one thread).
+  for_each_chunk(n, chunks_for(n), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t s = slot_of[i];
+      const std::size_t from = slot_offsets[s], to = slot_offsets[s + 1];
+      std::int32_t* const out = neighbors_.data() + offsets_[i];
+      if (slot_particle) {
+        for (std::size_t k = from; k < to; ++k) {
+          out[k - from] = slot_particle[static_cast<std::size_t>(slot_neighbors[k])];
+        }
+      } else {
+        std::copy(slot_neighbors + from, slot_neighbors + to, out);
+      }
+      if (coded_) std::copy(slot_codes + from, slot_codes + to, image_codes_.data() + offsets_[i]);
+    }
+  });
+}
+
+void NeighborList::make_by_particle() const {
+  const std::lock_guard<std::mutex> lock(by_particle_.mutex);
+  if (!by_particle_.stale.load(std::memory_order_acquire)) return;
+  rearrange_by_particle(slot_of_.data(), cell_ordered_.offsets.data(),
+                        cell_ordered_.neighbors.data(), cell_ordered_.particle.data(),
+                        cell_ordered_.image_codes.data(), cell_ordered_.particle.size());
+  by_particle_.stale.store(false, std::memory_order_release);
+}
+
 void NeighborList::set_cell_order(bool on) {
+  // The list by particle of the last build, made before the list by slot goes.
+  by_particle();
   cell_order_ = on;
   if (!on) cell_ordered_ = CellOrdered{};
   position_at_build_.clear();  // force a rebuild

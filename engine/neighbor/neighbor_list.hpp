@@ -1,7 +1,9 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "core/vec3.hpp"
@@ -37,17 +39,29 @@ class NeighborList {
   // and with it every rounding, repeats.
   const std::vector<Vec3>& positions_at_build() const { return position_at_build_; }
 
-  // Neighbours of i are neighbors()[offsets()[i] .. offsets()[i+1]).
-  const std::vector<std::int32_t>& neighbors() const { return neighbors_; }
-  const std::vector<std::size_t>& offsets() const { return offsets_; }
-  std::size_t pair_count() const { return neighbors_.size(); }
+  // Neighbours of i are neighbors()[offsets()[i] .. offsets()[i+1]). With cache order on,
+  // made from the list by slot when first asked for after a build (on any thread).
+  const std::vector<std::int32_t>& neighbors() const {
+    by_particle();
+    return neighbors_;
+  }
+  const std::vector<std::size_t>& offsets() const {
+    by_particle();
+    return offsets_;
+  }
+  std::size_t pair_count() const { return pairs_; }
   std::int64_t builds() const { return builds_; }
 
   // When the box is at least three reaches wide along every periodic axis, each listed pair
   // also has a fixed periodic shift, valid until the next rebuild: x_i - x_j - shift is its
   // minimum-image separation, with no rounding in the force loop. Otherwise (small boxes)
   // image_codes() is empty and callers take minimum images.
-  const std::vector<std::uint8_t>& image_codes() const { return image_codes_; }
+  const std::vector<std::uint8_t>& image_codes() const {
+    by_particle();
+    return image_codes_;
+  }
+  // Whether the pairs have image codes (image_codes() not empty, here and by slot).
+  bool coded() const { return coded_ && pairs_ > 0; }
   const std::array<Vec3, 27>& image_shifts() const { return image_shifts_; }
 
   // Cache order: with it on, each build also keeps the list in the particles' cell order
@@ -76,6 +90,13 @@ class NeighborList {
     }
   };
   Grid make_grid(const std::vector<Vec3>& inside, const Box& box) const;
+  void by_particle() const {
+    if (by_particle_.stale.load(std::memory_order_acquire)) make_by_particle();
+  }
+  void make_by_particle() const;
+  void rearrange_by_particle(const std::size_t* slot_of, const std::size_t* slot_offsets,
+                             const std::int32_t* slot_neighbors, const std::int32_t* slot_particle,
+                             const std::uint8_t* slot_codes, std::size_t n) const;
   void make_stencils(const Grid& grid, const Box& box);
 
   double cutoff_, skin_;
@@ -116,9 +137,24 @@ class NeighborList {
   std::vector<std::int32_t> slot_neighbors_;
   std::vector<std::uint8_t> slot_codes_;
 
-  std::vector<std::int32_t> neighbors_;
-  std::vector<std::size_t> offsets_;
-  std::vector<std::uint8_t> image_codes_;
+  // The list by particle, made from the list by slot when first asked for (cache order):
+  // `stale` until then. Copies take the flag, not the lock.
+  struct Pending {
+    std::atomic<bool> stale{false};
+    std::mutex mutex;
+    Pending() = default;
+    Pending(const Pending& other) : stale(other.stale.load()) {}
+    Pending& operator=(const Pending& other) {
+      stale.store(other.stale.load());
+      return *this;
+    }
+  };
+  mutable Pending by_particle_;
+  mutable std::vector<std::int32_t> neighbors_;
+  mutable std::vector<std::size_t> offsets_;
+  mutable std::vector<std::uint8_t> image_codes_;
+  std::size_t pairs_ = 0;
+  bool coded_ = false;
   std::array<Vec3, 27> image_shifts_{};
   std::vector<Vec3> position_at_build_;
   std::int64_t builds_ = 0;

@@ -85,11 +85,15 @@ class PairForce final : public ForceTerm {
                  SymTensor& virial, bool tally) const override {
     const std::size_t n = system.particles.size();
     const NeighborList::CellOrdered& ordered = neighbors.cell_ordered();
-    Listed listed{system.particles.position.data(), system.particles.type.data(),
-                  neighbors.neighbors().data(),     neighbors.image_codes().data(),
-                  neighbors.offsets().data(),       !neighbors.image_codes().empty()};
-    double energy = 0.0;
     const bool by_slot = ordered.particle.size() == n && n > 0;
+    // By slot the list by particle is not read (nor made: NeighborList makes it on demand).
+    Listed listed{system.particles.position.data(),
+                  system.particles.type.data(),
+                  by_slot ? nullptr : neighbors.neighbors().data(),
+                  by_slot ? nullptr : neighbors.image_codes().data(),
+                  by_slot ? nullptr : neighbors.offsets().data(),
+                  neighbors.coded()};
+    double energy = 0.0;
     if (vector_loop_applies(listed) && n > 0) {
       energy = by_slot ? vector_loops(system.particles.position, ordered.particle.data(),
                                       ordered.neighbors.data(), ordered.image_codes.data(),
