@@ -14,6 +14,24 @@ inline RunInput input_from(const std::string& toml) {
   return parse_run_input(toml, std::string(DELI_SOURCE_DIR) + "/tests/inline.toml");
 }
 
+// The [system] and [velocities] tables of 40 random-walk chains of 30 beads (1200 particles,
+// 1160 bonds of length 1, density 0.5, temperature 1): held by rods, 1160 rows in 40
+// clusters, past the rows from which cluster loops are cut into chunks. The caller adds the
+// force field, constraints and integrator.
+inline const std::string kThirtyBeadChains = R"(
+[system]
+[system.chains]
+count = 40
+length = 30
+density = 0.5
+bond_length = 1.0
+min_distance = 0.8
+seed = 31
+[velocities]
+temperature = 1.0
+seed = 7
+)";
+
 // Energies and forces of `input` at its current positions through a fresh neighbour list.
 struct Evaluated {
   ForceEvaluation evaluation;

@@ -17,18 +17,7 @@ namespace {
 
 // 40 random-walk chains of 30 beads, LJ between them, every bond a rod (1160 rods).
 RunInput rod_chains() {
-  return testing::input_from(R"(
-[system]
-[system.chains]
-count = 40
-length = 30
-density = 0.5
-bond_length = 1.0
-min_distance = 0.8
-seed = 31
-[velocities]
-temperature = 1.0
-seed = 7
+  return testing::input_from(testing::kThirtyBeadChains + R"(
 [forcefield.special_bonds]
 lj = [0.0, 1.0, 1.0]
 [forcefield.pair]

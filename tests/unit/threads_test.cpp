@@ -331,18 +331,7 @@ void expect_same_trajectory(const GviTrajectory& a, const GviTrajectory& b) {
 // 40 random-walk chains of 30 beads held by rods (1160 rods, 40 clusters: past the rows
 // from which the cluster loops are cut into chunks), free of pair forces.
 RunInput rigid_chains() {
-  return testing::input_from(R"(
-[system]
-[system.chains]
-count = 40
-length = 30
-density = 0.5
-bond_length = 1.0
-min_distance = 0.8
-seed = 31
-[velocities]
-temperature = 1.0
-seed = 7
+  return testing::input_from(testing::kThirtyBeadChains + R"(
 [forcefield.pair]
 style = "none"
 [constraints]
