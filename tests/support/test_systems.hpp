@@ -14,11 +14,11 @@ inline RunInput input_from(const std::string& toml) {
   return parse_run_input(toml, std::string(DELI_SOURCE_DIR) + "/tests/inline.toml");
 }
 
-// The [system] and [velocities] tables of 40 random-walk chains of 30 beads (1200 particles,
-// 1160 bonds of length 1, density 0.5, temperature 1): held by rods, 1160 rows in 40
-// clusters, past the rows from which cluster loops are cut into chunks. The caller adds the
-// force field, constraints and integrator.
-inline const std::string kThirtyBeadChains = R"(
+// 40 random-walk chains of 30 beads (1200 particles, density 0.5, temperature 1), every bond
+// a rod of length 1 (1160 rows in 40 clusters: past the rows from which cluster loops are
+// cut into chunks), GVI at h 0.005, with the force field's tables `force_field`.
+inline RunInput thirty_bead_rod_chains(const std::string& force_field) {
+  return input_from(R"(
 [system]
 [system.chains]
 count = 40
@@ -30,7 +30,17 @@ seed = 31
 [velocities]
 temperature = 1.0
 seed = 7
-)";
+)" + force_field + R"(
+[constraints]
+bonds = "rigid"
+rod_length = 1.0
+[integrator]
+type = "gvi"
+timestep = 0.005
+[run]
+steps = 0
+)");
+}
 
 // Energies and forces of `input` at its current positions through a fresh neighbour list.
 struct Evaluated {

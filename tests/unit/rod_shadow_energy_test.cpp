@@ -17,7 +17,7 @@ namespace {
 
 // 40 random-walk chains of 30 beads, LJ between them, every bond a rod (1160 rods).
 RunInput rod_chains() {
-  return testing::input_from(testing::kThirtyBeadChains + R"(
+  return testing::thirty_bead_rod_chains(R"(
 [forcefield.special_bonds]
 lj = [0.0, 1.0, 1.0]
 [forcefield.pair]
@@ -25,14 +25,6 @@ style = "lj/cut"
 cutoff = 2.5
 shift = true
 coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
-[constraints]
-bonds = "rigid"
-rod_length = 1.0
-[integrator]
-type = "gvi"
-timestep = 0.005
-[run]
-steps = 0
 )");
 }
 

@@ -331,18 +331,7 @@ void expect_same_trajectory(const GviTrajectory& a, const GviTrajectory& b) {
 // 40 random-walk chains of 30 beads held by rods (1160 rods, 40 clusters: past the rows
 // from which the cluster loops are cut into chunks), free of pair forces.
 RunInput rigid_chains() {
-  return testing::input_from(testing::kThirtyBeadChains + R"(
-[forcefield.pair]
-style = "none"
-[constraints]
-bonds = "rigid"
-rod_length = 1.0
-[integrator]
-type = "gvi"
-timestep = 0.005
-[run]
-steps = 0
-)");
+  return testing::thirty_bead_rod_chains("[forcefield.pair]\nstyle = \"none\"\n");
 }
 
 TEST(ThreadsGvi, RigidChainsOnTwoThreadsAreTheOneThreadTrajectory) {
