@@ -94,11 +94,6 @@ class ConstrainedIntegrator : public Integrator {
     const std::vector<Vec3>& delta;
     const std::vector<Vec3>& impulse;
   };
-  // Per-particle passes made with the cluster solves, chunk by chunk on the thread that
-  // solves the chunk's clusters (no parallel region, and no pass over every particle, of
-  // their own): before(chunk, particles) for each of the chunk's clusters before any of them
-  // is solved (it makes what their solves read), after(chunk, particles) for each once all
-  // are (it reads what they wrote). Chunks are numbered from 0, below thread_count().
   // The particles of one or more clusters: list[0..count) where list is not null, else
   // first..first+count-1 (consecutive clusters joined into one run, a loop that vectorises).
   struct ParticleRun {
@@ -113,6 +108,11 @@ class ConstrainedIntegrator : public Integrator {
       for (std::size_t i = first, end = first + count; i < end; ++i) body(i);
     }
   };
+  // Per-particle passes made with the cluster solves, chunk by chunk on the thread that
+  // solves the chunk's clusters (no parallel region, and no pass over every particle, of
+  // their own): before(chunk, run) over the chunk's clusters' particles before any of them
+  // is solved (it makes what their solves read), after(chunk, run) once all are (it reads
+  // what they wrote). Chunks are numbered from 0, below thread_count().
   struct ClusterPasses {
     std::function<void(int, const ParticleRun&)> before, after;
   };

@@ -202,8 +202,12 @@ std::optional<Eigen::VectorXd> chain_multipliers(const Particles& P,
     a.diagonal(static_cast<Eigen::Index>(k)) = 1.0 / P.mass[ai] * d + 1.0 / P.mass[aj] * d;
     if (k + 1 == rods.size()) continue;
     const Constraint& next = rods[k + 1];
+    auto in_next = [&](std::size_t s) {
+      return static_cast<std::size_t>(next.i) == s || static_cast<std::size_t>(next.j) == s;
+    };
+    if (in_next(ai) && in_next(aj)) return std::nullopt;  // two rods on one pair
     for (const std::size_t s : {ai, aj}) {
-      if (static_cast<std::size_t>(next.i) != s && static_cast<std::size_t>(next.j) != s) continue;
+      if (!in_next(s)) continue;
       const double coupling = sign(c, s) * sign(next, s) / P.mass[s] * dot(grad[k], grad[k + 1]);
       a.upper(static_cast<Eigen::Index>(k)) = coupling;
       a.lower(static_cast<Eigen::Index>(k + 1)) = coupling;
