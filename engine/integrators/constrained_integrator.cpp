@@ -394,14 +394,20 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
   const std::size_t cluster_count = cluster_rows(rows, system.particles);
   virial_terms_.reset(cluster_count,
                       [&](std::size_t k) { return cluster_at(rows, k).rows.size(); });
-  auto project_cluster = [&](std::size_t index, RodChainWorkspace& chain_work) {
+  const int chunks = chunks_for_work(cluster_count, rows.size());
+  // Per chunk: the largest deviation of the rod lengths the chain kernels measured at x, or
+  // -1 once a cluster went another way.
+  std::vector<double> chunk_deviation(static_cast<std::size_t>(chunks), 0.0);
+  auto project_cluster = [&](std::size_t index, RodChainWorkspace& chain_work, double& deviation) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
     if (prepared && prepared->chain &&
         prepared->chain->project_momenta(x.data(), p.data(), system.box, chain_work,
                                          virial_terms_.take(index, prepared->chain->rows()))) {
+      if (deviation >= 0.0) deviation = std::max(deviation, prepared->chain->measured_deviation());
       return;
     }
+    deviation = -1.0;
     std::optional<LocalCluster> built;
     std::optional<ClusterRows> built_structure;
     if (!prepared) {
@@ -437,7 +443,6 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     return prepared ? prepared->chain.get() : nullptr;
   };
-  const int chunks = chunks_for_work(cluster_count, rows.size());
   if (chain_works_.size() < static_cast<std::size_t>(chunks)) chain_works_.resize(chunks);
   if (chain_lanes_.size() < static_cast<std::size_t>(chunks)) chain_lanes_.resize(chunks);
   // A failure is thrown once every chunk has ended: the lowest chunk's, whose loop stopped at
@@ -445,22 +450,34 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
   for_each_chunk(cluster_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
     RodChainWorkspace& work = chain_works_[static_cast<std::size_t>(c)];
     RodChainLanes& lanes = chain_lanes_[static_cast<std::size_t>(c)];
-    auto alone = [&](std::size_t index) { project_cluster(index, work); };
+    double& deviation = chunk_deviation[static_cast<std::size_t>(c)];
+    auto alone = [&](std::size_t index) { project_cluster(index, work, deviation); };
     auto together = [&](const RodChain** chains, const std::size_t* indices, std::size_t count) {
       bool solved[RodChainLanes::width];
       RodChain::project_momenta_lanes(chains, count, x.data(), p.data(), system.box, lanes, solved);
       const std::size_t m = chains[0]->rows();
       for (std::size_t l = 0; l < count; ++l) {
         if (!solved[l]) {
-          project_cluster(indices[l], work);
+          project_cluster(indices[l], work, deviation);
           continue;
         }
         std::copy_n(lanes.virial_terms.data() + l * m, m, virial_terms_.take(indices[l], m));
+        if (deviation >= 0.0) deviation = std::max(deviation, chains[l]->measured_deviation());
       }
     };
     around_clusters(rows, passes, c, begin, end,
                     [&] { by_chain_runs(begin, end, chain_of, alone, together); });
   });
+  projected_deviation_ = -1.0;
+  if (&rows == &constraints_.equalities) {
+    double largest = 0.0;
+    bool measured = true;
+    for (const double d : chunk_deviation) {
+      measured = measured && d >= 0.0;
+      largest = std::max(largest, d);
+    }
+    if (measured) projected_deviation_ = largest;
+  }
   double virial = 0.0;
   virial_terms_.add_to(virial);
   return virial;
@@ -743,7 +760,7 @@ std::vector<Constraint> ConstrainedIntegrator::candidates_for_step(System& syste
 
 void ConstrainedIntegrator::record_geometry(const System& system,
                                             const std::vector<Constraint>& candidates, bool full,
-                                            const double* candidates_smallest) {
+                                            const double* candidates_smallest, bool projected) {
   const Particles& P = system.particles;
   double gap = full
                    ? constraints_.minimum_gap(P, P.position.data(), engine_.neighbors(), system.box)
@@ -768,7 +785,9 @@ void ConstrainedIntegrator::record_geometry(const System& system,
   }
   stats_.min_gap = std::min(stats_.min_gap, gap);
   if (gap < -constraints_.tolerances.gap) ++stats_.penetrations;
-  stats_.max_rod_violation = largest_rod_violation(system, stats_.max_rod_violation);
+  stats_.max_rod_violation = projected && projected_deviation_ >= 0.0
+                                 ? std::max(stats_.max_rod_violation, projected_deviation_)
+                                 : largest_rod_violation(system, stats_.max_rod_violation);
 }
 
 // Per equality cluster: a chain's rod lengths are those its momentum projection computed at

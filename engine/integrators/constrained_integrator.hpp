@@ -156,9 +156,11 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<Constraint> candidates_for_step(System& system, std::vector<Vec3>& q,
                                               std::vector<Vec3>& x);
   // `candidates_smallest`, when given, is the smallest gap of the candidates at the current
-  // positions, already found: the candidates are not scanned again.
+  // positions, already found: the candidates are not scanned again. `projected`: the last
+  // project_momenta was at the current positions (nothing has moved them since), so the rod
+  // lengths its chain kernels measured there stand for the largest rod violation.
   void record_geometry(const System& system, const std::vector<Constraint>& candidates, bool full,
-                       const double* candidates_smallest = nullptr);
+                       const double* candidates_smallest = nullptr, bool projected = false);
   // max |f| / length over the equality rows at the current positions, at least `start`.
   double largest_rod_violation(const System& system, double start);
   // The implicit midpoint's fixed point, the one loop of every integrator that has one:
@@ -204,7 +206,11 @@ class ConstrainedIntegrator : public Integrator {
   double step_virial_ = 0.0;              // sum of r . J over this step's constraint impulses
   std::array<double, 2> virial_sums_{};   // sum over steps of step_virial_ / h, per sampler
   std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
-  bool setting_up_ = false;               // solves of setup(): failures name the start
+  // max |r - L| / L over the equality rows at the positions of the last project_momenta,
+  // when it projected them alone and every cluster by a chain kernel (which measures the
+  // lengths there); else -1.
+  double projected_deviation_ = -1.0;
+  bool setting_up_ = false;  // solves of setup(): failures name the start
   // Performance only: the equality rows' clusters, prepared once; the last clustering.
   EqualityClusters equality_clusters_;
   std::vector<Cluster> found_clusters_;

@@ -833,7 +833,8 @@ void Gvi::check_constraints(const System& system, bool tally) {
   // The feasibility guard's last pass saw the same candidates at the same positions.
   const bool known = at_x && ws_.x_smallest_gap_known && !ws_.nearby_refreshed;
   ws_.x_smallest_gap_known = false;
-  record_geometry(system, ws_.nearby, tally, known ? &ws_.x_smallest_gap : nullptr);
+  // Nothing moves the positions after the momentum update's projection.
+  record_geometry(system, ws_.nearby, tally, known ? &ws_.x_smallest_gap : nullptr, true);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,

@@ -117,6 +117,10 @@ class RodChain {
   // computed.
   double largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,
                                     double start) const;
+  // max_k |r_k - L_k| / L_k at the positions of the last momentum projection that returned
+  // true (project_momenta, or project_momenta_lanes with the chain solved): what
+  // largest_relative_deviation gives there from 0.
+  double measured_deviation() const { return memo_.largest_deviation; }
 
  private:
   RodChain() = default;

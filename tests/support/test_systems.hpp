@@ -42,6 +42,19 @@ steps = 0
 )");
 }
 
+// thirty_bead_rod_chains with shifted LJ (cutoff 2.5) between beads not bonded to each other.
+inline RunInput thirty_bead_lj_rod_chains() {
+  return thirty_bead_rod_chains(R"(
+[forcefield.special_bonds]
+lj = [0.0, 1.0, 1.0]
+[forcefield.pair]
+style = "lj/cut"
+cutoff = 2.5
+shift = true
+coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
+)");
+}
+
 // Energies and forces of `input` at its current positions through a fresh neighbour list.
 struct Evaluated {
   ForceEvaluation evaluation;

@@ -15,21 +15,8 @@
 namespace deli {
 namespace {
 
-// 40 random-walk chains of 30 beads, LJ between them, every bond a rod (1160 rods).
-RunInput rod_chains() {
-  return testing::thirty_bead_rod_chains(R"(
-[forcefield.special_bonds]
-lj = [0.0, 1.0, 1.0]
-[forcefield.pair]
-style = "lj/cut"
-cutoff = 2.5
-shift = true
-coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
-)");
-}
-
 TEST(RodShadowEnergy, ChainSweepIsTheSparseFactorisation) {
-  RunInput input = rod_chains();
+  RunInput input = testing::thirty_bead_lj_rod_chains();
   System& system = input.system;
   Gvi gvi(*input.force_field, input.constraints, input.gvi, system.particles);
   gvi.setup(system);

@@ -20,37 +20,13 @@
 #include "support/scratch_files.hpp"
 #include "support/short_runs.hpp"
 #include "support/test_systems.hpp"
+#include "support/thread_count.hpp"
 
 namespace deli {
 namespace {
 
-// Sets the thread count for a scope (the tests run with OMP_NUM_THREADS=1), and splits the
-// loops of cheap items from kParallelMinimum items on, as the others: these systems (a few
-// thousand particles) are below the default cheap_loop_minimum(), and these tests are about
-// the split paths' results.
-class ThreadCount {
- public:
-  explicit ThreadCount(int n) : before_(thread_count()), cheap_before_(cheap_loop_minimum()) {
-    set_thread_count(n);
-    set_cheap_loop_minimum(kParallelMinimum);
-  }
-  ~ThreadCount() {
-    set_thread_count(before_);
-    set_cheap_loop_minimum(cheap_before_);
-  }
-  ThreadCount(const ThreadCount&) = delete;
-  ThreadCount& operator=(const ThreadCount&) = delete;
-
- private:
-  int before_;
-  std::size_t cheap_before_;
-};
-
-#ifdef _OPENMP
-constexpr bool kThreaded = true;
-#else
-constexpr bool kThreaded = false;
-#endif
+using testing::kThreaded;
+using testing::ThreadCount;
 
 // 100 harmonic chains of 40 beads: 4000 particles and 3900 bonds, both past the length
 // from which loops are cut into chunks, with shifted LJ and bonded exclusions.
