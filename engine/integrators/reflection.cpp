@@ -2,6 +2,7 @@
 
 #include "solvers/chain_projection.hpp"
 #include "solvers/cluster_matrices.hpp"
+#include "solvers/least_norm.hpp"
 #include "solvers/nonnegative_qp.hpp"
 
 namespace deli {
@@ -20,7 +21,8 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
     const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, x, box);
     const Eigen::MatrixXd WF = w.asDiagonal() * F;
     const Eigen::MatrixXd FWF = F.transpose() * WF;
-    N -= F * FWF.completeOrthogonalDecomposition().solve(WF.transpose() * N);
+    least_norm_solve(FWF, WF.transpose() * N, Y);
+    N -= F * Y;
   }
   return N;
 }
@@ -117,7 +119,7 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     const Eigen::MatrixXd F = gradient_matrix(cluster, eq_rows, q, box);
     const Eigen::MatrixXd WF = w.asDiagonal() * F;
     const Eigen::MatrixXd FWF = F.transpose() * WF;
-    Y = FWF.completeOrthogonalDecomposition().solve(WF.transpose() * N);
+    least_norm_solve(FWF, WF.transpose() * N, Y);
     N -= F * Y;
   }
   stats.row_impulse.assign(cluster.rows.size(), 0.0);

@@ -1,6 +1,7 @@
 #include "solvers/momentum_update.hpp"
 
 #include "solvers/cluster_rows.hpp"
+#include "solvers/least_norm.hpp"
 
 namespace deli {
 
@@ -46,7 +47,7 @@ SolverStatus project_momentum(const ClusterRows& structure, const std::vector<Ve
     // fails, or gives multipliers that do not solve the system; least norm instead.
     if (ldlt.info() != Eigen::Success || !mu.allFinite() ||
         !(residual_norm(A * mu - b) <= tolerance)) {
-      mu = A.completeOrthogonalDecomposition().solve(b);
+      mu = least_norm_solve(A, b);
     }
   }
   const std::vector<Vec3> j = structure.impulse(u, mu);

@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include "solvers/least_norm.hpp"
+
 namespace deli {
 
 namespace {
@@ -13,7 +15,7 @@ constexpr std::size_t kSizesKeptApart = 16;
 struct PassiveSolve {
   Eigen::MatrixXd A;
   Eigen::VectorXd b, s;
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> decomposition;
+  LeastNorm decomposition;
 };
 
 // The solver's vectors and solves, kept between calls: reflections solve many small
@@ -41,7 +43,7 @@ const Eigen::VectorXd& solve_passive(const Eigen::MatrixXd& Q, const Eigen::Vect
     for (Eigen::Index s = 0; s < n; ++s) A(r, s) = Q(passive[r], passive[s]);
   }
   solve.decomposition.compute(A);
-  solve.s = solve.decomposition.solve(b);
+  solve.decomposition.solve(b, solve.s);
   return solve.s;
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "solvers/cluster_rows.hpp"
+#include "solvers/least_norm.hpp"
 
 namespace deli {
 
@@ -23,10 +24,9 @@ Eigen::VectorXd solve_linear(const Eigen::MatrixXd& J, const Eigen::VectorXd& rh
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(J);
   Eigen::VectorXd step = lu.solve(rhs);
   if (!step.allFinite() || !(lu.rcond() > kDependentRows)) {
-    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> least_norm;
-    least_norm.setThreshold(kDependentRows);
-    least_norm.compute(J);
-    step = least_norm.solve(rhs);
+    LeastNorm least_norm;
+    least_norm.compute(J, kDependentRows);
+    least_norm.solve(rhs, step);
   }
   return step;
 }
