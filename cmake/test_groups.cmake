@@ -11,9 +11,10 @@
 # ctest -j2). A group runs its cases as the binary run alone runs them, in order in one
 # process, so a case that depends on another's leftovers fails here too. A failing group's
 # output names the failing case.
+# The binary's name, for the tests that report a problem.
+get_filename_component(cases_name "${cases_file}" NAME)
 if(NOT EXISTS "${cases_file}")
-  get_filename_component(binary "${cases_file}" NAME)
-  add_test("${binary}_NOT_BUILT" "${binary}_NOT_BUILT")
+  add_test("${cases_name}_NOT_BUILT" "${cases_name}_NOT_BUILT")
   return()
 endif()
 
@@ -57,7 +58,8 @@ endforeach()
 
 # A case this file could not read (an unexpected line format) must not go unrun unseen.
 if(NOT placed EQUAL discovered)
-  add_test("${binary}: ${placed} of ${discovered} cases grouped, see cmake/test_groups.cmake" false)
+  add_test("${cases_name}: ${placed} of ${discovered} cases grouped, see cmake/test_groups.cmake"
+           false)
 endif()
 
 foreach(suite IN LISTS suites)
