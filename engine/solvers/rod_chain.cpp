@@ -467,7 +467,8 @@ RodChainLanes::Group& RodChain::group_of(const RodChain* const* chains, std::siz
     v->assign(m * w, 0.0);
   }
   g.image.assign(3 * m * w, 0.0);
-  for (auto* v : {&g.first_sign, &g.second_sign, &g.hw}) v->assign(n * w, 0.0);
+  for (auto* v : {&g.first_sign, &g.second_sign, &g.hw, &g.inverse_mass}) v->assign(n * w, 0.0);
+  g.particle.assign(n * w, 0);
   // Kept for a new h (lanes stamped with their generations stay valid).
   g.memo_u.resize(3 * m * w);
   g.memo_r.resize(m * w);
@@ -490,23 +491,24 @@ RodChainLanes::Group& RodChain::group_of(const RodChain* const* chains, std::siz
       g.first_sign[b * w + lane] = c.first_sign_[b];
       g.second_sign[b * w + lane] = c.second_sign_[b];
       g.hw[b * w + lane] = h * c.bead_inverse_mass_[b];
+      g.inverse_mass[b * w + lane] = c.bead_inverse_mass_[b];
+      g.particle[b * w + lane] = c.bead_particle_[b];
+    }
+  }
+  g.consecutive = g.particle[0];
+  for (std::size_t b = 0; b < n; ++b) {
+    for (std::size_t lane = 0; lane < w; ++lane) {
+      if (g.particle[b * w + lane] != g.particle[0] + std::int64_t(lane * n + b))
+        g.consecutive = -1;
     }
   }
   return g;
 }
 
-void RodChain::begin_across(const Vec3* q, const Vec3* delta, const Box& box, std::size_t lane,
+void RodChain::begin_across(const Vec3* q, const Box& box, std::size_t lane,
                             RodChainLanes::Group& group, RodChainLanes& lanes) const {
   constexpr std::size_t w = RodChainLanes::width;
-  const std::size_t n = beads();
   const std::size_t m = rows();
-  RodChainLanes::Across& a = lanes.across;
-  for (std::size_t b = 0; b < n; ++b) {
-    const std::int32_t g = bead_particle_[b];
-    a.x0[b * w + lane] = delta[g].x + q[g].x;
-    a.x0[(n + b) * w + lane] = delta[g].y + q[g].y;
-    a.x0[(2 * n + b) * w + lane] = delta[g].z + q[g].z;
-  }
   // Directions of the impulses: the rods at the start of the step, fixed. Usually the last
   // projection's, already in the group's lane.
   const bool remembered = remembers(q, box);
@@ -567,14 +569,18 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
   // z = 0, as solve_positions starts.
   a.z.assign(m * w, 0.0);
   size_lanes(m, lanes);
+  // The free positions x0 = delta + q of every lane (lanes without a chain repeat the first
+  // one: their results are never read).
+  static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  rod_passes::across::gather_sum(n, g.particle.data(), g.consecutive, &delta[0].x, &q[0].x,
+                                 a.x0.data());
   for (std::size_t l = 0; l < count; ++l) {
-    chains[l]->begin_across(q, delta, box, l, g, lanes);
+    chains[l]->begin_across(q, box, l, g, lanes);
     status[l] = SolverStatus{};
     solved[l] = false;
   }
-  // Lanes without a chain repeat the first one (their results are never read).
   for (std::size_t l = count; l < w; ++l) {
-    for (auto* v : {&a.x0, &g.memo_u, &g.memo_r}) copy_lane(*v, 0, l);
+    for (auto* v : {&g.memo_u, &g.memo_r}) copy_lane(*v, 0, l);
   }
   const double* start_u = g.memo_u.data();
   const double* start_r = g.memo_r.data();
@@ -710,17 +716,16 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
                                a.impulse.data());
   double virials[w];
   rod_passes::across::virial(m, a.z.data(), start_r, virials);
+  std::uint8_t done[w] = {};
   for (std::size_t l = 0; l < count; ++l) {
     if (state[l] != State::done) continue;
     status[l].converged = true;
     virial[l] = virials[l];
-    const std::vector<std::int32_t>& particle = chains[l]->bead_particle_;
-    for (std::size_t b = 0; b < n; ++b) {
-      impulse[particle[b]] = {a.impulse[b * w + l], a.impulse[(n + b) * w + l],
-                              a.impulse[(2 * n + b) * w + l]};
-    }
+    done[l] = 1;
     solved[l] = true;
   }
+  rod_passes::across::scatter(n, g.particle.data(), g.consecutive, a.impulse.data(), done, false,
+                              &impulse[0].x);
 }
 
 void RodChain::begin_momenta(const Vec3* x, const Vec3* p, const Box& box,
@@ -769,23 +774,6 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
   return true;
 }
 
-void RodChain::gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t lane,
-                                     RodChainLanes& lanes) const {
-  constexpr std::size_t w = RodChainLanes::width;
-  const std::size_t n = beads();
-  RodChainLanes::Across& a = lanes.across;
-  for (std::size_t b = 0; b < n; ++b) {
-    const std::int32_t g = bead_particle_[b];
-    a.x[b * w + lane] = x[g].x;
-    a.x[(n + b) * w + lane] = x[g].y;
-    a.x[(2 * n + b) * w + lane] = x[g].z;
-    const Vec3 v = p[g] * bead_inverse_mass_[b];
-    a.v[b * w + lane] = v.x;
-    a.v[(n + b) * w + lane] = v.y;
-    a.v[(2 * n + b) * w + lane] = v.z;
-  }
-}
-
 void RodChain::remember_across(const Vec3* x, const Box& box, std::size_t lane,
                                RodChainLanes::Group& group, double largest) const {
   remember_positions(x, box);
@@ -814,11 +802,9 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
   a.r.resize(m * w);
   a.phi.resize(m * w);
   size_lanes(m, lanes);
-  for (std::size_t l = 0; l < count; ++l) chains[l]->gather_momenta_across(x, p, l, lanes);
-  for (std::size_t l = count; l < w; ++l) {
-    copy_lane(a.x, 0, l);
-    copy_lane(a.v, 0, l);
-  }
+  // Lanes without a chain repeat the first one.
+  rod_passes::across::gather_velocities(n, g.particle.data(), g.consecutive, &x[0].x, &p[0].x,
+                                        g.inverse_mass.data(), a.x.data(), a.v.data());
   // The directions at x (directions()), remembered where the next solve finds them.
   const ImageRange range(box);
   std::uint8_t hold[w];
@@ -839,17 +825,16 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
   rod_passes::across::impulses(m, a.u.data(), lanes.x.data(), g.first_sign.data(),
                                g.second_sign.data(), a.impulse.data());
   lanes.virial_terms.resize(count * m);
+  std::uint8_t take[w] = {};
   for (std::size_t l = 0; l < count; ++l) {
     solved[l] = lanes.solved[l] != 0;
     if (!solved[l]) continue;
+    take[l] = 1;
     double* terms = lanes.virial_terms.data() + l * m;
     for (std::size_t k = 0; k < m; ++k) terms[k] = lanes.x[k * w + l] * a.r[k * w + l];
-    const std::vector<std::int32_t>& particle = chains[l]->bead_particle_;
-    for (std::size_t b = 0; b < n; ++b) {
-      p[particle[b]] +=
-          Vec3{a.impulse[b * w + l], a.impulse[(n + b) * w + l], a.impulse[(2 * n + b) * w + l]};
-    }
   }
+  rod_passes::across::scatter(n, g.particle.data(), g.consecutive, a.impulse.data(), take, true,
+                              &p[0].x);
   // The directions and lengths, remembered in the group's lanes for the next step's solve.
   std::swap(a.u, g.memo_u);
   std::swap(a.r, g.memo_r);

@@ -38,8 +38,11 @@ struct RodChainLanes {
     std::size_t rows = 0;
     double h = 0.0;
     std::vector<double> forward, length, inverse_length, w_low, w_high, coupling, low_first,
-        low_sign, high_sign, image;                   // rods
-    std::vector<double> first_sign, second_sign, hw;  // beads
+        low_sign, high_sign, image;                                 // rods
+    std::vector<double> first_sign, second_sign, hw, inverse_mass;  // beads
+    std::vector<std::int32_t> particle;                             // beads
+    // Lane l's bead b is particle consecutive + l (m + 1) + b when consecutive >= 0.
+    std::int64_t consecutive = -1;
     // The chains' remembered start directions and lengths in this layout (the momentum
     // projection's, kept for the next step's solve); lane l holds chain l's memo while
     // memo_generation[l] is that memo's generation (RodChain::DirectionsMemo).
@@ -178,19 +181,15 @@ class RodChain {
   // The group of chains[0..count) in lanes.across.groups, or null.
   static RodChainLanes::Group* find_group(const RodChain* const* chains, std::size_t count,
                                           RodChainLanes& lanes);
-  // Lane `lane` of lanes.across for the momentum projection: the positions x and velocities
-  // M^-1 p.
-  void gather_momenta_across(const Vec3* x, const Vec3* p, std::size_t lane,
-                             RodChainLanes& lanes) const;
   // Remembers the directions and lengths made in lane `lane` of lanes.across at positions x
   // (global), which the caller then moves into group.memo_u and memo_r; `largest` is their
   // largest_deviation.
   void remember_across(const Vec3* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
                        double largest) const;
-  // Lane `lane` of lanes.across: the free positions x0 = q + delta, and of group.memo_u and
-  // memo_r, the start directions and lengths of this solve (memo_, made where not remembered).
-  void begin_across(const Vec3* q, const Vec3* delta, const Box& box, std::size_t lane,
-                    RodChainLanes::Group& group, RodChainLanes& lanes) const;
+  // Lane `lane` of group.memo_u and memo_r: the start directions and lengths of this solve
+  // (memo_, made where not remembered).
+  void begin_across(const Vec3* q, const Box& box, std::size_t lane, RodChainLanes::Group& group,
+                    RodChainLanes& lanes) const;
   // rewrap_differences for lane `lane` at positions x (lane-major), into lanes.across.
   void rewrap_across(const double* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
                      RodChainLanes::Across& across) const;

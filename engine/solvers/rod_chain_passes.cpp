@@ -732,4 +732,198 @@ void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
   store_lanes(per_lane, sum);
 }
 
+namespace {
+// Rows v[0..8) of an 8 x 8 block transposed in place (v[c][r] = old v[r][c]): three rounds
+// of two-source shuffles, moving numbers without changing them.
+inline void transpose(Lanes (&v)[w]) {
+  static_assert(w == 8);
+  Lanes s[w], t[w];
+  for (std::size_t i = 0; i < w; i += 2) {
+    s[i] = __builtin_shuffle(v[i], v[i + 1], LaneMask{0, 8, 2, 10, 4, 12, 6, 14});
+    s[i + 1] = __builtin_shuffle(v[i], v[i + 1], LaneMask{1, 9, 3, 11, 5, 13, 7, 15});
+  }
+  for (std::size_t i = 0; i < w; i += 4) {
+    for (std::size_t o = 0; o < 2; ++o) {
+      t[i + o] = __builtin_shuffle(s[i + o], s[i + o + 2], LaneMask{0, 1, 8, 9, 4, 5, 12, 13});
+      t[i + o + 2] =
+          __builtin_shuffle(s[i + o], s[i + o + 2], LaneMask{2, 3, 10, 11, 6, 7, 14, 15});
+    }
+  }
+  for (std::size_t c = 0; c < 4; ++c) {
+    v[c] = __builtin_shuffle(t[c], t[c + 4], LaneMask{0, 1, 2, 3, 8, 9, 10, 11});
+    v[c + 4] = __builtin_shuffle(t[c], t[c + 4], LaneMask{4, 5, 6, 7, 12, 13, 14, 15});
+  }
+}
+
+// Lane l's chain at particles base + l n .. (consecutive chains of n beads): its numbers
+// are the doubles 3 (base + l n) + j, j < 3n, j = 3 bead + axis. The across layout holds
+// number j of every lane at row (axis n + bead), one vector. Blocks of 8 numbers of the 8
+// lanes are 8 x 8 transposes; `block(j, rows)` gets the block's rows (row k: number j + k of
+// every lane) and `number(j, l)` each number past the last whole block.
+inline std::size_t row_of(std::size_t n, std::size_t j) {
+  return (j % 3) * n + j / 3;
+}
+}  // namespace
+
+// Per row of lanes: the particles' entries loaded one by one into vectors, stored whole (the
+// rows' stores fill their cache lines; the lane-by-lane copies wrote one double per line).
+// Consecutive chains (base >= 0): by 8 x 8 blocks.
+void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int64_t base,
+                const double* __restrict a, const double* __restrict b, double* __restrict out) {
+  if (base >= 0) {
+    const std::size_t numbers = 3 * n;
+    const double* __restrict a0 = a + 3 * base;
+    const double* __restrict b0 = b + 3 * base;
+    std::size_t j = 0;
+    for (; j + w <= numbers; j += w) {
+      Lanes v[w];
+      for (std::size_t l = 0; l < w; ++l)
+        v[l] = load(a0 + l * numbers + j) + load(b0 + l * numbers + j);
+      transpose(v);
+      for (std::size_t k = 0; k < w; ++k) store(out + row_of(n, j + k) * w, v[k]);
+    }
+    for (; j < numbers; ++j) {
+      for (std::size_t l = 0; l < w; ++l) {
+        out[row_of(n, j) * w + l] = a0[l * numbers + j] + b0[l * numbers + j];
+      }
+    }
+    return;
+  }
+  for (std::size_t bead = 0; bead < n; ++bead) {
+    const std::int32_t* __restrict row = particle + bead * w;
+    Lanes ax, ay, az, bx, by, bz;
+    for (std::size_t l = 0; l < w; ++l) {
+      const std::size_t g = 3 * static_cast<std::size_t>(row[l]);
+      ax[l] = a[g];
+      ay[l] = a[g + 1];
+      az[l] = a[g + 2];
+      bx[l] = b[g];
+      by[l] = b[g + 1];
+      bz[l] = b[g + 2];
+    }
+    store(out + bead * w, ax + bx);
+    store(out + (n + bead) * w, ay + by);
+    store(out + (2 * n + bead) * w, az + bz);
+  }
+}
+
+void gather_velocities(std::size_t n, const std::int32_t* __restrict particle, std::int64_t base,
+                       const double* __restrict x, const double* __restrict p,
+                       const double* __restrict inverse_mass, double* __restrict x_out,
+                       double* __restrict v_out) {
+  if (base >= 0) {
+    const std::size_t numbers = 3 * n;
+    const double* __restrict x0 = x + 3 * base;
+    const double* __restrict p0 = p + 3 * base;
+    std::size_t j = 0;
+    for (; j + w <= numbers; j += w) {
+      Lanes u[w], v[w];
+      for (std::size_t l = 0; l < w; ++l) {
+        u[l] = load(x0 + l * numbers + j);
+        v[l] = load(p0 + l * numbers + j);
+      }
+      transpose(u);
+      transpose(v);
+      for (std::size_t k = 0; k < w; ++k) {
+        const std::size_t r = row_of(n, j + k);
+        store(x_out + r * w, u[k]);
+        store(v_out + r * w, v[k] * load(inverse_mass + ((j + k) / 3) * w));
+      }
+    }
+    for (; j < numbers; ++j) {
+      const std::size_t r = row_of(n, j);
+      for (std::size_t l = 0; l < w; ++l) {
+        x_out[r * w + l] = x0[l * numbers + j];
+        v_out[r * w + l] = p0[l * numbers + j] * inverse_mass[(j / 3) * w + l];
+      }
+    }
+    return;
+  }
+  for (std::size_t bead = 0; bead < n; ++bead) {
+    const std::int32_t* __restrict row = particle + bead * w;
+    Lanes xx, xy, xz, px, py, pz;
+    for (std::size_t l = 0; l < w; ++l) {
+      const std::size_t g = 3 * static_cast<std::size_t>(row[l]);
+      xx[l] = x[g];
+      xy[l] = x[g + 1];
+      xz[l] = x[g + 2];
+      px[l] = p[g];
+      py[l] = p[g + 1];
+      pz[l] = p[g + 2];
+    }
+    const Lanes weight = load(inverse_mass + bead * w);
+    store(x_out + bead * w, xx);
+    store(x_out + (n + bead) * w, xy);
+    store(x_out + (2 * n + bead) * w, xz);
+    store(v_out + bead * w, px * weight);
+    store(v_out + (n + bead) * w, py * weight);
+    store(v_out + (2 * n + bead) * w, pz * weight);
+  }
+}
+
+namespace {
+template <bool add>
+void scatter_rows(std::size_t n, const std::int32_t* __restrict particle, std::int64_t base,
+                  const double* __restrict in, const std::uint8_t* __restrict take,
+                  double* __restrict out) {
+  bool every = true;
+  for (std::size_t l = 0; l < w; ++l) every = every && take[l];
+  if (base >= 0 && every) {
+    const std::size_t numbers = 3 * n;
+    double* __restrict o = out + 3 * base;
+    std::size_t j = 0;
+    for (; j + w <= numbers; j += w) {
+      Lanes v[w];
+      for (std::size_t k = 0; k < w; ++k) v[k] = load(in + row_of(n, j + k) * w);
+      transpose(v);
+      for (std::size_t l = 0; l < w; ++l) {
+        double* __restrict at = o + l * numbers + j;
+        if constexpr (add) {
+          store(at, load(at) + v[l]);
+        } else {
+          store(at, v[l]);
+        }
+      }
+    }
+    for (; j < numbers; ++j) {
+      for (std::size_t l = 0; l < w; ++l) {
+        if constexpr (add) {
+          o[l * numbers + j] += in[row_of(n, j) * w + l];
+        } else {
+          o[l * numbers + j] = in[row_of(n, j) * w + l];
+        }
+      }
+    }
+    return;
+  }
+  for (std::size_t bead = 0; bead < n; ++bead) {
+    const std::int32_t* __restrict row = particle + bead * w;
+    const Lanes x = load(in + bead * w), y = load(in + (n + bead) * w),
+                z = load(in + (2 * n + bead) * w);
+    for (std::size_t l = 0; l < w; ++l) {
+      if (!take[l]) continue;
+      double* __restrict o = out + 3 * static_cast<std::size_t>(row[l]);
+      if constexpr (add) {
+        o[0] += x[l];
+        o[1] += y[l];
+        o[2] += z[l];
+      } else {
+        o[0] = x[l];
+        o[1] = y[l];
+        o[2] = z[l];
+      }
+    }
+  }
+}
+}  // namespace
+
+void scatter(std::size_t n, const std::int32_t* particle, std::int64_t base, const double* in,
+             const std::uint8_t* take, bool add, double* out) {
+  if (add) {
+    scatter_rows<true>(n, particle, base, in, take, out);
+  } else {
+    scatter_rows<false>(n, particle, base, in, take, out);
+  }
+}
+
 }  // namespace deli::rod_passes::across

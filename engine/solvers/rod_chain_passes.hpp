@@ -134,4 +134,19 @@ void project_rows(std::size_t m, double* d, double* r, const double* length, con
 // Per lane, 0 + sum_k z_k r_k in row order (finish_positions' virial).
 void virial(std::size_t m, const double* z, const double* r, double* per_lane);
 
+// Between per-particle vectors (3 doubles a particle, as Vec3) and per-bead vectors of the
+// lanes' n beads, lane l's bead b being particle[b * lanes + l]: whole rows of lanes at once,
+// each entry by the operations of the lane-by-lane copies. base >= 0: lane l's bead b is
+// particle base + l n + b (consecutive chains), which they exploit.
+// out = a + b per component (a first: x0 = delta + q).
+void gather_sum(std::size_t n, const std::int32_t* particle, std::int64_t base, const double* a,
+                const double* b, double* out);
+// x_out = x, v_out = p times the bead's inverse mass (lane-major, n entries).
+void gather_velocities(std::size_t n, const std::int32_t* particle, std::int64_t base,
+                       const double* x, const double* p, const double* inverse_mass, double* x_out,
+                       double* v_out);
+// out[particle] = in, or (add) out[particle] + in, in the lanes where take[lane].
+void scatter(std::size_t n, const std::int32_t* particle, std::int64_t base, const double* in,
+             const std::uint8_t* take, bool add, double* out);
+
 }  // namespace deli::rod_passes::across

@@ -341,6 +341,85 @@ TEST(RodChain, LanesGiveTheChainKernelsNumbers) {
   expect_equal_components(p_lanes, p_alone);
 }
 
+// Eight chains numbered one after another (lane l's bead b is particle base + l n + b): the
+// lockstep kernels move their numbers by 8 x 8 blocks of the per-particle arrays, and the
+// numbers past the last whole block one by one (31 beads: 93 numbers a chain, 11 blocks and
+// 5 more; 40 beads: 15 blocks). The impulses and momenta are the chain kernel's alone, bit
+// for bit, and the particles before and after the group keep their impulse and momentum.
+TEST(RodChain, ConsecutiveChainsMovedByBlocksGiveTheChainKernelsNumbers) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const double h = 0.005, tolerance = 1e-12;
+  const SolverLimits limits;
+  constexpr std::size_t count = RodChainLanes::width, before = 5, after = 3;
+  for (const std::size_t beads : {31, 40}) {
+    std::vector<Vec3> q(before), delta(before), p(before);
+    std::vector<std::unique_ptr<RodChain>> alone, lanes_chains;
+    for (std::size_t c = 0; c < count; ++c) {
+      Chain chain = random_chain(beads, box, 60 + c);
+      for (std::int32_t& particle : chain.cluster.particles) {
+        particle += static_cast<std::int32_t>(before + c * beads);
+      }
+      q.insert(q.end(), chain.q.begin(), chain.q.end());
+      delta.insert(delta.end(), chain.delta.begin(), chain.delta.end());
+      p.insert(p.end(), chain.p.begin(), chain.p.end());
+      alone.push_back(RodChain::make(chain.cluster));
+      lanes_chains.push_back(RodChain::make(chain.cluster));
+    }
+    q.resize(q.size() + after);
+    delta.resize(delta.size() + after);
+    p.resize(p.size() + after);
+    std::vector<const RodChain*> chains;
+    for (const auto& chain : lanes_chains) chains.push_back(chain.get());
+    // Outside the group: values no kernel may touch.
+    const Vec3 untouched{-7.0, 8.5, 0.25};
+    std::vector<Vec3> impulse_alone(q.size(), untouched), impulse_lanes(q.size(), untouched);
+    RodChainWorkspace work;
+    RodChainLanes lanes;
+    double virial[count];
+    SolverStatus status[count];
+    bool solved[count];
+    RodChain::solve_positions_lanes(chains.data(), count, q.data(), delta.data(), h, box, tolerance,
+                                    limits.newton, lanes, impulse_lanes.data(), virial, status,
+                                    solved);
+    ASSERT_EQ(lanes.across.groups.size(), 1u);
+    EXPECT_EQ(lanes.across.groups[0].consecutive, static_cast<std::int64_t>(before));
+    for (std::size_t c = 0; c < count; ++c) {
+      ASSERT_TRUE(solved[c]) << beads << " beads, chain " << c;
+      double virial_alone = 0.0;
+      SolverStatus status_alone;
+      ASSERT_TRUE(alone[c]->solve_positions(q.data(), delta.data(), h, box, tolerance,
+                                            limits.newton, limits.line_search, work,
+                                            impulse_alone.data(), virial_alone, status_alone));
+      EXPECT_EQ(virial[c], virial_alone) << beads << " beads, chain " << c;
+      EXPECT_EQ(status[c].iterations, status_alone.iterations) << beads << " beads, chain " << c;
+    }
+    expect_equal_components(impulse_lanes, impulse_alone);
+    for (std::size_t k : {std::size_t{0}, before - 1, q.size() - after, q.size() - 1}) {
+      EXPECT_EQ(impulse_lanes[k].x, untouched.x) << "particle " << k;
+      EXPECT_EQ(impulse_lanes[k].z, untouched.z) << "particle " << k;
+    }
+
+    std::vector<Vec3> x(q.size());
+    for (std::size_t k = 0; k < x.size(); ++k) x[k] = q[k] + delta[k] + impulse_alone[k] * h;
+    for (std::size_t k = 0; k < before; ++k) p[k] = untouched;
+    for (std::size_t k = q.size() - after; k < q.size(); ++k) p[k] = untouched;
+    std::vector<Vec3> p_alone = p, p_lanes = p;
+    RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
+                                    solved);
+    for (std::size_t c = 0; c < count; ++c) {
+      ASSERT_TRUE(solved[c]);
+      std::vector<double> terms(alone[c]->rows());
+      ASSERT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
+      for (std::size_t k = 0; k < terms.size(); ++k) {
+        EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
+      }
+    }
+    expect_equal_components(p_lanes, p_alone);
+    EXPECT_EQ(p_lanes.front().y, untouched.y);
+    EXPECT_EQ(p_lanes.back().y, untouched.y);
+  }
+}
+
 // A group of fewer chains than lanes (the empty lanes repeat the first chain), solved three
 // times with the same workspace: again at the same step (the group's interleaved constants
 // and images kept from the first solve) and at another step (remade). Every time the chain
