@@ -470,26 +470,19 @@ void Gvi::displaced(const Particles& P) {
   // With reaches per particle made this step: in the same pass, whether x stays within them.
   const bool by_particle = particle_reaches() && ws_.reach >= 0.0;
   ws_.x_cover_known = by_particle;
-  ws_.x_listed = false;
-  if (!by_particle) {
-    ws_.x_largest2 = ordered_max(n, 0.0, [&, h](std::size_t i) {
-      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
-      return norm2(ws_.x[i] - ws_.q[i]);
-    });
-    return;
-  }
-  // ordered_max's chunks, each also counting the particles beyond their reach.
+  // ordered_max's chunks, each also counting the particles beyond their reach and those
+  // beyond the neighbour list's (needs_rebuild's test per particle, which the force
+  // evaluation at x then need not make in a pass of its own).
   const int chunks = chunks_for_cheap(n);
   std::vector<double>& largest2 = ws_.chunk_largest2;
   std::vector<std::size_t>& outgrown = ws_.chunk_outgrown;
   largest2.assign(static_cast<std::size_t>(chunks), 0.0);
   outgrown.assign(static_cast<std::size_t>(chunks), 0);
-  // And whether the neighbour list stays valid at x (needs_rebuild's test per particle).
   std::vector<std::size_t>& unlisted = ws_.chunk_unlisted;
   unlisted.assign(static_cast<std::size_t>(chunks), 0);
   const NeighborList& list = engine_.neighbors();
   const bool built = list.built_for(n);
-  const double* limit2 = ws_.reach_limit2.data();
+  const double* limit2 = by_particle ? ws_.reach_limit2.data() : nullptr;
   for_each_chunk(n, chunks, [&, h, built](int c, std::size_t begin, std::size_t end) {
     double largest = 0.0;
     std::size_t beyond = 0, beyond_list = 0;
@@ -497,7 +490,7 @@ void Gvi::displaced(const Particles& P) {
       ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
       const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
       largest = std::max(largest, moved2);
-      beyond += !(moved2 <= limit2[i]);
+      if (limit2) beyond += !(moved2 <= limit2[i]);
       if (built) beyond_list += !list.keeps_valid(i, ws_.x[i]);
     }
     largest2[static_cast<std::size_t>(c)] = largest;
@@ -505,7 +498,7 @@ void Gvi::displaced(const Particles& P) {
     unlisted[static_cast<std::size_t>(c)] = beyond_list;
   });
   ws_.x_largest2 = 0.0;
-  ws_.x_covered = true;
+  ws_.x_covered = by_particle;
   ws_.x_listed = built;
   for (int c = 0; c < chunks; ++c) {
     ws_.x_largest2 = std::max(ws_.x_largest2, largest2[static_cast<std::size_t>(c)]);

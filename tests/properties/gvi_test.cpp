@@ -16,6 +16,7 @@
 #include "support/process_temp_dir.hpp"
 #include "support/short_runs.hpp"
 #include "support/statistic.hpp"
+#include "support/thread_count.hpp"
 
 namespace deli {
 namespace {
@@ -326,6 +327,41 @@ TEST(Gvi, DISABLED_LjChainInSphereLiteralAlgorithmKeepsEnergyBounded) {
 TEST(Gvi, DISABLED_LjChainInSphereRestoreGuardKeepsEnergyBounded) {
   const LjChainResult r = lj_chain_in_sphere("restore");
   EXPECT_LT(r.trend.ratio(), 0.5);
+}
+
+// The forces at a step's end are evaluated with a neighbour list valid at its end positions x.
+// A dumbbell (rod 1, h 0.05) translating at u = 1 and spinning at v = 1 per bead: bead 1's
+// free step (u, v) h moves it 0.0707 from where the list was built, the rod pulls it to
+// 0.0725 (x = (0.5 (sqrt(1 - (2hv)^2) - 1) - hu, hv) from its start). With the skin 0.143
+// (half of it: 0.0715) the step's prediction leaves the list valid and x does not: the
+// force evaluation at x must rebuild it.
+TEST(Gvi, ForcesAtTheStepsEndUseAListValidAtItsPositions) {
+  const double u = 1.0, v = 1.0;
+  // One thread: the end positions in a pass of their own; two: made with the rods' solves
+  // (Gvi::steps_by_cluster). Each tests the list at x as it makes it.
+  for (const int threads : {1, 2}) {
+    if (threads > 1 && !testing::kThreaded) continue;
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    const testing::ThreadCount count(threads);
+    GviRun run(input_with_atoms("spinning_dumbbell",
+                                {{{5.5, 5, 5}, {-u, v, 0}}, {{4.5, 5, 5}, {-u, -v, 0}}}, "ppp",
+                                {0, 0, 0}, {10, 10, 10},
+                                "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\n"
+                                "coeffs = [{ types = [1, 1], epsilon = 0.0, sigma = 1.0 }]\n"
+                                "[neighbor]\nskin = 0.143\n"
+                                "[constraints]\nrods = [{ atoms = [1, 2], length = 1.0 }]\n"
+                                "[integrator]\ntype = \"gvi\"\nlagrangian = \"verlet\"\n"
+                                "timestep = 0.05\n[run]\nsteps = 0\n"));
+    const NeighborList& list = run.gvi->forces().neighbors();
+    const Vec3 start = run.particles().position[0];
+    const std::int64_t builds = list.builds();
+    run.step();
+    const double moved = norm(run.particles().position[0] - start);
+    ASSERT_NEAR(moved, 0.0725045, 1e-6);  // the analytic x above
+    EXPECT_GT(moved, 0.143 / 2);
+    EXPECT_FALSE(list.needs_rebuild(run.particles().position));
+    EXPECT_EQ(list.builds(), builds + 1);
+  }
 }
 
 // Pair contacts exchange momentum only: a hard-sphere gas in a periodic box keeps its total
