@@ -672,10 +672,12 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
                                         g.first_sign.data(),
                                         g.second_sign.data(),
                                         g.hw.data(),
-                                        trying};
+                                        trying,
+                                        a.impulse.data()};
   rod_passes::across::measure_residual(measured, a.x0.data(), a.u.data(), a.r.data(), hold, bound,
                                        a.phi.data(), made_norm, made_merit);
   evaluate(a.x0.data(), true, true);
+  bool advanced = false;  // advance_and_measure made the positions (and impulses) of z
   for (int steps = 1;; ++steps) {
     bool any = false;
     for (std::size_t l = 0; l < count; ++l) {
@@ -704,6 +706,7 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
     // O(h^2) residual) rarely holds the rods yet; after later steps only if the bound asks
     // for it. The same numbers either way.
     const bool residual_expected = steps == 1;
+    advanced = true;
     rod_passes::across::advance_and_measure(measured, a.x.data(), a.u.data(), a.r.data(), hold,
                                             bound, residual_expected ? a.phi.data() : nullptr,
                                             made_norm, made_merit);
@@ -712,8 +715,12 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
   bool any_done = false;
   for (std::size_t l = 0; l < count; ++l) any_done = any_done || state[l] == State::done;
   if (!any_done) return;
-  rod_passes::across::impulses(m, start_u, a.z.data(), g.first_sign.data(), g.second_sign.data(),
-                               a.impulse.data());
+  // The impulses of the multipliers z: made with the last positions (every lane's z as it
+  // ended), else (no step taken) here.
+  if (!advanced) {
+    rod_passes::across::impulses(m, start_u, a.z.data(), g.first_sign.data(), g.second_sign.data(),
+                                 a.impulse.data());
+  }
   double virials[w];
   rod_passes::across::virial(m, a.z.data(), start_r, virials);
   std::uint8_t done[w] = {};

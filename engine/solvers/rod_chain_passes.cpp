@@ -581,6 +581,11 @@ void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* 
         iy = 0.0 + uy_before * sa;
         iz = 0.0 + uz_before * sa;
       }
+      if (in.impulse) {
+        store(in.impulse + i, ix);
+        store(in.impulse + beads + i, iy);
+        store(in.impulse + 2 * beads + i, iz);
+      }
       const Lanes h = load(in.hw + i);
       cx = load(in.x0 + i) + ix * h;
       cy = load(in.x0 + beads + i) + iy * h;

@@ -103,7 +103,9 @@ void impulses(std::size_t m, const double* u, const double* z, const double* fir
 // What measure_residual and advance_and_measure read: the group's constants (per rod:
 // forward, image, length, inverse_length; per bead: first_sign, second_sign, hw), the box's
 // periods and image limits, the tolerance; for advance_and_measure also the multipliers z (made
-// z + step in the lanes where take[lane]), the free positions x0 and the start directions u.
+// z + step in the lanes where take[lane]), the free positions x0 and the start directions u,
+// and where the impulses() of the multipliers z go (per bead, made with the positions) unless
+// null.
 struct Measured {
   std::size_t m;
   const double *forward, *image, *period, *limit, *length, *inverse_length;
@@ -111,6 +113,7 @@ struct Measured {
   double* z;
   const double *step, *x0, *u, *first_sign, *second_sign, *hw;
   const std::uint8_t* take;
+  double* impulse = nullptr;
 };
 // differences() at positions x into d and r, hold and held_bound()'s bound, then
 // normalize_residual() (d, r, phi, norm, merit) in one pass, the same numbers. Where a lane's

@@ -417,6 +417,24 @@ TEST(RodChain, ConsecutiveChainsMovedByBlocksGiveTheChainKernelsNumbers) {
     expect_equal_components(p_lanes, p_alone);
     EXPECT_EQ(p_lanes.front().y, untouched.y);
     EXPECT_EQ(p_lanes.back().y, untouched.y);
+
+    // Every chain held where it starts (no displacement): no Newton step in any lane, and the
+    // impulses are the zero ones of the chain kernel, not those the lanes made last.
+    const std::vector<Vec3> still(q.size());
+    std::vector<Vec3> held_lanes(q.size(), untouched), held_alone(q.size(), untouched);
+    RodChain::solve_positions_lanes(chains.data(), count, q.data(), still.data(), h, box, tolerance,
+                                    limits.newton, lanes, held_lanes.data(), virial, status,
+                                    solved);
+    for (std::size_t c = 0; c < count; ++c) {
+      ASSERT_TRUE(solved[c]);
+      EXPECT_EQ(status[c].iterations, 0);
+      double virial_alone = 0.0;
+      SolverStatus status_alone;
+      ASSERT_TRUE(alone[c]->solve_positions(q.data(), still.data(), h, box, tolerance,
+                                            limits.newton, limits.line_search, work,
+                                            held_alone.data(), virial_alone, status_alone));
+    }
+    expect_equal_components(held_lanes, held_alone);
   }
 }
 
