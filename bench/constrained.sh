@@ -87,8 +87,8 @@ printf '%s\n' "${summary[@]}"
 # The rods' cost on the melt as issue 10 measures it ("the rods cost deli 83 % of its step;
 # OpenMM pays about 15 %"): 1 - rigid / harmonic throughput, each engine against its own
 # harmonic run. Both runs of a pair are taken back to back and the pairs are alternated
-# (SHARE_ROUNDS, default 3), since this machine's speed drifts by tens of percent between
-# minutes; the median pair is the figure. The machine's noise only ever slows a run, so the
+# (SHARE_ROUNDS, default 3) and taken in either order in turn, since this machine's speed
+# drifts by tens of percent between minutes; the median pair is the figure. The machine's noise only ever slows a run, so the
 # best run of each kind is printed beside it: 1 - best rigid / best harmonic throughput.
 melt=$top/inputs/lj_chains
 rounds=${SHARE_ROUNDS:-3}
@@ -108,8 +108,16 @@ if [[ " ${*:-harmonic rigid} " == *" harmonic "* && " ${*:-harmonic rigid} " == 
   echo
   echo "== rods' cost on the melt: 1 - rigid / harmonic throughput, $rounds alternated rounds"
   for ((k = 1; k <= rounds; ++k)); do
-    h=$(cd "$dir" && "$deli" run harmonic.toml --threads 1 | rate)
-    r=$(cd "$dir" && "$deli" run rigid.toml --threads 1 | rate)
+    # Every other pair the other way round: a run right after the other input's ran about 2 %
+    # slower here (rigid melt 0.561-0.592 s after a harmonic run, 0.554-0.571 s after a rigid
+    # one, 4 of each alternated), which would otherwise always fall on the same side.
+    if ((k % 2)); then
+      h=$(cd "$dir" && "$deli" run harmonic.toml --threads 1 | rate)
+      r=$(cd "$dir" && "$deli" run rigid.toml --threads 1 | rate)
+    else
+      r=$(cd "$dir" && "$deli" run rigid.toml --threads 1 | rate)
+      h=$(cd "$dir" && "$deli" run harmonic.toml --threads 1 | rate)
+    fi
     deli_shares+=("$(share "$r" "$h")")
     deli_h+=("$h") deli_r+=("$r")
     line="round $k: deli $h -> $r (${deli_shares[-1]} %)"
