@@ -768,6 +768,18 @@ inline void transpose(Lanes (&v)[w]) {
 inline std::size_t row_of(std::size_t n, std::size_t j) {
   return (j % 3) * n + j / 3;
 }
+
+// Lane l's particle row[l]: its three numbers (3 doubles a particle in `all`) into lane l of
+// vx, vy and vz.
+inline void gather_row(const std::int32_t* __restrict row, const double* __restrict all, Lanes& vx,
+                       Lanes& vy, Lanes& vz) {
+  for (std::size_t l = 0; l < w; ++l) {
+    const std::size_t g = 3 * static_cast<std::size_t>(row[l]);
+    vx[l] = all[g];
+    vy[l] = all[g + 1];
+    vz[l] = all[g + 2];
+  }
+}
 }  // namespace
 
 // Per row of lanes: the particles' entries loaded one by one into vectors, stored whole (the
@@ -797,15 +809,8 @@ void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int
   for (std::size_t bead = 0; bead < n; ++bead) {
     const std::int32_t* __restrict row = particle + bead * w;
     Lanes ax, ay, az, bx, by, bz;
-    for (std::size_t l = 0; l < w; ++l) {
-      const std::size_t g = 3 * static_cast<std::size_t>(row[l]);
-      ax[l] = a[g];
-      ay[l] = a[g + 1];
-      az[l] = a[g + 2];
-      bx[l] = b[g];
-      by[l] = b[g + 1];
-      bz[l] = b[g + 2];
-    }
+    gather_row(row, a, ax, ay, az);
+    gather_row(row, b, bx, by, bz);
     store(out + bead * w, ax + bx);
     store(out + (n + bead) * w, ay + by);
     store(out + (2 * n + bead) * w, az + bz);
@@ -847,15 +852,8 @@ void gather_velocities(std::size_t n, const std::int32_t* __restrict particle, s
   for (std::size_t bead = 0; bead < n; ++bead) {
     const std::int32_t* __restrict row = particle + bead * w;
     Lanes xx, xy, xz, px, py, pz;
-    for (std::size_t l = 0; l < w; ++l) {
-      const std::size_t g = 3 * static_cast<std::size_t>(row[l]);
-      xx[l] = x[g];
-      xy[l] = x[g + 1];
-      xz[l] = x[g + 2];
-      px[l] = p[g];
-      py[l] = p[g + 1];
-      pz[l] = p[g + 2];
-    }
+    gather_row(row, x, xx, xy, xz);
+    gather_row(row, p, px, py, pz);
     const Lanes weight = load(inverse_mass + bead * w);
     store(x_out + bead * w, xx);
     store(x_out + (n + bead) * w, xy);

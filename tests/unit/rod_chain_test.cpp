@@ -78,6 +78,31 @@ void expect_equal_components(const std::vector<Vec3>& a, const std::vector<Vec3>
   }
 }
 
+// The lockstep momentum projection of `chains` at x from momenta p against each chain's
+// kernel alone (`alone`: the same chains made separately): every chain solved, the momenta and
+// virial terms the same bit for bit. Returns the lockstep projection's momenta.
+std::vector<Vec3> expect_lanes_project_as_alone(const std::vector<const RodChain*>& chains,
+                                                const std::vector<std::unique_ptr<RodChain>>& alone,
+                                                const std::vector<Vec3>& x,
+                                                const std::vector<Vec3>& p, const Box& box,
+                                                RodChainLanes& lanes, RodChainWorkspace& work) {
+  const std::size_t count = chains.size();
+  std::vector<Vec3> p_alone = p, p_lanes = p;
+  bool solved[RodChainLanes::width];
+  RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
+                                  solved);
+  for (std::size_t c = 0; c < count; ++c) {
+    EXPECT_TRUE(solved[c]) << "chain " << c;
+    std::vector<double> terms(alone[c]->rows());
+    EXPECT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+      EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
+    }
+  }
+  expect_equal_components(p_lanes, p_alone);
+  return p_lanes;
+}
+
 TEST(RodChain, SameNumbersAsTheGenericSolvers) {
   const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
   const double h = 0.005, tolerance = 1e-12;
@@ -327,18 +352,7 @@ TEST(RodChain, LanesGiveTheChainKernelsNumbers) {
   // Momentum projection at the end positions.
   std::vector<Vec3> x(q.size());
   for (std::size_t k = 0; k < x.size(); ++k) x[k] = q[k] + delta[k] + impulse_alone[k] * h;
-  std::vector<Vec3> p_alone = p, p_lanes = p;
-  RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
-                                  solved);
-  for (std::size_t c = 0; c < count; ++c) {
-    ASSERT_TRUE(solved[c]);
-    std::vector<double> terms(alone[c]->rows());
-    ASSERT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
-    for (std::size_t k = 0; k < terms.size(); ++k) {
-      EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
-    }
-  }
-  expect_equal_components(p_lanes, p_alone);
+  expect_lanes_project_as_alone(chains, alone, x, p, box, lanes, work);
 }
 
 // Eight chains numbered one after another (lane l's bead b is particle base + l n + b): the
@@ -403,18 +417,8 @@ TEST(RodChain, ConsecutiveChainsMovedByBlocksGiveTheChainKernelsNumbers) {
     for (std::size_t k = 0; k < x.size(); ++k) x[k] = q[k] + delta[k] + impulse_alone[k] * h;
     for (std::size_t k = 0; k < before; ++k) p[k] = untouched;
     for (std::size_t k = q.size() - after; k < q.size(); ++k) p[k] = untouched;
-    std::vector<Vec3> p_alone = p, p_lanes = p;
-    RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
-                                    solved);
-    for (std::size_t c = 0; c < count; ++c) {
-      ASSERT_TRUE(solved[c]);
-      std::vector<double> terms(alone[c]->rows());
-      ASSERT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
-      for (std::size_t k = 0; k < terms.size(); ++k) {
-        EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
-      }
-    }
-    expect_equal_components(p_lanes, p_alone);
+    const std::vector<Vec3> p_lanes =
+        expect_lanes_project_as_alone(chains, alone, x, p, box, lanes, work);
     EXPECT_EQ(p_lanes.front().y, untouched.y);
     EXPECT_EQ(p_lanes.back().y, untouched.y);
 
@@ -486,18 +490,7 @@ TEST(RodChain, AShortGroupSolvedAgainGivesTheChainKernelsNumbers) {
     expect_equal_components(impulse_lanes, impulse_alone);
     std::vector<Vec3> x(q.size());
     for (std::size_t k = 0; k < x.size(); ++k) x[k] = q[k] + delta[k] + impulse_alone[k] * h;
-    std::vector<Vec3> p_alone = p, p_lanes = p;
-    RodChain::project_momenta_lanes(chains.data(), count, x.data(), p_lanes.data(), box, lanes,
-                                    solved);
-    for (std::size_t c = 0; c < count; ++c) {
-      ASSERT_TRUE(solved[c]);
-      std::vector<double> terms(alone[c]->rows());
-      ASSERT_TRUE(alone[c]->project_momenta(x.data(), p_alone.data(), box, work, terms.data()));
-      for (std::size_t k = 0; k < terms.size(); ++k) {
-        EXPECT_EQ(lanes.virial_terms[c * terms.size() + k], terms[k]) << "chain " << c;
-      }
-    }
-    expect_equal_components(p_lanes, p_alone);
+    expect_lanes_project_as_alone(chains, alone, x, p, box, lanes, work);
   }
 }
 
