@@ -10,31 +10,16 @@
 #include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
 #include "integrators/contact_group.hpp"
-#include "integrators/gvi_passes.hpp"
 #include "integrators/shadow_correction.hpp"
 #include "solvers/cluster_matrices.hpp"
 
 namespace deli {
 
 namespace {
-// A vector of Vec3 as the doubles gvi_passes reads (x, y, z of each in turn); null when empty.
-static_assert(sizeof(Vec3) == 3 * sizeof(double));
-double* flat(std::vector<Vec3>& v) {
-  return v.empty() ? nullptr : &v[0].x;
-}
-const double* flat(const std::vector<Vec3>& v) {
-  return v.empty() ? nullptr : &v[0].x;
-}
-
-// A pass over a run of particles as ranges [begin, end): the run itself when its particles are
-// consecutive, else one range per listed particle.
-template <class Run, class Pass>
-void over_run(const Run& run, Pass&& pass) {
-  if (!run.list) {
-    pass(run.first, run.first + run.count);
-    return;
-  }
-  run.for_each([&](std::size_t i) { pass(i, i + 1); });
+// Particle i's impulse from the held rows' position solve: +0 (what the solve's zeroed
+// vector holds) when no row was held, which leaves `impulse` empty.
+Vec3 held_impulse(const GviWorkspace& ws, std::size_t i) {
+  return ws.impulse.empty() ? Vec3{} : ws.impulse[i];
 }
 }  // namespace
 
@@ -166,14 +151,18 @@ void Gvi::start_step(System& system) {
     const int chunks = steps_by_cluster(P) ? chunks_for(n) : chunks_for_cheap(n);
     std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
     beyond.assign(static_cast<std::size_t>(chunks), 0);
-    // free_displacement's d is not stored: only predict() reads it, after making it.
-    const double* built = listed ? flat(list.positions_at_build()) : nullptr;
-    const double limit2 = 0.25 * list.skin() * list.skin();  // keeps_valid's
-    double* predicted = keep ? flat(ws_.predicted) : nullptr;
-    for_each_chunk(n, chunks, [&, h, built, limit2](int c, std::size_t begin, std::size_t end) {
-      beyond[static_cast<std::size_t>(c)] =
-          gvi_passes::start(begin, end, h, flat(P.position), flat(P.velocity), P.mass.data(),
-                            flat(f), flat(ws_.q), flat(ws_.p), predicted, built, limit2);
+    for_each_chunk(n, chunks, [&, h, listed, keep](int c, std::size_t begin, std::size_t end) {
+      std::size_t count = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        ws_.q[i] = P.position[i];
+        ws_.p[i] = P.velocity[i] * P.mass[i];
+        // free_displacement's d, not stored: only predict() reads it, after making it.
+        const Vec3 d = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+        const Vec3 x = P.position[i] + d;
+        if (keep) ws_.predicted[i] = x;
+        if (listed) count += !list.keeps_valid(i, x);
+      }
+      beyond[static_cast<std::size_t>(c)] = count;
     });
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
@@ -493,18 +482,20 @@ void Gvi::displaced(const Particles& P) {
   unlisted.assign(static_cast<std::size_t>(chunks), 0);
   const NeighborList& list = engine_.neighbors();
   const bool built = list.built_for(n);
-  const double* reach2 = by_particle ? ws_.reach_limit2.data() : nullptr;
-  const double* build_positions = built ? flat(list.positions_at_build()) : nullptr;
-  const double list_limit2 = 0.25 * list.skin() * list.skin();  // keeps_valid's
-  // Null when no row was held: a zero impulse, +0 (what the solve's zeroed vector holds).
-  const double* impulse = flat(ws_.impulse);
-  for_each_chunk(n, chunks, [&, h](int c, std::size_t begin, std::size_t end) {
-    const gvi_passes::EndPositions ends = gvi_passes::end_positions(
-        begin, end, h, flat(ws_.q), flat(ws_.half), impulse, P.mass.data(), flat(ws_.x), 0.0,
-        reach2, build_positions, list_limit2);
-    largest2[static_cast<std::size_t>(c)] = ends.largest;
-    outgrown[static_cast<std::size_t>(c)] = ends.beyond_reach;
-    unlisted[static_cast<std::size_t>(c)] = ends.beyond_list;
+  const double* limit2 = by_particle ? ws_.reach_limit2.data() : nullptr;
+  for_each_chunk(n, chunks, [&, h, built](int c, std::size_t begin, std::size_t end) {
+    double largest = 0.0;
+    std::size_t beyond = 0, beyond_list = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
+      const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
+      largest = std::max(largest, moved2);
+      if (limit2) beyond += !(moved2 <= limit2[i]);
+      if (built) beyond_list += !list.keeps_valid(i, ws_.x[i]);
+    }
+    largest2[static_cast<std::size_t>(c)] = largest;
+    outgrown[static_cast<std::size_t>(c)] = beyond;
+    unlisted[static_cast<std::size_t>(c)] = beyond_list;
   });
   ws_.x_largest2 = 0.0;
   ws_.x_covered = by_particle;
@@ -540,10 +531,11 @@ void Gvi::solve_held_positions(System& system) {
     ws_.free.resize(n);
     ws_.impulse.resize(n);
     const bool zero = !equalities_hold_every_particle(P);
-    for_each_chunk(n, chunks_for_cheap(n), [&, h, zero](int, std::size_t begin, std::size_t end) {
-      gvi_passes::half_kick(begin, end, h, flat(ws_.p), flat(f_start), P.mass.data(),
-                            flat(ws_.half), flat(ws_.free));
-      if (zero) std::fill(ws_.impulse.begin() + begin, ws_.impulse.begin() + end, Vec3{});
+    parallel_for(n, [&, h, zero](std::size_t i) {
+      const Vec3 half = ws_.p[i] + f_start[i] * (0.5 * h);
+      ws_.half[i] = half;
+      ws_.free[i] = half * (h / P.mass[i]);
+      if (zero) ws_.impulse[i] = Vec3{};
     });
   } else {
     parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
@@ -617,30 +609,30 @@ void Gvi::held_positions_by_cluster(System& system) {
   const NeighborList& list = engine_.neighbors();
   const bool built = list.built_for(n);
   ClusterPasses passes;
-  const double* p = flat(ws_.p);
-  const double* q = flat(ws_.q);
-  const double* force = flat(f);
+  const Vec3* p = ws_.p.data();
+  const Vec3* q = ws_.q.data();
   const double* mass = P.mass.data();
-  double* half = flat(ws_.half);
-  double* free = flat(ws_.free);
-  const double* impulse = flat(ws_.impulse);
-  double* x = flat(ws_.x);
-  const double* build_positions = built ? flat(list.positions_at_build()) : nullptr;
-  const double list_limit2 = 0.25 * list.skin() * list.skin();  // keeps_valid's
+  Vec3* half = ws_.half.data();
+  Vec3* free = ws_.free.data();
+  const Vec3* impulse = ws_.impulse.data();
+  Vec3* x = ws_.x.data();
   passes.before = [&, h](int, const ParticleRun& run) {
-    over_run(run, [&, h](std::size_t begin, std::size_t end) {
-      gvi_passes::half_kick(begin, end, h, p, force, mass, half, free);
+    run.for_each([&, h](std::size_t i) {
+      half[i] = p[i] + f[i] * (0.5 * h);
+      free[i] = half[i] * (h / mass[i]);
     });
   };
-  passes.after = [&, h](int chunk, const ParticleRun& run) {
+  passes.after = [&, h, built](int chunk, const ParticleRun& run) {
     const auto c = static_cast<std::size_t>(chunk);
-    over_run(run, [&, h](std::size_t begin, std::size_t end) {
-      const gvi_passes::EndPositions ends =
-          gvi_passes::end_positions(begin, end, h, q, half, impulse, mass, x, ws_.chunk_largest2[c],
-                                    nullptr, build_positions, list_limit2);
-      ws_.chunk_largest2[c] = ends.largest;
-      ws_.chunk_unlisted[c] += ends.beyond_list;
+    double largest = ws_.chunk_largest2[c];
+    std::size_t unlisted = ws_.chunk_unlisted[c];
+    run.for_each([&, h, built](std::size_t i) {
+      x[i] = q[i] + (half[i] + impulse[i]) * (h / mass[i]);
+      largest = std::max(largest, norm2(x[i] - q[i]));
+      if (built) unlisted += !list.keeps_valid(i, x[i]);
     });
+    ws_.chunk_largest2[c] = largest;
+    ws_.chunk_unlisted[c] = unlisted;
   };
   ws_.position_virial = solve_positions(system, constraints_.equalities, ws_.equality, ws_.q,
                                         ws_.free, ws_.impulse, nullptr, nullptr, &passes);
@@ -760,29 +752,30 @@ void Gvi::update_momenta(System& system, bool tally) {
     // The kick before a chunk's projections, the velocities after, on their thread (the
     // held rows are the rods alone, and nothing lands).
     ClusterPasses passes;
-    const double* half = flat(ws_.half);
-    const double* impulse = flat(ws_.impulse);
-    const double* force = flat(f);
+    const Vec3* half = ws_.half.data();
+    const Vec3* impulse = ws_.impulse.data();
+    const Vec3* force = f.data();
     const double* mass = P.mass.data();
-    double* momenta = flat(p);
-    double* velocity = flat(P.velocity);
+    Vec3* momenta = p.data();
+    Vec3* velocity = P.velocity.data();
     passes.before = [&, h](int, const ParticleRun& run) {
-      over_run(run, [&, h](std::size_t begin, std::size_t end) {
-        gvi_passes::kick(begin, end, h, half, impulse, force, momenta);
+      run.for_each([&, h](std::size_t i) {
+        Vec3 momentum = half[i] + impulse[i];
+        momentum += force[i] * (0.5 * h);
+        momenta[i] = momentum;
       });
     };
     passes.after = [&](int, const ParticleRun& run) {
-      over_run(run, [&](std::size_t begin, std::size_t end) {
-        gvi_passes::velocities(begin, end, momenta, mass, velocity);
-      });
+      run.for_each([&](std::size_t i) { velocity[i] = momenta[i] * (1.0 / mass[i]); });
     };
     step_virial_ += project_momenta(system, constraints_.equalities, P.position, p, &passes);
     step_virial_ += ws_.position_virial;
     return;
   }
-  const double* impulse = flat(ws_.impulse);  // null: none held, +0
-  for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
-    gvi_passes::kick(begin, end, h, flat(ws_.half), impulse, flat(f), flat(p));
+  parallel_for(n, [&, h](std::size_t i) {
+    Vec3 momentum = ws_.half[i] + held_impulse(ws_, i);
+    momentum += f[i] * (0.5 * h);
+    p[i] = momentum;
   });
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   ws_.momentum_rows.clear();
@@ -814,9 +807,7 @@ void Gvi::update_momenta(System& system, bool tally) {
   if (feasibility_ == Feasibility::restore && landed) {
     restore_energy(system, ws_.landed, target_energy, p);
   }
-  for_each_chunk(n, chunks_for_cheap(n), [&](int, std::size_t begin, std::size_t end) {
-    gvi_passes::velocities(begin, end, flat(p), P.mass.data(), flat(P.velocity));
-  });
+  parallel_for(n, [&](std::size_t i) { P.velocity[i] = p[i] * (1.0 / P.mass[i]); });
 }
 
 // The rows that can have closed this step are among the candidates (their reach covers the
