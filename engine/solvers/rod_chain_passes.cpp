@@ -762,9 +762,8 @@ inline void transpose(Lanes (&v)[w]) {
 
 // Lane l's chain at particles base + l n .. (consecutive chains of n beads): its numbers
 // are the doubles 3 (base + l n) + j, j < 3n, j = 3 bead + axis. The across layout holds
-// number j of every lane at row (axis n + bead), one vector. Blocks of 8 numbers of the 8
-// lanes are 8 x 8 transposes; `block(j, rows)` gets the block's rows (row k: number j + k of
-// every lane) and `number(j, l)` each number past the last whole block.
+// number j of every lane in row row_of(n, j) = axis n + bead, one vector. Blocks of 8 numbers
+// of the 8 lanes move as 8 x 8 transposes, the numbers past the last whole block one by one.
 inline std::size_t row_of(std::size_t n, std::size_t j) {
   return (j % 3) * n + j / 3;
 }
