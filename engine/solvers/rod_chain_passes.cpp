@@ -738,25 +738,36 @@ void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
 }
 
 namespace {
+// Entries k... of a then b (b's entry j as k = w + j): GCC's and Clang's two-source shuffles
+// (the fuzzing build is Clang's).
+template <long... k>
+inline Lanes shuffle(const Lanes& a, const Lanes& b) {
+  static_assert(sizeof...(k) == w);
+#if defined(__clang__)
+  return __builtin_shufflevector(a, b, k...);
+#else
+  return __builtin_shuffle(a, b, LaneMask{k...});
+#endif
+}
+
 // Rows v[0..8) of an 8 x 8 block transposed in place (v[c][r] = old v[r][c]): three rounds
 // of two-source shuffles, moving numbers without changing them.
 inline void transpose(Lanes (&v)[w]) {
   static_assert(w == 8);
   Lanes s[w], t[w];
   for (std::size_t i = 0; i < w; i += 2) {
-    s[i] = __builtin_shuffle(v[i], v[i + 1], LaneMask{0, 8, 2, 10, 4, 12, 6, 14});
-    s[i + 1] = __builtin_shuffle(v[i], v[i + 1], LaneMask{1, 9, 3, 11, 5, 13, 7, 15});
+    s[i] = shuffle<0, 8, 2, 10, 4, 12, 6, 14>(v[i], v[i + 1]);
+    s[i + 1] = shuffle<1, 9, 3, 11, 5, 13, 7, 15>(v[i], v[i + 1]);
   }
   for (std::size_t i = 0; i < w; i += 4) {
     for (std::size_t o = 0; o < 2; ++o) {
-      t[i + o] = __builtin_shuffle(s[i + o], s[i + o + 2], LaneMask{0, 1, 8, 9, 4, 5, 12, 13});
-      t[i + o + 2] =
-          __builtin_shuffle(s[i + o], s[i + o + 2], LaneMask{2, 3, 10, 11, 6, 7, 14, 15});
+      t[i + o] = shuffle<0, 1, 8, 9, 4, 5, 12, 13>(s[i + o], s[i + o + 2]);
+      t[i + o + 2] = shuffle<2, 3, 10, 11, 6, 7, 14, 15>(s[i + o], s[i + o + 2]);
     }
   }
   for (std::size_t c = 0; c < 4; ++c) {
-    v[c] = __builtin_shuffle(t[c], t[c + 4], LaneMask{0, 1, 2, 3, 8, 9, 10, 11});
-    v[c + 4] = __builtin_shuffle(t[c], t[c + 4], LaneMask{4, 5, 6, 7, 12, 13, 14, 15});
+    v[c] = shuffle<0, 1, 2, 3, 8, 9, 10, 11>(t[c], t[c + 4]);
+    v[c + 4] = shuffle<4, 5, 6, 7, 12, 13, 14, 15>(t[c], t[c + 4]);
   }
 }
 
