@@ -790,6 +790,14 @@ inline void gather_row(const std::int32_t* __restrict row, const double* __restr
     vz[l] = all[g + 2];
   }
 }
+
+// Bead `bead`'s three rows of the across layout (n beads) from vx, vy and vz.
+inline void store_bead(double* __restrict out, std::size_t n, std::size_t bead, const Lanes& vx,
+                       const Lanes& vy, const Lanes& vz) {
+  store(out + bead * w, vx);
+  store(out + (n + bead) * w, vy);
+  store(out + (2 * n + bead) * w, vz);
+}
 }  // namespace
 
 // Per row of lanes: the particles' entries loaded one by one into vectors, stored whole (the
@@ -821,9 +829,7 @@ void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int
     Lanes ax, ay, az, bx, by, bz;
     gather_row(row, a, ax, ay, az);
     gather_row(row, b, bx, by, bz);
-    store(out + bead * w, ax + bx);
-    store(out + (n + bead) * w, ay + by);
-    store(out + (2 * n + bead) * w, az + bz);
+    store_bead(out, n, bead, ax + bx, ay + by, az + bz);
   }
 }
 
@@ -865,12 +871,8 @@ void gather_velocities(std::size_t n, const std::int32_t* __restrict particle, s
     gather_row(row, x, xx, xy, xz);
     gather_row(row, p, px, py, pz);
     const Lanes weight = load(inverse_mass + bead * w);
-    store(x_out + bead * w, xx);
-    store(x_out + (n + bead) * w, xy);
-    store(x_out + (2 * n + bead) * w, xz);
-    store(v_out + bead * w, px * weight);
-    store(v_out + (n + bead) * w, py * weight);
-    store(v_out + (2 * n + bead) * w, pz * weight);
+    store_bead(x_out, n, bead, xx, xy, xz);
+    store_bead(v_out, n, bead, px * weight, py * weight, pz * weight);
   }
 }
 
