@@ -245,13 +245,14 @@ bool RodChain::memo_in(const Box& box) const {
   return memo.valid && memo.period.x == box.period().x && memo.period.y == box.period().y &&
          memo.period.z == box.period().z && memo.inverse_period.x == box.inverse_period().x &&
          memo.inverse_period.y == box.inverse_period().y &&
-         memo.inverse_period.z == box.inverse_period().z && memo.x.size() == beads();
+         memo.inverse_period.z == box.inverse_period().z;
 }
 
-// Compared bit for bit (a zero's sign too), as the memo's positions were copied.
+// Compared bit for bit (a zero's sign too), as the memo's positions were copied. A memo in
+// lanes is compared there (begin_across).
 bool RodChain::remembers(const Vec3* global, const Box& box) const {
   static_assert(sizeof(Vec3) == 3 * sizeof(double));
-  if (!memo_in(box)) return false;
+  if (memo_.in_lanes || !memo_in(box) || memo_.x.size() != beads()) return false;
   const std::size_t n = beads();
   if (consecutive_) {
     return std::memcmp(global + bead_particle_[0], memo_.x.data(), n * sizeof(Vec3)) == 0;
@@ -270,6 +271,10 @@ void RodChain::remember_positions(const Vec3* global, const Box& box) const {
   } else {
     for (std::size_t b = 0; b < n; ++b) memo_.x[b] = global[bead_particle_[b]];
   }
+  remember_box(box);
+}
+
+void RodChain::remember_box(const Box& box) const {
   memo_.period = box.period();
   memo_.inverse_period = box.inverse_period();
   memo_.valid = true;
@@ -506,14 +511,16 @@ RodChainLanes::Group& RodChain::group_of(const RodChain* const* chains, std::siz
 }
 
 void RodChain::begin_across(const Vec3* q, const Box& box, std::size_t lane,
-                            RodChainLanes::Group& group, RodChainLanes& lanes) const {
+                            RodChainLanes::Group& group, RodChainLanes& lanes, bool same) const {
   constexpr std::size_t w = RodChainLanes::width;
   const std::size_t m = rows();
   // Directions of the impulses: the rods at the start of the step, fixed. Usually the last
-  // projection's, already in the group's lane.
+  // projection's, already in the group's lane with the positions they were made at.
+  const bool in_lane = group.memo_generation[lane] == memo_.generation;
+  if (memo_.in_lanes && in_lane && same && memo_in(box)) return;
   const bool remembered = remembers(q, box);
-  if (remembered && group.memo_generation[lane] == memo_.generation) return;
-  if (!remembered || memo_.in_lanes) {
+  if (remembered && in_lane) return;
+  if (!remembered) {
     RodChainWorkspace& ws = lanes.lane[lane];
     gather(q, ws.q);
     remember_directions(ws.q, q, box);
@@ -572,10 +579,13 @@ void RodChain::solve_positions_lanes(const RodChain* const* chains, std::size_t 
   // The free positions x0 = delta + q of every lane (lanes without a chain repeat the first
   // one: their results are never read).
   static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  // q against the positions the lanes' directions were made at, in the same pass.
+  std::uint8_t same[w];
+  const bool memo = g.memo_x.size() == a.x0.size();
   rod_passes::across::gather_sum(n, g.particle.data(), g.consecutive, &delta[0].x, &q[0].x,
-                                 a.x0.data());
+                                 a.x0.data(), memo ? g.memo_x.data() : nullptr, same);
   for (std::size_t l = 0; l < count; ++l) {
-    chains[l]->begin_across(q, box, l, g, lanes);
+    chains[l]->begin_across(q, box, l, g, lanes, same[l] != 0);
     status[l] = SolverStatus{};
     solved[l] = false;
   }
@@ -781,9 +791,9 @@ bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainW
   return true;
 }
 
-void RodChain::remember_across(const Vec3* x, const Box& box, std::size_t lane,
-                               RodChainLanes::Group& group, double largest) const {
-  remember_positions(x, box);
+void RodChain::remember_across(const Box& box, std::size_t lane, RodChainLanes::Group& group,
+                               double largest) const {
+  remember_box(box);
   memo_.in_lanes = true;
   memo_.largest_deviation = largest;
   group.memo_generation[lane] = memo_.generation;
@@ -827,7 +837,7 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
       m, a.u.data(), a.r.data(), g.length.data(), a.v.data(), g.low_first.data(), g.low_sign.data(),
       g.high_sign.data(), g.w_low.data(), g.w_high.data(), g.coupling.data(), largest,
       lanes.lower.data(), lanes.diagonal.data(), lanes.upper.data(), lanes.rhs.data());
-  for (std::size_t l = 0; l < count; ++l) chains[l]->remember_across(x, box, l, g, largest[l]);
+  for (std::size_t l = 0; l < count; ++l) chains[l]->remember_across(box, l, g, largest[l]);
   eliminate_lanes(m, lanes);
   rod_passes::across::impulses(m, a.u.data(), lanes.x.data(), g.first_sign.data(),
                                g.second_sign.data(), a.impulse.data());
@@ -842,9 +852,11 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
   }
   rod_passes::across::scatter(n, g.particle.data(), g.consecutive, a.impulse.data(), take, true,
                               &p[0].x);
-  // The directions and lengths, remembered in the group's lanes for the next step's solve.
+  // The directions and lengths, remembered in the group's lanes for the next step's solve,
+  // with the positions they were made at.
   std::swap(a.u, g.memo_u);
   std::swap(a.r, g.memo_r);
+  std::swap(a.x, g.memo_x);
 }
 
 double RodChain::largest_relative_deviation(const Vec3* x, const Box& box, RodChainWorkspace& ws,

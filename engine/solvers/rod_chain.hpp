@@ -44,9 +44,10 @@ struct RodChainLanes {
     // Lane l's bead b is particle consecutive + l (m + 1) + b when consecutive >= 0.
     std::int64_t consecutive = -1;
     // The chains' remembered start directions and lengths in this layout (the momentum
-    // projection's, kept for the next step's solve); lane l holds chain l's memo while
-    // memo_generation[l] is that memo's generation (RodChain::DirectionsMemo).
-    std::vector<double> memo_u, memo_r;
+    // projection's, kept for the next step's solve), and the positions they were made at;
+    // lane l holds chain l's memo while memo_generation[l] is that memo's generation
+    // (RodChain::DirectionsMemo).
+    std::vector<double> memo_u, memo_r, memo_x;
     std::uint64_t memo_generation[width] = {};
   };
   struct Across {
@@ -181,15 +182,16 @@ class RodChain {
   // The group of chains[0..count) in lanes.across.groups, or null.
   static RodChainLanes::Group* find_group(const RodChain* const* chains, std::size_t count,
                                           RodChainLanes& lanes);
-  // Remembers the directions and lengths made in lane `lane` of lanes.across at positions x
-  // (global), which the caller then moves into group.memo_u and memo_r; `largest` is their
-  // largest_deviation.
-  void remember_across(const Vec3* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
+  // Remembers the directions and lengths made in lane `lane` of lanes.across at the positions
+  // there, which the caller then moves into group.memo_u, memo_r and memo_x; `largest` is
+  // their largest_deviation.
+  void remember_across(const Box& box, std::size_t lane, RodChainLanes::Group& group,
                        double largest) const;
   // Lane `lane` of group.memo_u and memo_r: the start directions and lengths of this solve
-  // (memo_, made where not remembered).
+  // (memo_, made where not remembered). `same`: whether the lane's positions q are its
+  // memo_x bit for bit (the solve's gather compared them).
   void begin_across(const Vec3* q, const Box& box, std::size_t lane, RodChainLanes::Group& group,
-                    RodChainLanes& lanes) const;
+                    RodChainLanes& lanes, bool same) const;
   // rewrap_differences for lane `lane` at positions x (lane-major), into lanes.across.
   void rewrap_across(const double* x, const Box& box, std::size_t lane, RodChainLanes::Group& group,
                      RodChainLanes::Across& across) const;
@@ -215,6 +217,9 @@ class RodChain {
   bool remembers(const Vec3* global, const Box& box) const;
   // The positions of the chain's particles into the memo (bead order).
   void remember_positions(const Vec3* global, const Box& box) const;
+  // The box's periods into the memo, which starts a new generation (its positions kept
+  // elsewhere or set by the caller).
+  void remember_box(const Box& box) const;
   // Computes the directions and lengths at positions x (chain order, gathered from `global`)
   // into memo_.
   void remember_directions(const std::vector<double>& x, const Vec3* global, const Box& box) const;
@@ -224,9 +229,10 @@ class RodChain {
   // The last directions computed at a step's end or start positions, with those positions
   // and the box's periods: directions() is a function of these alone. The positions per bead
   // as they lie in the global array, so that the check is a comparison of memory (one block
-  // when the chain's particles are consecutive). u and r in chain order unless `in_lanes`:
-  // then only a group's lane holds them (RodChainLanes::Group::memo_generation), and a solve
-  // alone makes them again (the same numbers). Each remembering starts a new generation.
+  // when the chain's particles are consecutive). u, r and x in chain order unless `in_lanes`:
+  // then only a group's lane holds them (RodChainLanes::Group::memo_generation; the positions
+  // are compared there as the solve gathers its own), and a solve alone makes them again (the
+  // same numbers). Each remembering starts a new generation.
   // Mutable: a cache, invisible in the results (a chain is solved by one thread at a time;
   // threads solve different chains).
   struct DirectionsMemo {

@@ -251,6 +251,17 @@ inline Lanes load(const double* p) {
 inline void store(double* p, const Lanes& v) {
   __builtin_memcpy(p, &v, sizeof v);
 }
+// The lanes' bit patterns (compared as integers: -0 and +0 differ, a NaN equals itself).
+inline LaneMask bits(const Lanes& v) {
+  LaneMask b;
+  __builtin_memcpy(&b, &v, sizeof b);
+  return b;
+}
+inline LaneMask load_bits(const double* p) {
+  LaneMask b;
+  __builtin_memcpy(&b, p, sizeof b);
+  return b;
+}
 // |v| but for the sign of a zero (only compared here); NaN stays NaN.
 inline Lanes magnitude(const Lanes& v) {
   return v < 0 ? -v : v;
@@ -802,34 +813,58 @@ inline void store_bead(double* __restrict out, std::size_t n, std::size_t bead, 
 
 // Per row of lanes: the particles' entries loaded one by one into vectors, stored whole (the
 // rows' stores fill their cache lines; the lane-by-lane copies wrote one double per line).
-// Consecutive chains (base >= 0): by 8 x 8 blocks.
+// Consecutive chains (base >= 0): by 8 x 8 blocks. a and b are moved apart and added in the
+// across layout: the same sums as added in the particles' (the moves change no number).
 void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int64_t base,
-                const double* __restrict a, const double* __restrict b, double* __restrict out) {
+                const double* __restrict a, const double* __restrict b, double* __restrict out,
+                const double* __restrict memo, std::uint8_t* __restrict same) {
+  // The bits of b against memo's, lanes whose bits differ anywhere set.
+  LaneMask differ = {};
+  auto compare = [&](std::size_t row, const Lanes& v) {
+    if (memo) differ |= bits(v) != load_bits(memo + row * w);
+  };
   if (base >= 0) {
     const std::size_t numbers = 3 * n;
     const double* __restrict a0 = a + 3 * base;
     const double* __restrict b0 = b + 3 * base;
     std::size_t j = 0;
     for (; j + w <= numbers; j += w) {
-      Lanes v[w];
-      for (std::size_t l = 0; l < w; ++l)
-        v[l] = load(a0 + l * numbers + j) + load(b0 + l * numbers + j);
-      transpose(v);
-      for (std::size_t k = 0; k < w; ++k) store(out + row_of(n, j + k) * w, v[k]);
-    }
-    for (; j < numbers; ++j) {
+      Lanes u[w], v[w];
       for (std::size_t l = 0; l < w; ++l) {
-        out[row_of(n, j) * w + l] = a0[l * numbers + j] + b0[l * numbers + j];
+        u[l] = load(a0 + l * numbers + j);
+        v[l] = load(b0 + l * numbers + j);
+      }
+      transpose(u);
+      transpose(v);
+      for (std::size_t k = 0; k < w; ++k) {
+        const std::size_t r = row_of(n, j + k);
+        store(out + r * w, u[k] + v[k]);
+        compare(r, v[k]);
       }
     }
-    return;
+    for (; j < numbers; ++j) {
+      const std::size_t r = row_of(n, j);
+      Lanes v;
+      for (std::size_t l = 0; l < w; ++l) {
+        v[l] = b0[l * numbers + j];
+        out[r * w + l] = a0[l * numbers + j] + v[l];
+      }
+      compare(r, v);
+    }
+  } else {
+    for (std::size_t bead = 0; bead < n; ++bead) {
+      const std::int32_t* __restrict row = particle + bead * w;
+      Lanes ax, ay, az, bx, by, bz;
+      gather_row(row, a, ax, ay, az);
+      gather_row(row, b, bx, by, bz);
+      store_bead(out, n, bead, ax + bx, ay + by, az + bz);
+      compare(bead, bx);
+      compare(n + bead, by);
+      compare(2 * n + bead, bz);
+    }
   }
-  for (std::size_t bead = 0; bead < n; ++bead) {
-    const std::int32_t* __restrict row = particle + bead * w;
-    Lanes ax, ay, az, bx, by, bz;
-    gather_row(row, a, ax, ay, az);
-    gather_row(row, b, bx, by, bz);
-    store_bead(out, n, bead, ax + bx, ay + by, az + bz);
+  if (same) {
+    for (std::size_t l = 0; l < w; ++l) same[l] = static_cast<std::uint8_t>(memo && differ[l] == 0);
   }
 }
 

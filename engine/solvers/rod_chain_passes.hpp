@@ -141,9 +141,11 @@ void virial(std::size_t m, const double* z, const double* r, double* per_lane);
 // lanes' n beads, lane l's bead b being particle[b * lanes + l]: whole rows of lanes at once,
 // each entry by the operations of the lane-by-lane copies. base >= 0: lane l's bead b is
 // particle base + l n + b (consecutive chains), which they exploit.
-// out = a + b per component (a first: x0 = delta + q).
+// out = a + b per component (a first: x0 = delta + q). With `memo` (this layout), same[l]
+// tells whether lane l's b is memo's lane l bit for bit (a zero's sign too), else 0.
 void gather_sum(std::size_t n, const std::int32_t* particle, std::int64_t base, const double* a,
-                const double* b, double* out);
+                const double* b, double* out, const double* memo = nullptr,
+                std::uint8_t* same = nullptr);
 // x_out = x, v_out = p times the bead's inverse mass (lane-major, n entries).
 void gather_velocities(std::size_t n, const std::int32_t* particle, std::int64_t base,
                        const double* x, const double* p, const double* inverse_mass, double* x_out,

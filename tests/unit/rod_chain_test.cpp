@@ -596,5 +596,73 @@ TEST(RodChain, DirectionsRememberedInLanesGiveFreshChainsNumbers) {
   }
 }
 
+// A lockstep solve takes its start directions from the group's lanes only where the start
+// positions are bit for bit those the projection saw there: the lanes' gather compares them.
+// A bead moved after the projection (by 1e-9, or by one ulp), in the first numbers of the
+// chain, in the middle, or among the numbers past its last whole 8 x 8 block (30 beads: 90
+// numbers, 11 blocks), gives that chain the numbers of a chain that remembers nothing; the
+// others are unchanged. Consecutive chains (moved by blocks) and a group with one chain
+// numbered backwards (moved bead by bead).
+TEST(RodChain, LanesNoticeStartPositionsMovedSinceTheProjection) {
+  const Box box({0, 0, 0}, {6, 7, 8}, {true, true, true});
+  const double h = 0.005, tolerance = 1e-12;
+  const SolverLimits limits;
+  constexpr std::size_t count = RodChainLanes::width, beads = 30;
+  for (const bool backwards : {false, true}) {
+    SCOPED_TRACE(backwards ? "chain 2 numbered backwards" : "consecutive chains");
+    std::vector<Vec3> q(count * beads), delta(count * beads), p(count * beads);
+    std::vector<LocalCluster> clusters;
+    for (std::size_t c = 0; c < count; ++c) {
+      Chain chain = random_chain(beads, box, 80 + c);
+      for (std::size_t k = 0; k < beads; ++k) {
+        const std::size_t particle = c * beads + (backwards && c == 2 ? beads - 1 - k : k);
+        chain.cluster.particles[k] = static_cast<std::int32_t>(particle);
+        q[particle] = chain.q[k];
+        delta[particle] = chain.delta[k];
+        p[particle] = chain.p[k];
+      }
+      clusters.push_back(chain.cluster);
+    }
+    std::vector<std::unique_ptr<RodChain>> owned;
+    std::vector<const RodChain*> chains;
+    for (const LocalCluster& cluster : clusters) {
+      owned.push_back(RodChain::make(cluster));
+      chains.push_back(owned.back().get());
+    }
+    RodChainLanes lanes;
+    bool solved[count];
+    RodChain::project_momenta_lanes(chains.data(), count, q.data(), p.data(), box, lanes, solved);
+    for (std::size_t c = 0; c < count; ++c) ASSERT_TRUE(solved[c]);
+    // Chain 1: a middle bead; chain 2: its first particle; chain 3: its last bead's z (a
+    // number past the blocks); chain 6: its first bead's y by one ulp.
+    const std::size_t last = beads - 1;
+    q[1 * beads + 12].x += 1e-9;
+    q[2 * beads].y -= 1e-9;
+    q[3 * beads + last].z += 1e-9;
+    q[6 * beads].y = std::nextafter(q[6 * beads].y, 10.0);
+    std::vector<Vec3> impulse(q.size()), impulse_fresh(q.size());
+    double virial[count];
+    SolverStatus status[count];
+    RodChain::solve_positions_lanes(chains.data(), count, q.data(), delta.data(), h, box, tolerance,
+                                    limits.newton, lanes, impulse.data(), virial, status, solved);
+    RodChainWorkspace work;
+    for (std::size_t c = 0; c < count; ++c) {
+      ASSERT_TRUE(solved[c]) << "chain " << c;
+      const std::unique_ptr<RodChain> fresh = RodChain::make(clusters[c]);
+      double virial_fresh = 0.0;
+      SolverStatus fresh_status;
+      ASSERT_TRUE(fresh->solve_positions(q.data(), delta.data(), h, box, tolerance, limits.newton,
+                                         limits.line_search, work, impulse_fresh.data(),
+                                         virial_fresh, fresh_status));
+      EXPECT_EQ(virial[c], virial_fresh) << "chain " << c;
+      for (std::size_t k = c * beads; k < (c + 1) * beads; ++k) {
+        EXPECT_EQ(impulse[k].x, impulse_fresh[k].x) << "chain " << c << " bead " << k;
+        EXPECT_EQ(impulse[k].y, impulse_fresh[k].y) << "chain " << c << " bead " << k;
+        EXPECT_EQ(impulse[k].z, impulse_fresh[k].z) << "chain " << c << " bead " << k;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace deli
