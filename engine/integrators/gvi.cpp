@@ -133,6 +133,7 @@ void Gvi::start_step(System& system) {
   bool prediction_covered = false;  // known to be covered (else asked below)
   bool q_copied = false;            // ws_.q holds P.position
   bool prediction_known = false;    // prediction_covered is neighbors_cover's answer
+  ws_.half_kicked = false;
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
@@ -148,22 +149,42 @@ void Gvi::start_step(System& system) {
     if (keep) ws_.predicted.resize(n);
     // By cluster, each thread's particles are those whose clusters it solves (a partition by
     // clusters of equal size is this one): their data stay in its cache.
-    const int chunks = steps_by_cluster(P) ? chunks_for(n) : chunks_for_cheap(n);
+    const bool by_cluster = steps_by_cluster(P);
+    const int chunks = by_cluster ? chunks_for(n) : chunks_for_cheap(n);
+    // Rods alone (no reflection changes the momenta before the position update): the half
+    // kick and free step that solve_held_positions starts from are the numbers made here,
+    // kept in this pass instead of made in one of their own (by cluster, made there).
+    const bool kick = !keep && !constraints_.equalities.empty() && !by_cluster;
+    const bool zero = kick && !equalities_hold_every_particle(P);
+    if (kick) {
+      ws_.half.resize(n);
+      ws_.free.resize(n);
+      ws_.impulse.resize(n);
+    }
     std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
     beyond.assign(static_cast<std::size_t>(chunks), 0);
-    for_each_chunk(n, chunks, [&, h, listed, keep](int c, std::size_t begin, std::size_t end) {
-      std::size_t count = 0;
-      for (std::size_t i = begin; i < end; ++i) {
-        ws_.q[i] = P.position[i];
-        ws_.p[i] = P.velocity[i] * P.mass[i];
-        // free_displacement's d, not stored: only predict() reads it, after making it.
-        const Vec3 d = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
-        const Vec3 x = P.position[i] + d;
-        if (keep) ws_.predicted[i] = x;
-        if (listed) count += !list.keeps_valid(i, x);
-      }
-      beyond[static_cast<std::size_t>(c)] = count;
-    });
+    for_each_chunk(n, chunks,
+                   [&, h, listed, keep, kick, zero](int c, std::size_t begin, std::size_t end) {
+                     std::size_t count = 0;
+                     for (std::size_t i = begin; i < end; ++i) {
+                       ws_.q[i] = P.position[i];
+                       ws_.p[i] = P.velocity[i] * P.mass[i];
+                       // free_displacement's d: predict() makes it again where it reads it.
+                       const Vec3 half = ws_.p[i] + f[i] * (0.5 * h);
+                       const Vec3 d = half * (h / P.mass[i]);
+                       if (kick) {
+                         ws_.half[i] = half;
+                         ws_.free[i] = d;
+                         if (zero) ws_.impulse[i] = Vec3{};
+                       }
+                       const Vec3 x = P.position[i] + d;
+                       if (keep) ws_.predicted[i] = x;
+                       if (listed) count += !list.keeps_valid(i, x);
+                     }
+                     beyond[static_cast<std::size_t>(c)] = count;
+                   });
+    // A rebuild below wraps the positions, which leaves these numbers as they are.
+    ws_.half_kicked = kick;
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
     // neighbors_cover's answer for the prediction: its test, made above (a list not built for
@@ -188,8 +209,10 @@ void Gvi::start_step(System& system) {
     }
   }
   if (!q_copied) ws_.q = P.position;
-  // Read only by the energy restoration and the impact-time step.
-  if (feasibility_ == Feasibility::restore || contact_ == ContactTreatment::impact_time) {
+  // Read only by the energy restoration of landed rows (inequality rows alone land) and the
+  // impact-time step.
+  if ((feasibility_ == Feasibility::restore && has_inequalities()) ||
+      contact_ == ContactTreatment::impact_time) {
     ws_.p_start = ws_.p;
   }
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
@@ -527,7 +550,9 @@ void Gvi::solve_held_positions(System& system) {
   // Verlet solves once: the free step and the zeroed impulses made in the half kick's pass;
   // the solve writes every impulse itself when every particle is in a rod's cluster.
   const bool once = lagrangian_ == Lagrangian::verlet && !rows.empty();
-  if (once) {
+  if (once && ws_.half_kicked) {
+    // Made by start_step from these momenta (rods alone: no reflection changed them).
+  } else if (once) {
     ws_.free.resize(n);
     ws_.impulse.resize(n);
     const bool zero = !equalities_hold_every_particle(P);

@@ -47,6 +47,9 @@ struct GviWorkspace {
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
   std::vector<Vec3> half, impulse, x, free, mid, f_mid;
+  // half, free (and zeroed impulses) made by start_step from this step's momenta (Verlet,
+  // rods alone, not by cluster), as solve_held_positions makes them.
+  bool half_kicked = false;
   double x_largest2 = 0.0;                  // max |x - q|^2
   bool x_cover_known = false;               // whether x_covered holds for this step's x
   bool x_covered = false;                   // x within the particles' reaches (by particle reach)
