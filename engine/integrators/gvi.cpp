@@ -153,7 +153,9 @@ void Gvi::start_step(System& system) {
     const int chunks = by_cluster ? chunks_for(n) : chunks_for_cheap(n);
     // Rods alone (no reflection changes the momenta before the position update): the half
     // kick and free step that solve_held_positions starts from are the numbers made here,
-    // kept in this pass instead of made in one of their own (by cluster, made there).
+    // kept in this pass instead of made in one of their own (by cluster, made there). Then
+    // nothing reads the momenta before update_momenta makes them anew, but a prediction after
+    // a rebuild below: they are stored only for it.
     const bool kick = !keep && !constraints_.equalities.empty() && !by_cluster;
     const bool zero = kick && !equalities_hold_every_particle(P);
     if (kick) {
@@ -168,9 +170,10 @@ void Gvi::start_step(System& system) {
                      std::size_t count = 0;
                      for (std::size_t i = begin; i < end; ++i) {
                        ws_.q[i] = P.position[i];
-                       ws_.p[i] = P.velocity[i] * P.mass[i];
+                       const Vec3 momentum = P.velocity[i] * P.mass[i];
+                       if (!kick) ws_.p[i] = momentum;
                        // free_displacement's d: predict() makes it again where it reads it.
-                       const Vec3 half = ws_.p[i] + f[i] * (0.5 * h);
+                       const Vec3 half = momentum + f[i] * (0.5 * h);
                        const Vec3 d = half * (h / P.mass[i]);
                        if (kick) {
                          ws_.half[i] = half;
@@ -201,6 +204,9 @@ void Gvi::start_step(System& system) {
       (prediction_known || !engine_.neighbors_cover(ws_.predicted))) {
     engine_.ensure_neighbors(system, true);  // may wrap P.position
     q_copied = false;
+    if (ws_.half_kicked) {
+      parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
+    }
     predict(system, ws_.p, ws_.predicted, false);
     if (!engine_.neighbors_cover(ws_.predicted)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
