@@ -494,6 +494,42 @@ TEST(RodChain, AShortGroupSolvedAgainGivesTheChainKernelsNumbers) {
   }
 }
 
+// A lane group's worth of random chains of `beads` beads (seeds from `seed`), chain c's
+// particles c * beads onwards, chain 2's numbered backwards where asked; move(c, x) may shift
+// chain c's start positions, bead by bead.
+struct LaneChains {
+  std::vector<Vec3> q, delta, p;
+  std::vector<LocalCluster> clusters;
+  std::vector<std::unique_ptr<RodChain>> owned;
+  std::vector<const RodChain*> chains;
+};
+template <class Move>
+LaneChains lane_chains(std::size_t beads, const Box& box, std::uint64_t seed, bool backwards,
+                       Move&& move) {
+  constexpr std::size_t count = RodChainLanes::width;
+  LaneChains made;
+  made.q.resize(count * beads);
+  made.delta.resize(count * beads);
+  made.p.resize(count * beads);
+  for (std::size_t c = 0; c < count; ++c) {
+    Chain chain = random_chain(beads, box, seed + c);
+    for (std::size_t k = 0; k < beads; ++k) {
+      const std::size_t particle = c * beads + (backwards && c == 2 ? beads - 1 - k : k);
+      chain.cluster.particles[k] = static_cast<std::int32_t>(particle);
+      move(c, chain.q[k]);
+      made.q[particle] = chain.q[k];
+      made.delta[particle] = chain.delta[k];
+      made.p[particle] = chain.p[k];
+    }
+    made.clusters.push_back(chain.cluster);
+  }
+  for (const LocalCluster& cluster : made.clusters) {
+    made.owned.push_back(RodChain::make(cluster));
+    made.chains.push_back(made.owned.back().get());
+  }
+  return made;
+}
+
 // The directions a lockstep projection remembers stay in its group's lanes. Whoever meets
 // the chains next gives the numbers of chains that never remembered anything: the largest
 // deviation, a subset solved in another group, a chain solved alone (which makes its
@@ -505,28 +541,14 @@ TEST(RodChain, DirectionsRememberedInLanesGiveFreshChainsNumbers) {
   const double h = 0.005, tolerance = 1e-12;
   const SolverLimits limits;
   constexpr std::size_t count = RodChainLanes::width, beads = 30;
-  std::vector<Vec3> q(count * beads), delta(count * beads), p(count * beads);
-  std::vector<LocalCluster> clusters;
-  for (std::size_t c = 0; c < count; ++c) {
-    Chain chain = random_chain(beads, box, 60 + c);
-    for (std::size_t k = 0; k < beads; ++k) {
-      // Chain 2's particles numbered backwards (not consecutive).
-      const std::size_t particle = c * beads + (c == 2 ? beads - 1 - k : k);
-      chain.cluster.particles[k] = static_cast<std::int32_t>(particle);
-      // Half the chains moved away from the boundary.
-      if (c % 2) chain.q[k] = box.minimum_image(chain.q[k] - Vec3{2.5, 0, 0});
-      q[particle] = chain.q[k];
-      delta[particle] = chain.delta[k];
-      p[particle] = chain.p[k];
-    }
-    clusters.push_back(chain.cluster);
-  }
-  std::vector<std::unique_ptr<RodChain>> owned;
-  std::vector<const RodChain*> chains;
-  for (const LocalCluster& cluster : clusters) {
-    owned.push_back(RodChain::make(cluster));
-    chains.push_back(owned.back().get());
-  }
+  // Half the chains moved away from the boundary; chain 2's particles numbered backwards.
+  LaneChains made = lane_chains(beads, box, 60, true, [&](std::size_t c, Vec3& x) {
+    if (c % 2) x = box.minimum_image(x - Vec3{2.5, 0, 0});
+  });
+  std::vector<Vec3>&q = made.q, &p = made.p;
+  const std::vector<Vec3>& delta = made.delta;
+  const std::vector<LocalCluster>& clusters = made.clusters;
+  const std::vector<const RodChain*>& chains = made.chains;
   RodChainWorkspace work;
   RodChainLanes lanes;
   bool solved[count];
@@ -610,25 +632,11 @@ TEST(RodChain, LanesNoticeStartPositionsMovedSinceTheProjection) {
   constexpr std::size_t count = RodChainLanes::width, beads = 30;
   for (const bool backwards : {false, true}) {
     SCOPED_TRACE(backwards ? "chain 2 numbered backwards" : "consecutive chains");
-    std::vector<Vec3> q(count * beads), delta(count * beads), p(count * beads);
-    std::vector<LocalCluster> clusters;
-    for (std::size_t c = 0; c < count; ++c) {
-      Chain chain = random_chain(beads, box, 80 + c);
-      for (std::size_t k = 0; k < beads; ++k) {
-        const std::size_t particle = c * beads + (backwards && c == 2 ? beads - 1 - k : k);
-        chain.cluster.particles[k] = static_cast<std::int32_t>(particle);
-        q[particle] = chain.q[k];
-        delta[particle] = chain.delta[k];
-        p[particle] = chain.p[k];
-      }
-      clusters.push_back(chain.cluster);
-    }
-    std::vector<std::unique_ptr<RodChain>> owned;
-    std::vector<const RodChain*> chains;
-    for (const LocalCluster& cluster : clusters) {
-      owned.push_back(RodChain::make(cluster));
-      chains.push_back(owned.back().get());
-    }
+    LaneChains made = lane_chains(beads, box, 80, backwards, [](std::size_t, Vec3&) {});
+    std::vector<Vec3>&q = made.q, &p = made.p;
+    const std::vector<Vec3>& delta = made.delta;
+    const std::vector<LocalCluster>& clusters = made.clusters;
+    const std::vector<const RodChain*>& chains = made.chains;
     RodChainLanes lanes;
     bool solved[count];
     RodChain::project_momenta_lanes(chains.data(), count, q.data(), p.data(), box, lanes, solved);
