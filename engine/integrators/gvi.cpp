@@ -21,6 +21,16 @@ namespace {
 Vec3 held_impulse(const GviWorkspace& ws, std::size_t i) {
   return ws.impulse.empty() ? Vec3{} : ws.impulse[i];
 }
+
+// Momentum p after a half kick by force f, p + h/2 f, and the free step h M^-1 of such a
+// momentum: one definition for every pass that makes them, so that numbers one pass keeps
+// stand for those another would make (start_step's for solve_held_positions').
+Vec3 half_kicked(const Vec3& p, const Vec3& f, double h) {
+  return p + f * (0.5 * h);
+}
+Vec3 free_step(const Vec3& momentum, double h, double mass) {
+  return momentum * (h / mass);
+}
 }  // namespace
 
 Gvi::Gvi(const ForceField& force_field, ConstraintSet constraints, const GviOptions& options,
@@ -72,8 +82,9 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
   d.resize(n);
   // The step is captured by value here and below: a double behind a reference could alias
   // the doubles the loop stores, and would be loaded again at every particle.
-  parallel_for(n,
-               [&, h](std::size_t i) { d[i] = (momenta[i] + f[i] * (0.5 * h)) * (h / P.mass[i]); });
+  parallel_for(n, [&, h](std::size_t i) {
+    d[i] = free_step(half_kicked(momenta[i], f[i], h), h, P.mass[i]);
+  });
   if (lagrangian_ != Lagrangian::midpoint) return;
   std::vector<Vec3>& mid = ws_.prediction_mid;
   mid.resize(n);
@@ -82,7 +93,7 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
     engine_.forces_at(system, mid, ws_.prediction_force);
     const std::vector<Vec3>& f_mid = ws_.prediction_force;
     return ordered_max(n, 0.0, [&, h](std::size_t i) {
-      const Vec3 next = (momenta[i] + f_mid[i] * (0.5 * h)) * (h / P.mass[i]);
+      const Vec3 next = free_step(half_kicked(momenta[i], f_mid[i], h), h, P.mass[i]);
       const double change = norm(next - d[i]);
       d[i] = next;
       return change;
@@ -173,8 +184,8 @@ void Gvi::start_step(System& system) {
                        const Vec3 momentum = P.velocity[i] * P.mass[i];
                        if (!kick) ws_.p[i] = momentum;
                        // free_displacement's d: predict() makes it again where it reads it.
-                       const Vec3 half = momentum + f[i] * (0.5 * h);
-                       const Vec3 d = half * (h / P.mass[i]);
+                       const Vec3 half = half_kicked(momentum, f[i], h);
+                       const Vec3 d = free_step(half, h, P.mass[i]);
                        if (kick) {
                          ws_.half[i] = half;
                          ws_.free[i] = d;
@@ -460,7 +471,7 @@ double Gvi::predict_reflected(const System& system) {
   ws_.changed_particles.clear();
   double largest2_bound = ws_.largest2;
   auto again = [&](std::int32_t i) {
-    const Vec3 d = (ws_.p[i] + f[i] * (0.5 * h)) * (h / P.mass[i]);
+    const Vec3 d = free_step(half_kicked(ws_.p[i], f[i], h), h, P.mass[i]);
     const Vec3 next = P.position[i] + d;
     Vec3& now = ws_.predicted[i];
     if (next.x != now.x || next.y != now.y || next.z != now.z) {
@@ -563,13 +574,13 @@ void Gvi::solve_held_positions(System& system) {
     ws_.impulse.resize(n);
     const bool zero = !equalities_hold_every_particle(P);
     parallel_for(n, [&, h, zero](std::size_t i) {
-      const Vec3 half = ws_.p[i] + f_start[i] * (0.5 * h);
+      const Vec3 half = half_kicked(ws_.p[i], f_start[i], h);
       ws_.half[i] = half;
-      ws_.free[i] = half * (h / P.mass[i]);
+      ws_.free[i] = free_step(half, h, P.mass[i]);
       if (zero) ws_.impulse[i] = Vec3{};
     });
   } else {
-    parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = ws_.p[i] + f_start[i] * (0.5 * h); });
+    parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = half_kicked(ws_.p[i], f_start[i], h); });
   }
   // Verlet: the free step is the constrained predictor's last one (the same numbers from
   // the same momenta and forces) at the same q, so a chain no contact row joins, whose
@@ -602,7 +613,7 @@ void Gvi::solve_held_positions(System& system) {
     parallel_for(n, [&](std::size_t i) { ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5; });
     engine_.forces_at(system, ws_.mid, ws_.f_mid);
     return ordered_max(n, 0.0, [&, h](std::size_t i) {
-      const Vec3 next = ws_.p[i] + ws_.f_mid[i] * (0.5 * h);
+      const Vec3 next = half_kicked(ws_.p[i], ws_.f_mid[i], h);
       const double change = norm(next - ws_.half[i]) * h / P.mass[i];
       ws_.half[i] = next;
       return change;
@@ -649,8 +660,8 @@ void Gvi::held_positions_by_cluster(System& system) {
   Vec3* x = ws_.x.data();
   passes.before = [&, h](int, const ParticleRun& run) {
     run.for_each([&, h](std::size_t i) {
-      half[i] = p[i] + f[i] * (0.5 * h);
-      free[i] = half[i] * (h / mass[i]);
+      half[i] = half_kicked(p[i], f[i], h);
+      free[i] = free_step(half[i], h, mass[i]);
     });
   };
   passes.after = [&, h, built](int chunk, const ParticleRun& run) {

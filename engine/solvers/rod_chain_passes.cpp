@@ -257,11 +257,6 @@ inline LaneMask bits(const Lanes& v) {
   __builtin_memcpy(&b, &v, sizeof b);
   return b;
 }
-inline LaneMask load_bits(const double* p) {
-  LaneMask b;
-  __builtin_memcpy(&b, p, sizeof b);
-  return b;
-}
 // |v| but for the sign of a zero (only compared here); NaN stays NaN.
 inline Lanes magnitude(const Lanes& v) {
   return v < 0 ? -v : v;
@@ -821,7 +816,7 @@ void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int
   // The bits of b against memo's, lanes whose bits differ anywhere set.
   LaneMask differ = {};
   auto compare = [&](std::size_t row, const Lanes& v) {
-    if (memo) differ |= bits(v) != load_bits(memo + row * w);
+    if (memo) differ |= bits(v) != bits(load(memo + row * w));
   };
   if (base >= 0) {
     const std::size_t numbers = 3 * n;
