@@ -10,16 +10,26 @@
 #include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
 #include "integrators/contact_group.hpp"
+#include "integrators/gvi_particle_passes.hpp"
 #include "integrators/shadow_correction.hpp"
 #include "solvers/cluster_matrices.hpp"
 
 namespace deli {
 
 namespace {
-// Particle i's impulse from the held rows' position solve: +0 (what the solve's zeroed
-// vector holds) when no row was held, which leaves `impulse` empty.
-Vec3 held_impulse(const GviWorkspace& ws, std::size_t i) {
-  return ws.impulse.empty() ? Vec3{} : ws.impulse[i];
+// Particles' vectors as their numbers, 3 doubles a particle (gvi_particle_passes.hpp).
+static_assert(sizeof(Vec3) == 3 * sizeof(double));
+double* numbers(std::vector<Vec3>& v) {
+  return reinterpret_cast<double*>(v.data());
+}
+const double* numbers(const std::vector<Vec3>& v) {
+  return reinterpret_cast<const double*>(v.data());
+}
+
+// The held rows' position impulses, or null when no row was held, which leaves `impulse`
+// empty: the passes read +0 then (what the solve's zeroed vector holds).
+const double* held_impulses(const GviWorkspace& ws) {
+  return ws.impulse.empty() ? nullptr : numbers(ws.impulse);
 }
 
 // Momentum p after a half kick by force f, p + h/2 f, and the free step h M^-1 of such a
@@ -176,27 +186,25 @@ void Gvi::start_step(System& system) {
     }
     std::vector<std::size_t>& beyond = ws_.chunk_outgrown;
     beyond.assign(static_cast<std::size_t>(chunks), 0);
-    for_each_chunk(n, chunks,
-                   [&, h, listed, keep, kick, zero](int c, std::size_t begin, std::size_t end) {
-                     std::size_t count = 0;
-                     for (std::size_t i = begin; i < end; ++i) {
-                       ws_.q[i] = P.position[i];
-                       const Vec3 momentum = P.velocity[i] * P.mass[i];
-                       if (!kick) ws_.p[i] = momentum;
-                       // free_displacement's d: predict() makes it again where it reads it.
-                       const Vec3 half = half_kicked(momentum, f[i], h);
-                       const Vec3 d = free_step(half, h, P.mass[i]);
-                       if (kick) {
-                         ws_.half[i] = half;
-                         ws_.free[i] = d;
-                         if (zero) ws_.impulse[i] = Vec3{};
-                       }
-                       const Vec3 x = P.position[i] + d;
-                       if (keep) ws_.predicted[i] = x;
-                       if (listed) count += !list.keeps_valid(i, x);
-                     }
-                     beyond[static_cast<std::size_t>(c)] = count;
-                   });
+    // The numbers of half_kicked and free_step (free_displacement's d: predict() makes it
+    // again where it reads it), in vectors.
+    gvi_passes::StepStart pass;
+    pass.h = h;
+    pass.position = numbers(P.position);
+    pass.velocity = numbers(P.velocity);
+    pass.mass = P.mass.data();
+    pass.force = numbers(f);
+    pass.at_build = listed ? numbers(list.positions_at_build()) : nullptr;
+    pass.list_limit2 = list.valid_distance2();
+    pass.q = numbers(ws_.q);
+    pass.p = kick ? nullptr : numbers(ws_.p);
+    pass.half = kick ? numbers(ws_.half) : nullptr;
+    pass.free = kick ? numbers(ws_.free) : nullptr;
+    pass.impulse = zero ? numbers(ws_.impulse) : nullptr;
+    pass.predicted = keep ? numbers(ws_.predicted) : nullptr;
+    for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      beyond[static_cast<std::size_t>(c)] = gvi_passes::step_start(pass, begin, end);
+    });
     // A rebuild below wraps the positions, which leaves these numbers as they are.
     ws_.half_kicked = kick;
     prediction_covered =
@@ -523,19 +531,22 @@ void Gvi::displaced(const Particles& P) {
   const NeighborList& list = engine_.neighbors();
   const bool built = list.built_for(n);
   const double* limit2 = by_particle ? ws_.reach_limit2.data() : nullptr;
-  for_each_chunk(n, chunks, [&, h, built](int c, std::size_t begin, std::size_t end) {
-    double largest = 0.0;
-    std::size_t beyond = 0, beyond_list = 0;
-    for (std::size_t i = begin; i < end; ++i) {
-      ws_.x[i] = ws_.q[i] + (ws_.half[i] + held_impulse(ws_, i)) * (h / P.mass[i]);
-      const double moved2 = norm2(ws_.x[i] - ws_.q[i]);
-      largest = std::max(largest, moved2);
-      if (limit2) beyond += !(moved2 <= limit2[i]);
-      if (built) beyond_list += !list.keeps_valid(i, ws_.x[i]);
-    }
-    largest2[static_cast<std::size_t>(c)] = largest;
-    outgrown[static_cast<std::size_t>(c)] = beyond;
-    unlisted[static_cast<std::size_t>(c)] = beyond_list;
+  // x = q + (half + impulse) (h / m), in vectors.
+  gvi_passes::EndPositions pass;
+  pass.h = h;
+  pass.q = numbers(ws_.q);
+  pass.half = numbers(ws_.half);
+  pass.impulse = held_impulses(ws_);
+  pass.mass = P.mass.data();
+  pass.reach_limit2 = limit2;
+  pass.at_build = built ? numbers(list.positions_at_build()) : nullptr;
+  pass.list_limit2 = list.valid_distance2();
+  pass.x = numbers(ws_.x);
+  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(pass, begin, end);
+    largest2[static_cast<std::size_t>(c)] = tally.largest2;
+    outgrown[static_cast<std::size_t>(c)] = tally.beyond_reach;
+    unlisted[static_cast<std::size_t>(c)] = tally.beyond_list;
   });
   ws_.x_largest2 = 0.0;
   ws_.x_covered = by_particle;
@@ -814,10 +825,10 @@ void Gvi::update_momenta(System& system, bool tally) {
     step_virial_ += ws_.position_virial;
     return;
   }
-  parallel_for(n, [&, h](std::size_t i) {
-    Vec3 momentum = ws_.half[i] + held_impulse(ws_, i);
-    momentum += f[i] * (0.5 * h);
-    p[i] = momentum;
+  // momentum = half + impulse; momentum += f (0.5 h), in vectors.
+  const double* impulse = held_impulses(ws_);
+  for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
+    gvi_passes::second_kick(h, numbers(ws_.half), impulse, numbers(f), numbers(p), begin, end);
   });
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   ws_.momentum_rows.clear();
@@ -849,7 +860,9 @@ void Gvi::update_momenta(System& system, bool tally) {
   if (feasibility_ == Feasibility::restore && landed) {
     restore_energy(system, ws_.landed, target_energy, p);
   }
-  parallel_for(n, [&](std::size_t i) { P.velocity[i] = p[i] * (1.0 / P.mass[i]); });
+  for_each_chunk(n, chunks_for_cheap(n), [&](int, std::size_t begin, std::size_t end) {
+    gvi_passes::velocities(numbers(p), P.mass.data(), numbers(P.velocity), begin, end);
+  });
 }
 
 // The rows that can have closed this step are among the candidates (their reach covers the

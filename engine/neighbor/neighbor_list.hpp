@@ -33,8 +33,10 @@ class NeighborList {
   // the list holds `count` particles' build positions, and particle i at x keeps it valid.
   bool built_for(std::size_t count) const { return position_at_build_.size() == count; }
   bool keeps_valid(std::size_t i, const Vec3& x) const {
-    return norm2(x - position_at_build_[i]) <= 0.25 * skin_ * skin_;
+    return norm2(x - position_at_build_[i]) <= valid_distance2();
   }
+  // The squared distance from its build position within which a particle keeps the list valid.
+  double valid_distance2() const { return 0.25 * skin_ * skin_; }
   // The positions of the last build: a restart rebuilds from them, so that the pair order,
   // and with it every rounding, repeats.
   const std::vector<Vec3>& positions_at_build() const { return position_at_build_; }

@@ -1,0 +1,242 @@
+#include "integrators/gvi_particle_passes.hpp"
+
+namespace deli::gvi_passes {
+
+// The helpers below take and return vectors by value: internal and inlined, so the warning
+// that such an ABI differs between targets concerns no call that exists.
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace {
+// Eight particles a block: their 24 numbers are three vectors of eight, and a value per
+// particle one vector.
+constexpr std::size_t w = 8;
+typedef double Lanes __attribute__((vector_size(w * sizeof(double))));
+typedef long LaneMask __attribute__((vector_size(w * sizeof(double))));
+static_assert(sizeof(long) == sizeof(double));
+
+inline Lanes load(const double* p) {
+  Lanes v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline void store(double* p, const Lanes& v) {
+  __builtin_memcpy(p, &v, sizeof v);
+}
+
+// Entries k... of a then b (b's entry j as w + j): GCC's and Clang's two-source shuffles (the
+// fuzzing build is Clang's). They move numbers without changing them.
+template <long... k>
+inline Lanes shuffle(const Lanes& a, const Lanes& b) {
+  static_assert(sizeof...(k) == w);
+#if defined(__clang__)
+  return __builtin_shufflevector(a, b, k...);
+#else
+  return __builtin_shuffle(a, b, LaneMask{k...});
+#endif
+}
+
+// The block's three vectors of numbers: particle j's x, y, z are entries 3j, 3j+1, 3j+2 of
+// the 24 (vector e / 8, entry e % 8).
+struct Triples {
+  Lanes v[3];
+};
+inline Triples load_triples(const double* p) {
+  return {{load(p), load(p + w), load(p + 2 * w)}};
+}
+inline void store_triples(double* p, const Triples& t) {
+  for (std::size_t k = 0; k < 3; ++k) store(p + k * w, t.v[k]);
+}
+// A value per particle at each of its three numbers.
+inline Triples spread(const Lanes& v) {
+  return {{shuffle<0, 0, 0, 1, 1, 1, 2, 2>(v, v), shuffle<2, 3, 3, 3, 4, 4, 4, 5>(v, v),
+           shuffle<5, 5, 6, 6, 6, 7, 7, 7>(v, v)}};
+}
+// Per particle, dot(d, d) = d.x d.x + d.y d.y + d.z d.z in that order (vec3.hpp's norm2).
+inline Lanes norm2s(const Triples& d) {
+  const Lanes a = d.v[0] * d.v[0], b = d.v[1] * d.v[1], c = d.v[2] * d.v[2];
+  const Lanes x = shuffle<0, 1, 2, 3, 4, 5, 10, 13>(shuffle<0, 3, 6, 9, 12, 15, 0, 0>(a, b), c);
+  const Lanes y = shuffle<0, 1, 2, 3, 4, 8, 11, 14>(shuffle<1, 4, 7, 10, 13, 0, 0, 0>(a, b), c);
+  const Lanes z = shuffle<0, 1, 2, 3, 4, 9, 12, 15>(shuffle<2, 5, 8, 11, 14, 0, 0, 0>(a, b), c);
+  return (x + y) + z;
+}
+// 1 where !(value <= limit), else 0 (a comparison's true is all ones, -1).
+inline LaneMask missed(const Lanes& value, const Lanes& limit) {
+  return (value <= limit) + 1;
+}
+inline std::size_t total(const LaneMask& counts) {
+  std::size_t sum = 0;
+  for (std::size_t l = 0; l < w; ++l) sum += static_cast<std::size_t>(counts[l]);
+  return sum;
+}
+inline Lanes broadcast(double v) {
+  Lanes out;
+  for (std::size_t l = 0; l < w; ++l) out[l] = v;
+  return out;
+}
+
+// The scalar form of the passes, for the particles after the last whole block.
+struct Three {
+  double x, y, z;
+};
+inline Three at(const double* p, std::size_t i) {
+  return {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+}
+inline void put(double* p, std::size_t i, const Three& v) {
+  p[3 * i] = v.x;
+  p[3 * i + 1] = v.y;
+  p[3 * i + 2] = v.z;
+}
+inline double norm2(const Three& d) {
+  return d.x * d.x + d.y * d.y + d.z * d.z;
+}
+}  // namespace
+
+std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end) {
+  const double h = pass.h;
+  const double kick = 0.5 * h;
+  const double* __restrict position = pass.position;
+  const double* __restrict velocity = pass.velocity;
+  const double* __restrict mass = pass.mass;
+  const double* __restrict force = pass.force;
+  const double* __restrict at_build = pass.at_build;
+  double* __restrict q = pass.q;
+  LaneMask outside = {};
+  const Lanes limit = broadcast(pass.list_limit2);
+  std::size_t i = begin;
+  for (; i + w <= end; i += w) {
+    const std::size_t o = 3 * i;
+    const Lanes m = load(mass + i);
+    const Triples ms = spread(m), hms = spread(h / m);
+    Triples momentum, half, d, x, moved;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t e = o + k * w;
+      const Lanes start = load(position + e);
+      store(q + e, start);
+      momentum.v[k] = load(velocity + e) * ms.v[k];
+      half.v[k] = momentum.v[k] + load(force + e) * kick;
+      d.v[k] = half.v[k] * hms.v[k];
+      x.v[k] = start + d.v[k];
+      if (at_build) moved.v[k] = x.v[k] - load(at_build + e);
+    }
+    if (pass.p) store_triples(pass.p + o, momentum);
+    if (pass.half) store_triples(pass.half + o, half);
+    if (pass.free) store_triples(pass.free + o, d);
+    if (pass.impulse) store_triples(pass.impulse + o, Triples{});
+    if (pass.predicted) store_triples(pass.predicted + o, x);
+    if (at_build) outside += missed(norm2s(moved), limit);
+  }
+  std::size_t count = total(outside);
+  for (; i < end; ++i) {
+    const double m = mass[i];
+    const Three start = at(position, i), v = at(velocity, i), f = at(force, i);
+    put(q, i, start);
+    const Three momentum{v.x * m, v.y * m, v.z * m};
+    const Three half{momentum.x + f.x * kick, momentum.y + f.y * kick, momentum.z + f.z * kick};
+    const double hm = h / m;
+    const Three d{half.x * hm, half.y * hm, half.z * hm};
+    const Three x{start.x + d.x, start.y + d.y, start.z + d.z};
+    if (pass.p) put(pass.p, i, momentum);
+    if (pass.half) put(pass.half, i, half);
+    if (pass.free) put(pass.free, i, d);
+    if (pass.impulse) put(pass.impulse, i, Three{0.0, 0.0, 0.0});
+    if (pass.predicted) put(pass.predicted, i, x);
+    if (at_build) {
+      const Three ref = at(at_build, i);
+      count += !(norm2(Three{x.x - ref.x, x.y - ref.y, x.z - ref.z}) <= pass.list_limit2);
+    }
+  }
+  return count;
+}
+
+EndPositionsTally end_positions(const EndPositions& pass, std::size_t begin, std::size_t end) {
+  const double h = pass.h;
+  const double* __restrict q = pass.q;
+  const double* __restrict half = pass.half;
+  const double* __restrict impulse = pass.impulse;
+  const double* __restrict mass = pass.mass;
+  const double* __restrict reach = pass.reach_limit2;
+  const double* __restrict at_build = pass.at_build;
+  double* __restrict x = pass.x;
+  Lanes largest = broadcast(0.0);
+  LaneMask outside_reach = {}, outside_list = {};
+  const Lanes list_limit = broadcast(pass.list_limit2);
+  std::size_t i = begin;
+  for (; i + w <= end; i += w) {
+    const std::size_t o = 3 * i;
+    const Triples hms = spread(h / load(mass + i));
+    Triples moved, listed;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t e = o + k * w;
+      const Lanes start = load(q + e);
+      // A missing impulse is a zero vector, added as it is (+0 turns a -0 sum into +0).
+      const Lanes total_impulse = load(half + e) + (impulse ? load(impulse + e) : broadcast(0.0));
+      const Lanes end_position = start + total_impulse * hms.v[k];
+      store(x + e, end_position);
+      moved.v[k] = end_position - start;
+      if (at_build) listed.v[k] = end_position - load(at_build + e);
+    }
+    const Lanes moved2 = norm2s(moved);
+    largest = largest < moved2 ? moved2 : largest;
+    if (reach) outside_reach += missed(moved2, load(reach + i));
+    if (at_build) outside_list += missed(norm2s(listed), list_limit);
+  }
+  EndPositionsTally tally;
+  for (std::size_t l = 0; l < w; ++l) {
+    tally.largest2 = tally.largest2 < largest[l] ? largest[l] : tally.largest2;
+  }
+  tally.beyond_reach = total(outside_reach);
+  tally.beyond_list = total(outside_list);
+  for (; i < end; ++i) {
+    const double hm = h / mass[i];
+    const Three start = at(q, i), kicked = at(half, i);
+    const Three held = impulse ? at(impulse, i) : Three{0.0, 0.0, 0.0};
+    const Three sum{kicked.x + held.x, kicked.y + held.y, kicked.z + held.z};
+    const Three end_position{start.x + sum.x * hm, start.y + sum.y * hm, start.z + sum.z * hm};
+    put(x, i, end_position);
+    const double moved2 =
+        norm2(Three{end_position.x - start.x, end_position.y - start.y, end_position.z - start.z});
+    tally.largest2 = tally.largest2 < moved2 ? moved2 : tally.largest2;
+    if (reach) tally.beyond_reach += !(moved2 <= reach[i]);
+    if (at_build) {
+      const Three ref = at(at_build, i);
+      tally.beyond_list += !(norm2(Three{end_position.x - ref.x, end_position.y - ref.y,
+                                         end_position.z - ref.z}) <= pass.list_limit2);
+    }
+  }
+  return tally;
+}
+
+void second_kick(double h, const double* half, const double* impulse, const double* force,
+                 double* p, std::size_t begin, std::size_t end) {
+  const double kick = 0.5 * h;
+  const double* __restrict a = half;
+  const double* __restrict b = impulse;
+  const double* __restrict f = force;
+  double* __restrict out = p;
+  // A missing impulse is a zero vector, added as it is (+0 turns a -0 sum into +0).
+  if (b) {
+    for (std::size_t e = 3 * begin; e < 3 * end; ++e) out[e] = (a[e] + b[e]) + f[e] * kick;
+  } else {
+    for (std::size_t e = 3 * begin; e < 3 * end; ++e) out[e] = (a[e] + 0.0) + f[e] * kick;
+  }
+}
+
+void velocities(const double* p, const double* mass, double* velocity, std::size_t begin,
+                std::size_t end) {
+  const double* __restrict momentum = p;
+  const double* __restrict m = mass;
+  double* __restrict v = velocity;
+  std::size_t i = begin;
+  for (; i + w <= end; i += w) {
+    const Triples inverse = spread(1.0 / load(m + i));
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t e = 3 * i + k * w;
+      store(v + e, load(momentum + e) * inverse.v[k]);
+    }
+  }
+  for (; i < end; ++i) {
+    const double inverse = 1.0 / m[i];
+    for (std::size_t k = 0; k < 3; ++k) v[3 * i + k] = momentum[3 * i + k] * inverse;
+  }
+}
+
+}  // namespace deli::gvi_passes

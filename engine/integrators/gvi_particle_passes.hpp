@@ -1,0 +1,70 @@
+#pragma once
+
+#include <cstddef>
+
+namespace deli::gvi_passes {
+
+// GVI's passes over the particles [begin, end) of arrays of xyz triples (3 doubles a particle,
+// the layout of std::vector<Vec3>), eight particles at a time in vectors. Each number is made
+// by the operations, in the order, of the scalar expressions written beside each function
+// (no fused multiply-add: -ffp-contract=off), so the results are bit for bit those of a loop
+// over Vec3. Their file alone is built for the build machine's CPU (DELI_NATIVE), so it
+// includes no header with inline code that the rest of the engine would share.
+
+// The start of a Verlet step, per particle i with m = mass[i]:
+//   q = position; momentum = velocity * m; p = momentum;
+//   half = momentum + force * (0.5 h); free = half * (h / m); impulse = 0;
+//   predicted = position + free;
+// and the count of particles whose predicted position is not within the neighbour list's
+// reach, !(|predicted - at_build|^2 <= list_limit2). Null outputs are not written; a null
+// at_build counts none.
+struct StepStart {
+  double h = 0.0;
+  const double* position = nullptr;
+  const double* velocity = nullptr;
+  const double* mass = nullptr;  // one a particle
+  const double* force = nullptr;
+  const double* at_build = nullptr;
+  double list_limit2 = 0.0;
+  double* q = nullptr;
+  double* p = nullptr;
+  double* half = nullptr;
+  double* free = nullptr;
+  double* impulse = nullptr;
+  double* predicted = nullptr;
+};
+std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end);
+
+// The end positions, per particle i with m = mass[i] (a null impulse reads as zeros):
+//   x = q + (half + impulse) * (h / m); moved2 = |x - q|^2;
+// with the largest moved2 (NaN passed over, as std::max(largest, moved2) from 0 does), the
+// count of !(moved2 <= reach_limit2[i]) (none with a null reach_limit2) and the count of
+// !(|x - at_build|^2 <= list_limit2) (none with a null at_build).
+struct EndPositions {
+  double h = 0.0;
+  const double* q = nullptr;
+  const double* half = nullptr;
+  const double* impulse = nullptr;
+  const double* mass = nullptr;
+  const double* reach_limit2 = nullptr;  // one a particle
+  const double* at_build = nullptr;
+  double list_limit2 = 0.0;
+  double* x = nullptr;
+};
+struct EndPositionsTally {
+  double largest2 = 0.0;
+  std::size_t beyond_reach = 0;
+  std::size_t beyond_list = 0;
+};
+EndPositionsTally end_positions(const EndPositions& pass, std::size_t begin, std::size_t end);
+
+// The second half kick of the momenta: p = (half + impulse) + force * (0.5 h) per number (a
+// null impulse reads as zeros).
+void second_kick(double h, const double* half, const double* impulse, const double* force,
+                 double* p, std::size_t begin, std::size_t end);
+
+// The velocities of the momenta: velocity = p * (1 / mass[i]) per particle i.
+void velocities(const double* p, const double* mass, double* velocity, std::size_t begin,
+                std::size_t end);
+
+}  // namespace deli::gvi_passes
