@@ -401,9 +401,11 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
   auto project_cluster = [&](std::size_t index, RodChainWorkspace& chain_work, double& deviation) {
     const PreparedCluster* prepared = prepared_cluster(rows, index);
     const Cluster& cluster = prepared ? prepared->cluster : found_clusters_[index];
+    double chain_virial = 0.0;
     if (prepared && prepared->chain &&
         prepared->chain->project_momenta(x.data(), p.data(), system.box, chain_work,
-                                         virial_terms_.take(index, prepared->chain->rows()))) {
+                                         chain_virial)) {
+      virial_terms_.add(index, chain_virial);
       if (deviation >= 0.0) deviation = std::max(deviation, prepared->chain->measured_deviation());
       return;
     }
@@ -454,14 +456,15 @@ double ConstrainedIntegrator::project_momenta(System& system, const std::vector<
     auto alone = [&](std::size_t index) { project_cluster(index, work, deviation); };
     auto together = [&](const RodChain** chains, const std::size_t* indices, std::size_t count) {
       bool solved[RodChainLanes::width];
-      RodChain::project_momenta_lanes(chains, count, x.data(), p.data(), system.box, lanes, solved);
-      const std::size_t m = chains[0]->rows();
+      double chain_virial[RodChainLanes::width];
+      RodChain::project_momenta_lanes(chains, count, x.data(), p.data(), system.box, lanes,
+                                      chain_virial, solved);
       for (std::size_t l = 0; l < count; ++l) {
         if (!solved[l]) {
           project_cluster(indices[l], work, deviation);
           continue;
         }
-        std::copy_n(lanes.virial_terms.data() + l * m, m, virial_terms_.take(indices[l], m));
+        virial_terms_.add(indices[l], chain_virial[l]);
         if (deviation >= 0.0) deviation = std::max(deviation, chains[l]->measured_deviation());
       }
     };

@@ -770,24 +770,22 @@ void RodChain::begin_momenta(const Vec3* x, const Vec3* p, const Box& box,
                           high_sign_.data(), ws.pt.data());
 }
 
-void RodChain::finish_momenta(RodChainWorkspace& ws, Vec3* p, double* virial_terms) const {
+void RodChain::finish_momenta(RodChainWorkspace& ws, Vec3* p, double& virial) const {
   const std::size_t n = beads();
   const std::size_t m = rows();
   bead_impulses(ws);
   for (std::size_t b = 0; b < n; ++b) {
     p[bead_particle_[b]] += Vec3{ws.impulse[b], ws.impulse[n + b], ws.impulse[2 * n + b]};
   }
-  for (std::size_t k = 0; k < m; ++k) {
-    virial_terms[k] = ws.z(static_cast<Eigen::Index>(k)) * memo_.r[k];
-  }
+  for (std::size_t k = 0; k < m; ++k) virial += ws.z(static_cast<Eigen::Index>(k)) * memo_.r[k];
 }
 
 bool RodChain::project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
-                               double* virial_terms) const {
+                               double& virial) const {
   begin_momenta(x, p, box, ws);
   // Scale 1: multiplying by 1 leaves every entry as it is.
   if (!solve_coupled(memo_.u.data(), memo_.u.data(), 1.0, ws.pt, ws.z, ws)) return false;
-  finish_momenta(ws, p, virial_terms);
+  finish_momenta(ws, p, virial);
   return true;
 }
 
@@ -803,7 +801,7 @@ void RodChain::remember_across(const Box& box, std::size_t lane, RodChainLanes::
 // lane's numbers its own.
 void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t count,
                                      const Vec3* x, Vec3* p, const Box& box, RodChainLanes& lanes,
-                                     bool* solved) {
+                                     double* virial, bool* solved) {
   constexpr std::size_t w = RodChainLanes::width;
   if (count == 0) return;
   const std::size_t m = chains[0]->rows();
@@ -841,14 +839,14 @@ void RodChain::project_momenta_lanes(const RodChain* const* chains, std::size_t 
   eliminate_lanes(m, lanes);
   rod_passes::across::impulses(m, a.u.data(), lanes.x.data(), g.first_sign.data(),
                                g.second_sign.data(), a.impulse.data());
-  lanes.virial_terms.resize(count * m);
+  double virials[w];
+  rod_passes::across::virial(m, lanes.x.data(), a.r.data(), virials);
   std::uint8_t take[w] = {};
   for (std::size_t l = 0; l < count; ++l) {
     solved[l] = lanes.solved[l] != 0;
     if (!solved[l]) continue;
     take[l] = 1;
-    double* terms = lanes.virial_terms.data() + l * m;
-    for (std::size_t k = 0; k < m; ++k) terms[k] = lanes.x[k * w + l] * a.r[k * w + l];
+    virial[l] = virials[l];
   }
   rod_passes::across::scatter(n, g.particle.data(), g.consecutive, a.impulse.data(), take, true,
                               &p[0].x);

@@ -58,7 +58,7 @@ struct RodChainLanes {
     std::vector<double> x0, x, u, r, phi, z, impulse;
     std::vector<double> v;  // the momentum projection's velocities
   } across;
-  std::vector<double> lower, diagonal, upper, rhs, x, c, virial_terms;
+  std::vector<double> lower, diagonal, upper, rhs, x, c;
   std::uint8_t solved[width];
 };
 
@@ -90,11 +90,12 @@ class RodChain {
                                      RodChainWorkspace& ws, Vec3* impulse, double& virial,
                                      SolverStatus& status) const;
 
-  // Momentum projection at positions x: p <- p + C(x) mu with C(x)^T M^-1 p = 0; writes
-  // rod k's virial term mu_k |x_i - x_j| to virial_terms[k], k < rows() (the caller adds
-  // them in row order). Returns false (p untouched) when the generic path must take over.
+  // Momentum projection at positions x: p <- p + C(x) mu with C(x)^T M^-1 p = 0; adds the rods'
+  // virial terms mu_k |x_i - x_j| to `virial` in row order (the caller passes 0 and adds the
+  // chain's sum as one term, as solve_positions' virial). Returns false (p untouched) when the
+  // generic path must take over.
   [[nodiscard]] bool project_momenta(const Vec3* x, Vec3* p, const Box& box, RodChainWorkspace& ws,
-                                     double* virial_terms) const;
+                                     double& virial) const;
 
   // solve_positions for chains[0..count) at once (count <= RodChainLanes::width, every
   // chain with the same number of rods), every pass with one chain per vector lane
@@ -108,11 +109,12 @@ class RodChain {
                                     const Vec3* delta, double h, const Box& box, double tolerance,
                                     int max_iterations, RodChainLanes& lanes, Vec3* impulse,
                                     double* virial, SolverStatus* status, bool* solved);
-  // project_momenta for chains[0..count) at once, likewise; chain l's virial terms go to
-  // lanes.virial_terms[l * rows() ...]. An unsolved chain's p is untouched: the caller
-  // projects it alone with project_momenta.
+  // project_momenta for chains[0..count) at once, likewise; chain l's virial (its terms
+  // summed from 0 in row order) goes to virial[l]. An unsolved chain's p is untouched: the
+  // caller projects it alone with project_momenta.
   static void project_momenta_lanes(const RodChain* const* chains, std::size_t count, const Vec3* x,
-                                    Vec3* p, const Box& box, RodChainLanes& lanes, bool* solved);
+                                    Vec3* p, const Box& box, RodChainLanes& lanes, double* virial,
+                                    bool* solved);
 
   // max_k |r_k - L_k| / L_k over the rods at positions x (indexed globally), at least
   // `start` (not negative): the number a loop over the rows with gap_of would give, bit for
@@ -173,8 +175,8 @@ class RodChain {
   // Gathers the velocities at positions x, remembers x's directions and makes RATTLE's
   // right-hand side in ws.pt.
   void begin_momenta(const Vec3* x, const Vec3* p, const Box& box, RodChainWorkspace& ws) const;
-  // Adds the impulses C(x) mu (mu in ws.z) to p and writes the virial terms.
-  void finish_momenta(RodChainWorkspace& ws, Vec3* p, double* virial_terms) const;
+  // Adds the impulses C(x) mu (mu in ws.z) to p and the virial terms to `virial`.
+  void finish_momenta(RodChainWorkspace& ws, Vec3* p, double& virial) const;
   // The group of chains[0..count) with step h from lanes.across.groups, made if new (lanes
   // past count repeat chain 0).
   static RodChainLanes::Group& group_of(const RodChain* const* chains, std::size_t count, double h,
