@@ -107,6 +107,19 @@ class ConstrainedIntegrator : public Integrator {
       }
       for (std::size_t i = first, end = first + count; i < end; ++i) body(i);
     }
+    // body(begin, end) over ranges of consecutive particles that make up the run (one range
+    // a particle for a list).
+    template <class Body>
+    void for_each_range(Body&& body) const {
+      if (list) {
+        for (std::size_t k = 0; k < count; ++k) {
+          const auto i = static_cast<std::size_t>(list[k]);
+          body(i, i + 1);
+        }
+        return;
+      }
+      body(first, first + count);
+    }
   };
   // Per-particle passes made with the cluster solves, chunk by chunk on the thread that
   // solves the chunk's clusters (no parallel region, and no pass over every particle, of

@@ -92,8 +92,9 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
   d.resize(n);
   // The step is captured by value here and below: a double behind a reference could alias
   // the doubles the loop stores, and would be loaded again at every particle.
-  parallel_for(n, [&, h](std::size_t i) {
-    d[i] = free_step(half_kicked(momenta[i], f[i], h), h, P.mass[i]);
+  for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
+    gvi_passes::half_kick(h, numbers(momenta), numbers(f), P.mass.data(), nullptr, numbers(d),
+                          begin, end);
   });
   if (lagrangian_ != Lagrangian::midpoint) return;
   std::vector<Vec3>& mid = ws_.prediction_mid;
@@ -584,14 +585,16 @@ void Gvi::solve_held_positions(System& system) {
     ws_.free.resize(n);
     ws_.impulse.resize(n);
     const bool zero = !equalities_hold_every_particle(P);
-    parallel_for(n, [&, h, zero](std::size_t i) {
-      const Vec3 half = half_kicked(ws_.p[i], f_start[i], h);
-      ws_.half[i] = half;
-      ws_.free[i] = free_step(half, h, P.mass[i]);
-      if (zero) ws_.impulse[i] = Vec3{};
+    for_each_chunk(n, chunks_for_cheap(n), [&, h, zero](int, std::size_t begin, std::size_t end) {
+      gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
+                            numbers(ws_.free), begin, end);
+      if (zero) std::fill(ws_.impulse.begin() + begin, ws_.impulse.begin() + end, Vec3{});
     });
   } else {
-    parallel_for(n, [&, h](std::size_t i) { ws_.half[i] = half_kicked(ws_.p[i], f_start[i], h); });
+    for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
+      gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
+                            nullptr, begin, end);
+    });
   }
   // Verlet: the free step is the constrained predictor's last one (the same numbers from
   // the same momenta and forces) at the same q, so a chain no contact row joins, whose
@@ -662,30 +665,29 @@ void Gvi::held_positions_by_cluster(System& system) {
   const NeighborList& list = engine_.neighbors();
   const bool built = list.built_for(n);
   ClusterPasses passes;
-  const Vec3* p = ws_.p.data();
-  const Vec3* q = ws_.q.data();
-  const double* mass = P.mass.data();
-  Vec3* half = ws_.half.data();
-  Vec3* free = ws_.free.data();
-  const Vec3* impulse = ws_.impulse.data();
-  Vec3* x = ws_.x.data();
   passes.before = [&, h](int, const ParticleRun& run) {
-    run.for_each([&, h](std::size_t i) {
-      half[i] = half_kicked(p[i], f[i], h);
-      free[i] = free_step(half[i], h, mass[i]);
+    run.for_each_range([&, h](std::size_t begin, std::size_t end) {
+      gvi_passes::half_kick(h, numbers(ws_.p), numbers(f), P.mass.data(), numbers(ws_.half),
+                            numbers(ws_.free), begin, end);
     });
   };
-  passes.after = [&, h, built](int chunk, const ParticleRun& run) {
+  // x = q + (half + impulse) (h / m), in vectors.
+  gvi_passes::EndPositions end_pass;
+  end_pass.h = h;
+  end_pass.q = numbers(ws_.q);
+  end_pass.half = numbers(ws_.half);
+  end_pass.impulse = numbers(ws_.impulse);
+  end_pass.mass = P.mass.data();
+  end_pass.at_build = built ? numbers(list.positions_at_build()) : nullptr;
+  end_pass.list_limit2 = list.valid_distance2();
+  end_pass.x = numbers(ws_.x);
+  passes.after = [&](int chunk, const ParticleRun& run) {
     const auto c = static_cast<std::size_t>(chunk);
-    double largest = ws_.chunk_largest2[c];
-    std::size_t unlisted = ws_.chunk_unlisted[c];
-    run.for_each([&, h, built](std::size_t i) {
-      x[i] = q[i] + (half[i] + impulse[i]) * (h / mass[i]);
-      largest = std::max(largest, norm2(x[i] - q[i]));
-      if (built) unlisted += !list.keeps_valid(i, x[i]);
+    run.for_each_range([&](std::size_t begin, std::size_t end) {
+      const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(end_pass, begin, end);
+      ws_.chunk_largest2[c] = std::max(ws_.chunk_largest2[c], tally.largest2);
+      ws_.chunk_unlisted[c] += tally.beyond_list;
     });
-    ws_.chunk_largest2[c] = largest;
-    ws_.chunk_unlisted[c] = unlisted;
   };
   ws_.position_virial = solve_positions(system, constraints_.equalities, ws_.equality, ws_.q,
                                         ws_.free, ws_.impulse, nullptr, nullptr, &passes);
@@ -805,21 +807,16 @@ void Gvi::update_momenta(System& system, bool tally) {
     // The kick before a chunk's projections, the velocities after, on their thread (the
     // held rows are the rods alone, and nothing lands).
     ClusterPasses passes;
-    const Vec3* half = ws_.half.data();
-    const Vec3* impulse = ws_.impulse.data();
-    const Vec3* force = f.data();
-    const double* mass = P.mass.data();
-    Vec3* momenta = p.data();
-    Vec3* velocity = P.velocity.data();
     passes.before = [&, h](int, const ParticleRun& run) {
-      run.for_each([&, h](std::size_t i) {
-        Vec3 momentum = half[i] + impulse[i];
-        momentum += force[i] * (0.5 * h);
-        momenta[i] = momentum;
+      run.for_each_range([&, h](std::size_t begin, std::size_t end) {
+        gvi_passes::second_kick(h, numbers(ws_.half), numbers(ws_.impulse), numbers(f), numbers(p),
+                                begin, end);
       });
     };
     passes.after = [&](int, const ParticleRun& run) {
-      run.for_each([&](std::size_t i) { velocity[i] = momenta[i] * (1.0 / mass[i]); });
+      run.for_each_range([&](std::size_t begin, std::size_t end) {
+        gvi_passes::velocities(numbers(p), P.mass.data(), numbers(P.velocity), begin, end);
+      });
     };
     step_virial_ += project_momenta(system, constraints_.equalities, P.position, p, &passes);
     step_virial_ += ws_.position_virial;

@@ -147,6 +147,34 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
   return count;
 }
 
+void half_kick(double h, const double* p, const double* force, const double* mass, double* half,
+               double* free, std::size_t begin, std::size_t end) {
+  const double kick = 0.5 * h;
+  const double* __restrict momentum = p;
+  const double* __restrict f = force;
+  const double* __restrict m = mass;
+  double* __restrict kicked = half;
+  double* __restrict d = free;
+  std::size_t i = begin;
+  for (; i + w <= end; i += w) {
+    const Triples hms = spread(h / load(m + i));
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t e = 3 * i + k * w;
+      const Lanes a = load(momentum + e) + load(f + e) * kick;
+      if (kicked) store(kicked + e, a);
+      if (d) store(d + e, a * hms.v[k]);
+    }
+  }
+  for (; i < end; ++i) {
+    const double hm = h / m[i];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double a = momentum[3 * i + k] + f[3 * i + k] * kick;
+      if (kicked) kicked[3 * i + k] = a;
+      if (d) d[3 * i + k] = a * hm;
+    }
+  }
+}
+
 EndPositionsTally end_positions(const EndPositions& pass, std::size_t begin, std::size_t end) {
   const double h = pass.h;
   const double* __restrict q = pass.q;

@@ -35,6 +35,12 @@ struct StepStart {
 };
 std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end);
 
+// The half kick and free step of momenta p, per particle i with m = mass[i]:
+//   half = p + force * (0.5 h); free = half * (h / m);
+// (a null output is not written).
+void half_kick(double h, const double* p, const double* force, const double* mass, double* half,
+               double* free, std::size_t begin, std::size_t end);
+
 // The end positions, per particle i with m = mass[i] (a null impulse reads as zeros):
 //   x = q + (half + impulse) * (h / m); moved2 = |x - q|^2;
 // with the largest moved2 (NaN passed over, as std::max(largest, moved2) from 0 does), the

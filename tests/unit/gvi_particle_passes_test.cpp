@@ -208,6 +208,31 @@ TEST(GviParticlePasses, EndPositionsMakeTheVec3LoopsNumbersAndTally) {
   EXPECT_GT(largest_seen, 0.0);
 }
 
+TEST(GviParticlePasses, HalfKickMakesTheVec3LoopsNumbers) {
+  const double h = 0.005;
+  const PassInputs s = edge_inputs(1.0);
+  for (int outputs = 1; outputs < 4; ++outputs) {
+    const bool with_half = outputs & 1, with_free = outputs & 2;
+    for (std::size_t begin = 0; begin < 9; ++begin) {
+      for (std::size_t end = begin; end <= kPassParticles; ++end) {
+        // Gvi's half_kicked and free_step, from the momenta (here the velocities' numbers).
+        std::vector<Vec3> half(kPassParticles, Vec3{5, 5, 5}), half2 = half;
+        std::vector<Vec3> free(kPassParticles, Vec3{4, 4, 4}), free2 = free;
+        for (std::size_t i = begin; i < end; ++i) {
+          const Vec3 kicked = s.velocity[i] + s.force[i] * (0.5 * h);
+          if (with_half) half[i] = kicked;
+          if (with_free) free[i] = kicked * (h / s.mass[i]);
+        }
+        gvi_passes::half_kick(h, pass_numbers(s.velocity), pass_numbers(s.force), s.mass.data(),
+                              with_half ? pass_numbers(half2) : nullptr,
+                              with_free ? pass_numbers(free2) : nullptr, begin, end);
+        expect_same_triples(half, half2, "half", begin, end);
+        expect_same_triples(free, free2, "free", begin, end);
+      }
+    }
+  }
+}
+
 TEST(GviParticlePasses, MomentaAndVelocitiesMakeTheVec3LoopsNumbers) {
   const double h = 0.005;
   const PassInputs s = edge_inputs(1.0);
