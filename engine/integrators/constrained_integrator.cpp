@@ -1,6 +1,7 @@
 #include "integrators/constrained_integrator.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -203,6 +204,9 @@ double ConstrainedIntegrator::solve_positions(
   const Particles& particles = system.particles;
   const std::size_t cluster_count = cluster_rows(rows, particles);
   const bool equality_rows = &rows == &constraints_.equalities;
+  // The equality rows passed as themselves are all held as equalities (every caller's
+  // `equality` is all true for them): their chains skip the test row by row.
+  assert(!equality_rows || std::find(equality.begin(), equality.end(), false) == equality.end());
   if (equality_rows) {
     equality_iterations_.resize(cluster_count, 0);
     equality_chain_virial_.resize(cluster_count, 0.0);
@@ -226,7 +230,9 @@ double ConstrainedIntegrator::solve_positions(
     if (prepared && prepared->chain) {
       // A chain of rods held as equalities: the chain kernel (same numbers, no gathering).
       bool held = true;
-      for (std::int32_t r : cluster.rows) held = held && equality[r];
+      if (!equality_rows) {
+        for (std::int32_t r : cluster.rows) held = held && equality[r];
+      }
       const auto own = static_cast<std::size_t>(prepared - equality_clusters_.all().data());
       if (held && solved_equalities && own < equality_chain_solved_.size() &&
           equality_chain_solved_[own] &&
@@ -326,8 +332,10 @@ double ConstrainedIntegrator::solve_positions(
       if (!changed) return nullptr;
     }
     // Row numbers as unsigned: the bit's word and position without a signed division.
-    for (const std::int32_t r : cluster.rows) {
-      if (!equality[static_cast<std::uint32_t>(r)]) return nullptr;
+    if (!equality_rows) {
+      for (const std::int32_t r : cluster.rows) {
+        if (!equality[static_cast<std::uint32_t>(r)]) return nullptr;
+      }
     }
     const auto own = static_cast<std::size_t>(prepared - equality_clusters_.all().data());
     if (solved_equalities && own < equality_chain_solved_.size() && equality_chain_solved_[own] &&

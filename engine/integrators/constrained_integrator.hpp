@@ -90,6 +90,8 @@ class ConstrainedIntegrator : public Integrator {
   // (`solved->impulse`), virial and iteration count instead of being solved again.
   // A chain's virial is summed on its own, then added. Every particle of the rows' clusters
   // gets its impulse written (or, with `delta_changed`, kept); the others' are not touched.
+  // The equality rows passed as themselves (rows is constraints_.equalities) are all held:
+  // `equality` is all true then.
   struct SolvedEqualities {
     const std::vector<Vec3>& delta;
     const std::vector<Vec3>& impulse;
