@@ -1,38 +1,19 @@
 #include "integrators/gvi_particle_passes.hpp"
 
+#include "core/lane_vectors.hpp"
+
 namespace deli::gvi_passes {
 
-// The helpers below take and return vectors by value: internal and inlined, so the warning
-// that such an ABI differs between targets concerns no call that exists.
-#pragma GCC diagnostic ignored "-Wpsabi"
 namespace {
+using lane_vectors::broadcast;
+using lane_vectors::LaneMask;
+using lane_vectors::Lanes;
+using lane_vectors::load;
+using lane_vectors::shuffle;
+using lane_vectors::store;
 // Eight particles a block: their 24 numbers are three vectors of eight, and a value per
 // particle one vector.
-constexpr std::size_t w = 8;
-typedef double Lanes __attribute__((vector_size(w * sizeof(double))));
-typedef long LaneMask __attribute__((vector_size(w * sizeof(double))));
-static_assert(sizeof(long) == sizeof(double));
-
-inline Lanes load(const double* p) {
-  Lanes v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-inline void store(double* p, const Lanes& v) {
-  __builtin_memcpy(p, &v, sizeof v);
-}
-
-// Entries k... of a then b (b's entry j as w + j): GCC's and Clang's two-source shuffles (the
-// fuzzing build is Clang's). They move numbers without changing them.
-template <long... k>
-inline Lanes shuffle(const Lanes& a, const Lanes& b) {
-  static_assert(sizeof...(k) == w);
-#if defined(__clang__)
-  return __builtin_shufflevector(a, b, k...);
-#else
-  return __builtin_shuffle(a, b, LaneMask{k...});
-#endif
-}
+constexpr std::size_t w = lane_vectors::width;
 
 // The block's three vectors of numbers: particle j's x, y, z are entries 3j, 3j+1, 3j+2 of
 // the 24 (vector e / 8, entry e % 8).
@@ -67,12 +48,6 @@ inline std::size_t total(const LaneMask& counts) {
   for (std::size_t l = 0; l < w; ++l) sum += static_cast<std::size_t>(counts[l]);
   return sum;
 }
-inline Lanes broadcast(double v) {
-  Lanes out;
-  for (std::size_t l = 0; l < w; ++l) out[l] = v;
-  return out;
-}
-
 // The scalar form of the passes, for the particles after the last whole block.
 struct Three {
   double x, y, z;

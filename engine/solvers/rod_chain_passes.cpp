@@ -1,5 +1,7 @@
 #include "solvers/rod_chain_passes.hpp"
 
+#include "core/lane_vectors.hpp"
+
 #if defined(__AVX512F__)
 #include <immintrin.h>
 #endif
@@ -233,24 +235,16 @@ void projections(std::size_t m, const double* __restrict u, const double* __rest
   }
 }
 
-// The lane helpers below take and return vectors by value: internal and inlined, so the
-// warning that such an ABI differs between targets concerns no call that exists.
-#pragma GCC diagnostic ignored "-Wpsabi"
 namespace {
-// One entry per lane: GCC's vector extension, element-wise IEEE operations at whatever
-// width the target has (two SSE2 halves per 128 bits, one AVX-512 register).
-typedef double Lanes __attribute__((vector_size(lanes * sizeof(double))));
-typedef long LaneMask __attribute__((vector_size(lanes * sizeof(double))));
-static_assert(sizeof(long) == sizeof(double));
+// One entry per lane (core/lane_vectors.hpp).
+static_assert(lane_vectors::width == lanes);
+using lane_vectors::broadcast;
+using lane_vectors::LaneMask;
+using lane_vectors::Lanes;
+using lane_vectors::load;
+using lane_vectors::shuffle;
+using lane_vectors::store;
 
-inline Lanes load(const double* p) {
-  Lanes v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-inline void store(double* p, const Lanes& v) {
-  __builtin_memcpy(p, &v, sizeof v);
-}
 // The lanes' bit patterns (compared as integers: -0 and +0 differ, a NaN equals itself).
 inline LaneMask bits(const Lanes& v) {
   LaneMask b;
@@ -398,11 +392,6 @@ inline Lanes square_root(Lanes v) {
   for (std::size_t l = 0; l < w; ++l) v[l] = __builtin_sqrt(v[l]);
 #endif
   return v;
-}
-inline Lanes broadcast(double v) {
-  Lanes out;
-  for (std::size_t l = 0; l < w; ++l) out[l] = v;
-  return out;
 }
 inline void store_lanes(double* out, const Lanes& v) {
   for (std::size_t l = 0; l < w; ++l) out[l] = v[l];
@@ -744,18 +733,6 @@ void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
 }
 
 namespace {
-// Entries k... of a then b (b's entry j as k = w + j): GCC's and Clang's two-source shuffles
-// (the fuzzing build is Clang's).
-template <long... k>
-inline Lanes shuffle(const Lanes& a, const Lanes& b) {
-  static_assert(sizeof...(k) == w);
-#if defined(__clang__)
-  return __builtin_shufflevector(a, b, k...);
-#else
-  return __builtin_shuffle(a, b, LaneMask{k...});
-#endif
-}
-
 // Rows v[0..8) of an 8 x 8 block transposed in place (v[c][r] = old v[r][c]): three rounds
 // of two-source shuffles, moving numbers without changing them.
 inline void transpose(Lanes (&v)[w]) {
