@@ -5,12 +5,7 @@
 namespace deli::gvi_passes {
 
 namespace {
-using lane_vectors::broadcast;
-using lane_vectors::LaneMask;
-using lane_vectors::Lanes;
-using lane_vectors::load;
-using lane_vectors::shuffle;
-using lane_vectors::store;
+using namespace lane_vectors;  // Lanes, LaneMask, load, store, broadcast, shuffle
 // Eight particles a block: their 24 numbers are three vectors of eight, and a value per
 // particle one vector.
 constexpr std::size_t w = lane_vectors::width;

@@ -238,12 +238,7 @@ void projections(std::size_t m, const double* __restrict u, const double* __rest
 namespace {
 // One entry per lane (core/lane_vectors.hpp).
 static_assert(lane_vectors::width == lanes);
-using lane_vectors::broadcast;
-using lane_vectors::LaneMask;
-using lane_vectors::Lanes;
-using lane_vectors::load;
-using lane_vectors::shuffle;
-using lane_vectors::store;
+using namespace lane_vectors;  // Lanes, LaneMask, load, store, broadcast, shuffle
 
 // The lanes' bit patterns (compared as integers: -0 and +0 differ, a NaN equals itself).
 inline LaneMask bits(const Lanes& v) {
