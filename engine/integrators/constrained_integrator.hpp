@@ -97,18 +97,11 @@ class ConstrainedIntegrator : public Integrator {
     const std::vector<Vec3>& impulse;
   };
   // The particles of one or more clusters: list[0..count) where list is not null, else
-  // first..first+count-1 (consecutive clusters joined into one run, a loop that vectorises).
+  // first..first+count-1 (consecutive clusters joined into one run: one range for the vector
+  // passes).
   struct ParticleRun {
     const std::int32_t* list;
     std::size_t first, count;
-    template <class Body>
-    void for_each(Body&& body) const {
-      if (list) {
-        for (std::size_t k = 0; k < count; ++k) body(static_cast<std::size_t>(list[k]));
-        return;
-      }
-      for (std::size_t i = first, end = first + count; i < end; ++i) body(i);
-    }
     // body(begin, end) over ranges of consecutive particles that make up the run (one range
     // a particle for a list).
     template <class Body>

@@ -33,8 +33,10 @@ const double* held_impulses(const GviWorkspace& ws) {
 }
 
 // Momentum p after a half kick by force f, p + h/2 f, and the free step h M^-1 of such a
-// momentum: one definition for every pass that makes them, so that numbers one pass keeps
-// stand for those another would make (start_step's for solve_held_positions').
+// momentum, for the passes over some particles (a reflection's prediction, the midpoint's).
+// The passes over all of them make the same numbers in vectors (gvi_passes::step_start and
+// half_kick, tested bit for bit against these): numbers one pass keeps stand for those another
+// would make (start_step's for solve_held_positions', its prediction for predict_reflected's).
 Vec3 half_kicked(const Vec3& p, const Vec3& f, double h) {
   return p + f * (0.5 * h);
 }
