@@ -15,9 +15,6 @@ constexpr std::size_t w = lane_vectors::width;
 struct Triples {
   Lanes v[3];
 };
-inline Triples load_triples(const double* p) {
-  return {{load(p), load(p + w), load(p + 2 * w)}};
-}
 inline void store_triples(double* p, const Triples& t) {
   for (std::size_t k = 0; k < 3; ++k) store(p + k * w, t.v[k]);
 }
