@@ -32,6 +32,24 @@ const double* held_impulses(const GviWorkspace& ws) {
   return ws.impulse.empty() ? nullptr : numbers(ws.impulse);
 }
 
+// The end positions' pass over the workspace: x = q + (half + impulse) (h / m), with the
+// list's test where the list is built for these particles and the reach's where given.
+gvi_passes::EndPositions end_positions_pass(GviWorkspace& ws, const Particles& P, double h,
+                                            const NeighborList& list, bool built,
+                                            const double* reach_limit2) {
+  gvi_passes::EndPositions pass;
+  pass.h = h;
+  pass.q = numbers(ws.q);
+  pass.half = numbers(ws.half);
+  pass.impulse = held_impulses(ws);
+  pass.mass = P.mass.data();
+  pass.reach_limit2 = reach_limit2;
+  pass.at_build = built ? numbers(list.positions_at_build()) : nullptr;
+  pass.list_limit2 = list.valid_distance2();
+  pass.x = numbers(ws.x);
+  return pass;
+}
+
 // Momentum p after a half kick by force f, p + h/2 f, and the free step h M^-1 of such a
 // momentum, for the passes over some particles (a reflection's prediction, the midpoint's).
 // The passes over all of them make the same numbers in vectors (gvi_passes::step_start and
@@ -535,16 +553,7 @@ void Gvi::displaced(const Particles& P) {
   const bool built = list.built_for(n);
   const double* limit2 = by_particle ? ws_.reach_limit2.data() : nullptr;
   // x = q + (half + impulse) (h / m), in vectors.
-  gvi_passes::EndPositions pass;
-  pass.h = h;
-  pass.q = numbers(ws_.q);
-  pass.half = numbers(ws_.half);
-  pass.impulse = held_impulses(ws_);
-  pass.mass = P.mass.data();
-  pass.reach_limit2 = limit2;
-  pass.at_build = built ? numbers(list.positions_at_build()) : nullptr;
-  pass.list_limit2 = list.valid_distance2();
-  pass.x = numbers(ws_.x);
+  const gvi_passes::EndPositions pass = end_positions_pass(ws_, P, h, list, built, limit2);
   for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
     const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(pass, begin, end);
     largest2[static_cast<std::size_t>(c)] = tally.largest2;
@@ -674,15 +683,7 @@ void Gvi::held_positions_by_cluster(System& system) {
     });
   };
   // x = q + (half + impulse) (h / m), in vectors.
-  gvi_passes::EndPositions end_pass;
-  end_pass.h = h;
-  end_pass.q = numbers(ws_.q);
-  end_pass.half = numbers(ws_.half);
-  end_pass.impulse = numbers(ws_.impulse);
-  end_pass.mass = P.mass.data();
-  end_pass.at_build = built ? numbers(list.positions_at_build()) : nullptr;
-  end_pass.list_limit2 = list.valid_distance2();
-  end_pass.x = numbers(ws_.x);
+  const gvi_passes::EndPositions end_pass = end_positions_pass(ws_, P, h, list, built, nullptr);
   passes.after = [&](int chunk, const ParticleRun& run) {
     const auto c = static_cast<std::size_t>(chunk);
     run.for_each_range([&](std::size_t begin, std::size_t end) {
