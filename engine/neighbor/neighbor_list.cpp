@@ -448,9 +448,16 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   pairs_ = pairs;
   coded_ = coded;
   if (!cell_order_) {
-    by_particle_.stale.store(false, std::memory_order_relaxed);
-    rearrange_by_particle(slot_of.data(), slot_offsets_.data(), slot_neighbors_.data(), nullptr,
-                          slot_codes_.data(), static_cast<std::size_t>(n));
+    // The list by slot stays where it is; the list by particle is made from it when first
+    // asked for (the force loop reads it in place through built_order()).
+    built_begin_.resize(static_cast<std::size_t>(n));
+    built_end_.resize(static_cast<std::size_t>(n));
+    parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
+      const std::size_t s = slot_of[i];
+      built_begin_[i] = slot_offsets_[s];
+      built_end_[i] = slot_offsets_[s + 1];
+    });
+    by_particle_.stale.store(true, std::memory_order_release);
   } else {
     // The list by slot, partners renamed by slot. The list by particle is made from it when
     // first asked for (the force loop reads this one; the thermo's curvature, contact rows
@@ -463,6 +470,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     parallel_for(list.size(), [&](std::size_t k) {
       list[k] = static_cast<std::int32_t>(slot_of[static_cast<std::size_t>(list[k])]);
     });
+    built_begin_.clear();
+    built_end_.clear();
     by_particle_.stale.store(true, std::memory_order_release);
   }
   position_at_build_ = position;
@@ -506,10 +515,21 @@ void NeighborList::rearrange_by_particle(const std::size_t* slot_of,
 void NeighborList::make_by_particle() const {
   const std::lock_guard<std::mutex> lock(by_particle_.mutex);
   if (!by_particle_.stale.load(std::memory_order_acquire)) return;
-  rearrange_by_particle(slot_of_.data(), cell_ordered_.offsets.data(),
-                        cell_ordered_.neighbors.data(), cell_ordered_.particle.data(),
-                        cell_ordered_.image_codes.data(), cell_ordered_.particle.size());
+  if (cell_order_) {
+    rearrange_by_particle(slot_of_.data(), cell_ordered_.offsets.data(),
+                          cell_ordered_.neighbors.data(), cell_ordered_.particle.data(),
+                          cell_ordered_.image_codes.data(), cell_ordered_.particle.size());
+  } else {
+    rearrange_by_particle(slot_of_.data(), slot_offsets_.data(), slot_neighbors_.data(), nullptr,
+                          slot_codes_.data(), built_begin_.size());
+  }
   by_particle_.stale.store(false, std::memory_order_release);
+}
+
+NeighborList::BuiltOrder NeighborList::built_order() const {
+  if (cell_order_ || built_begin_.empty()) return {};
+  return {slot_neighbors_.data(), coded_ ? slot_codes_.data() : nullptr, built_begin_.data(),
+          built_end_.data()};
 }
 
 void NeighborList::set_cell_order(bool on) {

@@ -41,8 +41,8 @@ class NeighborList {
   // and with it every rounding, repeats.
   const std::vector<Vec3>& positions_at_build() const { return position_at_build_; }
 
-  // Neighbours of i are neighbors()[offsets()[i] .. offsets()[i+1]). With cache order on,
-  // made from the list by slot when first asked for after a build (on any thread).
+  // Neighbours of i are neighbors()[offsets()[i] .. offsets()[i+1]). Made from the list by
+  // slot when first asked for after a build (on any thread).
   const std::vector<std::int32_t>& neighbors() const {
     by_particle();
     return neighbors_;
@@ -52,6 +52,20 @@ class NeighborList {
     return offsets_;
   }
   std::size_t pair_count() const { return pairs_; }
+
+  // The list as the last build left it, without cell order: particle i's partners (as
+  // particles) and their image codes are entries [begin[i], end[i]) of `neighbors` and
+  // `image_codes` (null when the pairs have none), in neighbors()' order. Read in place, the
+  // list by particle is not made (a copy of the whole list at every build, 4 % of an LJ
+  // liquid's run): NeighborList makes it when first asked for. All null with cell order on,
+  // or before a build.
+  struct BuiltOrder {
+    const std::int32_t* neighbors = nullptr;
+    const std::uint8_t* image_codes = nullptr;
+    const std::size_t* begin = nullptr;
+    const std::size_t* end = nullptr;
+  };
+  BuiltOrder built_order() const;
   std::int64_t builds() const { return builds_; }
 
   // When the box is at least three reaches wide along every periodic axis, each listed pair
@@ -134,13 +148,16 @@ class NeighborList {
   std::vector<std::size_t> cell_start_, slot_of_;
   // Per chunk of particles of the counting sort: its particles per cell, then its next slots.
   std::vector<std::vector<std::size_t>> chunk_cell_fill_;
-  // The joined list by slot (cell order), before it is rearranged by particle.
+  // The joined list by slot (cell order), partners as particles: without cell order, kept
+  // until the next build (built_order() reads it, the list by particle is made from it).
   std::vector<std::size_t> slot_offsets_;
   std::vector<std::int32_t> slot_neighbors_;
   std::vector<std::uint8_t> slot_codes_;
+  // Without cell order, each particle's entries in the list by slot: [begin, end).
+  std::vector<std::size_t> built_begin_, built_end_;
 
-  // The list by particle, made from the list by slot when first asked for (cache order):
-  // `stale` until then. Copies take the flag, not the lock.
+  // The list by particle, made from the list by slot when first asked for: `stale` until
+  // then. Copies take the flag, not the lock.
   struct Pending {
     std::atomic<bool> stale{false};
     std::mutex mutex;

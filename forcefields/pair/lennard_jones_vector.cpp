@@ -112,7 +112,19 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
     const __m512d xi = _mm512_set1_pd(c.x[i].x), yi = _mm512_set1_pd(c.x[i].y),
                   zi = _mm512_set1_pd(c.x[i].z);
     __m512d fxi = _mm512_setzero_pd(), fyi = fxi, fzi = fxi;
-    const std::size_t end = c.offsets[i + 1];
+    const std::size_t end = c.ends ? c.ends[i] : c.offsets[i + 1];
+    // The list read in place (ends) is in the build's cell order, particle i's partners not
+    // after i-1's: the next particles' entries fetched ahead, which the hardware's stream
+    // prefetch no longer does (LJ 32000: pair loop 1.25x the list by particle's time without,
+    // 1.01x with).
+    if (c.ends && i + 4 < c.last) {
+      const std::size_t next = c.offsets[i + 4];
+      const char* l = reinterpret_cast<const char*>(c.list + next);
+      _mm_prefetch(l, _MM_HINT_T0);
+      _mm_prefetch(l + 64, _MM_HINT_T0);
+      _mm_prefetch(l + 128, _MM_HINT_T0);
+      _mm_prefetch(reinterpret_cast<const char*>(c.codes + next), _MM_HINT_T0);
+    }
     for (std::size_t k = c.offsets[i]; k < end; k += 8) {
       // The partners' slots read one by one from the list (cheaper than from a vector);
       // in the last, partial vector lanes past the list's end take particle i itself: its
@@ -219,7 +231,7 @@ double LennardJones::lane_order_loop(const Params& p, const VectorPairChunk& c, 
   SymTensor w;
   for (std::int32_t i = c.first; i < c.last; ++i) {
     const PaddedVec3 xi = c.x[i];
-    const std::size_t begin = c.offsets[i], count = c.offsets[i + 1] - begin;
+    const std::size_t begin = c.offsets[i], count = (c.ends ? c.ends[i] : c.offsets[i + 1]) - begin;
     if (inside.size() < count + 1) inside.resize(2 * count + 1);
     std::size_t kept = 0;
     for (std::size_t k = begin; k < begin + count; ++k) {

@@ -86,6 +86,24 @@ class PairForce final : public ForceTerm {
     const std::size_t n = system.particles.size();
     const NeighborList::CellOrdered& ordered = neighbors.cell_ordered();
     const bool by_slot = ordered.particle.size() == n && n > 0;
+    double energy = 0.0;
+    if (vector_loop_applies(neighbors.coded()) && n > 0) {
+      // The list read where the build left it (by particle through ranges, or by slot): the
+      // list by particle is not made for it.
+      const NeighborList::BuiltOrder built = neighbors.built_order();
+      energy =
+          by_slot ? vector_loops(system.particles.position, ordered.particle.data(),
+                                 ordered.neighbors.data(), ordered.image_codes.data(),
+                                 ordered.offsets.data(), nullptr, neighbors, force, virial, tally)
+          : built.begin
+              ? vector_loops(system.particles.position, nullptr, built.neighbors, built.image_codes,
+                             built.begin, built.end, neighbors, force, virial, tally)
+              : vector_loops(system.particles.position, nullptr, neighbors.neighbors().data(),
+                             neighbors.image_codes().data(), neighbors.offsets().data(), nullptr,
+                             neighbors, force, virial, tally);
+      return energy + (tally ? scaled_pairs<true>(system, force, virial)
+                             : scaled_pairs<false>(system, force, virial));
+    }
     // By slot the list by particle is not read (nor made: NeighborList makes it on demand).
     Listed listed{system.particles.position.data(),
                   system.particles.type.data(),
@@ -93,14 +111,7 @@ class PairForce final : public ForceTerm {
                   by_slot ? nullptr : neighbors.image_codes().data(),
                   by_slot ? nullptr : neighbors.offsets().data(),
                   neighbors.coded()};
-    double energy = 0.0;
-    if (vector_loop_applies(listed) && n > 0) {
-      energy = by_slot ? vector_loops(system.particles.position, ordered.particle.data(),
-                                      ordered.neighbors.data(), ordered.image_codes.data(),
-                                      ordered.offsets.data(), neighbors, force, virial, tally)
-                       : vector_loops(system.particles.position, nullptr, listed.list, listed.codes,
-                                      listed.offsets, neighbors, force, virial, tally);
-    } else if (!by_slot) {
+    if (!by_slot) {
       energy = loops(system.box, neighbors, listed, n, force, virial, tally);
     } else {
       // Cache order: positions and types gathered into the list's cell order, the forces
@@ -230,20 +241,22 @@ class PairForce final : public ForceTerm {
   // The evaluator's vector loop (in a build without its instruction set, its sums one pair
   // at a time: the same bits in every build): one type (one parameter set) and image-coded
   // lists; else the scalar loop.
-  bool vector_loop_applies(const Listed& listed) const {
+  bool vector_loop_applies(bool coded) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
-      return type_count_ == 1 && listed.coded;
+      return type_count_ == 1 && coded;
     }
     return false;
   }
 
   // The vector loop over the list by slot: positions gathered into slot order (slot s holds
   // particle[s], or particle s without `particle`) padded to four doubles, chunked as
-  // loops(), the forces found there added back by particle.
+  // loops(), the forces found there added back by particle. Slot s's partners: list[offsets[s]
+  // .. ends[s]), or without `ends` list[offsets[s] .. offsets[s + 1]).
   double vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                       const std::int32_t* list, const std::uint8_t* codes,
-                      const std::size_t* offsets, const NeighborList& neighbors,
-                      std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
+                      const std::size_t* offsets, const std::size_t* ends,
+                      const NeighborList& neighbors, std::vector<Vec3>& force, SymTensor& virial,
+                      bool tally) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
       const std::size_t n = x.size();
       auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
@@ -265,7 +278,8 @@ class PairForce final : public ForceTerm {
                                         offsets,
                                         shifts,
                                         static_cast<std::int32_t>(begin),
-                                        static_cast<std::int32_t>(end)};
+                                        static_cast<std::int32_t>(end),
+                                        ends};
             return Evaluator::vector_loop(table_[0], chunk, tally, w);
           },
           [&](std::size_t s) {

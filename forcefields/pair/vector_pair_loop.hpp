@@ -18,8 +18,9 @@ struct alignas(32) PaddedVec3 {
   }
 };
 
-// One chunk of a cell-ordered half list for a vector pair loop: slots first..last-1 with
-// their listed partners (slots) and image codes, positions and forces by slot.
+// One chunk of a half list for a vector pair loop: slots first..last-1 with their listed
+// partners (slots) and image codes, positions and forces by slot. Slot i's partners are
+// list[offsets[i] .. ends[i]), or without `ends` list[offsets[i] .. offsets[i + 1]).
 struct VectorPairChunk {
   const PaddedVec3* x;
   PaddedVec3* f;
@@ -28,6 +29,7 @@ struct VectorPairChunk {
   const std::size_t* offsets;
   const Vec3* shifts;  // the list's 27 image shifts
   std::int32_t first, last;
+  const std::size_t* ends = nullptr;
 };
 
 // An evaluator with a vector form of PairForce's loop for one type pair and image-coded

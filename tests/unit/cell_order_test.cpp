@@ -14,6 +14,7 @@
 #include "integrators/force_engine.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "support/test_systems.hpp"
+#include "support/thread_count.hpp"
 
 namespace deli {
 namespace {
@@ -81,6 +82,40 @@ TEST(CellOrder, TheListBySlotIsTheListByParticleRenamed) {
         norm(input.system.box.minimum_image(x[by_slot.particle[s]] - x[by_slot.particle[s - 1]]));
   }
   EXPECT_LT(sum / static_cast<double>(n - 1), 2.0);
+}
+
+// Without cell order the force loop reads the list where the build left it (built_order()),
+// and the list by particle is copied from there when first asked for: particle i's range there
+// is its list by particle, entry for entry, on one thread and on two (the build's chunks
+// joined). With cell order there is no such list (the force loop reads the list by slot).
+TEST(CellOrder, TheBuiltOrderRangesAreTheListByParticle) {
+  const RunInput input = wrapped_chain_melt();
+  const std::size_t n = input.system.particles.size();
+  for (const int threads : {1, 2}) {
+    if (threads == 2 && !testing::kThreaded) continue;
+    const testing::ThreadCount count(threads);
+    const NeighborList plain = list_for(input, false);
+    const NeighborList::BuiltOrder built = plain.built_order();
+    ASSERT_NE(built.begin, nullptr);
+    ASSERT_NE(built.image_codes, nullptr);
+    // Read before the list by particle is made from the same arrays.
+    std::vector<std::int32_t> partners;
+    std::vector<std::uint8_t> codes;
+    std::vector<std::size_t> offsets{0};
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_LE(built.begin[i], built.end[i]);
+      partners.insert(partners.end(), built.neighbors + built.begin[i],
+                      built.neighbors + built.end[i]);
+      codes.insert(codes.end(), built.image_codes + built.begin[i],
+                   built.image_codes + built.end[i]);
+      offsets.push_back(partners.size());
+    }
+    EXPECT_EQ(partners, plain.neighbors()) << threads << " threads";
+    EXPECT_EQ(codes, plain.image_codes());
+    EXPECT_EQ(offsets, plain.offsets());
+    EXPECT_EQ(partners.size(), plain.pair_count());
+    EXPECT_EQ(list_for(input, true).built_order().begin, nullptr);
+  }
 }
 
 TEST(CellOrder, ForcesAgreeWithTheListByParticleToRoundOffAndRepeatBitForBit) {

@@ -239,38 +239,58 @@ TEST(LjVectorLoop, VectorsThroughOneCornerImage) {
 }
 
 // The vector loop (where built) and its one-pair-at-a-time form, which a build without
-// AVX-512 runs: the same forces, energy and virial bit for bit.
+// AVX-512 runs: the same forces, energy and virial bit for bit. Each also reads the list in
+// place through the build's ranges (VectorPairChunk::ends, the list as built: particle i's
+// partners not at offsets[i + 1]) with the same bits as through the list by particle.
 TEST(LjVectorLoop, OnePairAtATimeGivesTheVectorLoopsBits) {
   const LennardJones::Params lj = LennardJones::make(1.0, 1.0, kCutoff);
   for (const double vacancy : {0.0, 0.3}) {
     const System system = lattice_liquid(5, vacancy);
     const NeighborList list = built_list(system, false);
+    const NeighborList::BuiltOrder built = list.built_order();
+    ASSERT_NE(built.end, nullptr);
     const std::size_t n = system.particles.size();
-    std::vector<PaddedVec3> x(n), f_vector(n), f_pairs(n);
+    // The list as built is in another order than the list by particle.
+    bool moved = false;
+    for (std::size_t i = 0; i < n; ++i) moved = moved || built.begin[i] != list.offsets()[i];
+    ASSERT_TRUE(moved);
+    std::vector<PaddedVec3> x(n);
     for (std::size_t i = 0; i < n; ++i) {
       const Vec3& p = system.particles.position[i];
       x[i] = {p.x, p.y, p.z, 0.0};
     }
-    auto chunk = [&](std::vector<PaddedVec3>& f) {
-      return VectorPairChunk{x.data(),
-                             f.data(),
-                             list.neighbors().data(),
-                             list.image_codes().data(),
-                             list.offsets().data(),
-                             list.image_shifts().data(),
-                             0,
-                             static_cast<std::int32_t>(n)};
+    struct Run {
+      std::vector<PaddedVec3> f;
+      SymTensor w;
+      double e;
     };
-    SymTensor w_vector, w_pairs;
-    const double e_vector = LennardJones::vector_loop(lj, chunk(f_vector), true, w_vector);
-    const double e_pairs = LennardJones::lane_order_loop(lj, chunk(f_pairs), true, w_pairs);
-    EXPECT_EQ(e_vector, e_pairs);
-    EXPECT_EQ(w_vector.xx, w_pairs.xx);
-    EXPECT_EQ(w_vector.yz, w_pairs.yz);
-    for (std::size_t i = 0; i < n; ++i) {
-      ASSERT_EQ(f_vector[i].x, f_pairs[i].x) << i;
-      ASSERT_EQ(f_vector[i].y, f_pairs[i].y) << i;
-      ASSERT_EQ(f_vector[i].z, f_pairs[i].z) << i;
+    auto run = [&](bool in_place, bool by_vector) {
+      Run r{std::vector<PaddedVec3>(n), {}, 0.0};
+      const VectorPairChunk chunk{x.data(),
+                                  r.f.data(),
+                                  in_place ? built.neighbors : list.neighbors().data(),
+                                  in_place ? built.image_codes : list.image_codes().data(),
+                                  in_place ? built.begin : list.offsets().data(),
+                                  list.image_shifts().data(),
+                                  0,
+                                  static_cast<std::int32_t>(n),
+                                  in_place ? built.end : nullptr};
+      r.e = by_vector ? LennardJones::vector_loop(lj, chunk, true, r.w)
+                      : LennardJones::lane_order_loop(lj, chunk, true, r.w);
+      return r;
+    };
+    const Run vector = run(false, true);
+    for (const auto& [in_place, by_vector] :
+         {std::pair{false, false}, std::pair{true, true}, std::pair{true, false}}) {
+      const Run other = run(in_place, by_vector);
+      EXPECT_EQ(other.e, vector.e);
+      EXPECT_EQ(other.w.xx, vector.w.xx);
+      EXPECT_EQ(other.w.yz, vector.w.yz);
+      for (std::size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(other.f[i].x, vector.f[i].x) << i << " in place " << in_place;
+        ASSERT_EQ(other.f[i].y, vector.f[i].y) << i;
+        ASSERT_EQ(other.f[i].z, vector.f[i].z) << i;
+      }
     }
   }
   if (!LennardJones::vector_loop_built()) GTEST_SKIP() << "no vector loop in this build";
