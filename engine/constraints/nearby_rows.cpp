@@ -13,12 +13,14 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
                       const NeighborList& list, const Box& box) {
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
   if (bonded_pairs) index_bonded_pairs(set, particles.size());
-  shifted_ = !list.image_codes().empty();
+  shifted_ = list.coded();
+  // The list where the build left it (its list by particle is not made for this).
+  const NeighborList::PartnerRanges ranges = list.partner_ranges();
   // By chunks of the list's particles, each into its own pairs, joined in chunk order: the
   // serial scan's pairs in its order on any number of threads (chunk 0 writes in place).
   // Split as cheap items: from 1024 particles, hs_4000's 600 us scan took about 100 us more
   // on two threads of an idle 2-core machine than on one (bench/README.md, fuse).
-  const std::size_t listed = list.offsets().empty() ? 0 : list.offsets().size() - 1;
+  const std::size_t listed = ranges.begin ? list.positions_at_build().size() : 0;
   const int chunks = chunks_for_cheap(listed);
   chunk_pairs_.resize(static_cast<std::size_t>(chunks));
   chunk_bounds_.resize(static_cast<std::size_t>(chunks));
@@ -27,7 +29,8 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
     std::vector<PairBound>& bounds = c == 0 ? bounds_ : chunk_bounds_[static_cast<std::size_t>(c)];
     pairs.clear();
     bounds.clear();
-    scan_list(list, q, box, particles.radius.data(), bonded_pairs, begin, end, pairs, bounds);
+    scan_list(list, ranges, q, box, particles.radius.data(), bonded_pairs, begin, end, pairs,
+              bounds);
   });
   for (int c = 1; c < chunks; ++c) {
     const auto k = static_cast<std::size_t>(c);
@@ -40,17 +43,16 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   list_builds_ = list.builds();
 }
 
-void NearbyRows::scan_list(const NeighborList& list, const Vec3* q, const Box& box,
-                           const double* radius, bool bonded_pairs, std::size_t first,
-                           std::size_t last, std::vector<Pair>& pairs,
+void NearbyRows::scan_list(const NeighborList& list, const NeighborList::PartnerRanges& ranges,
+                           const Vec3* q, const Box& box, const double* radius, bool bonded_pairs,
+                           std::size_t first, std::size_t last, std::vector<Pair>& pairs,
                            std::vector<PairBound>& bounds) const {
-  const auto& offsets = list.offsets();
-  const auto& neighbors = list.neighbors();
-  const std::vector<std::uint8_t>& codes = list.image_codes();
+  const std::int32_t* neighbors = ranges.neighbors;
+  const std::uint8_t* codes = ranges.image_codes;
   const bool shifted = shifted_;
   const double margin = margin_;
   for (std::size_t i = first; i < last; ++i) {
-    for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+    for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
       const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
       const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
       Vec3 shift;

@@ -58,9 +58,9 @@ class NearbyRows {
   };
   std::vector<PairBound> bounds_;
   // The list's pairs of particles [first, last) within contact + margin at q, appended.
-  void scan_list(const NeighborList& list, const Vec3* q, const Box& box, const double* radius,
-                 bool bonded_pairs, std::size_t first, std::size_t last, std::vector<Pair>& pairs,
-                 std::vector<PairBound>& bounds) const;
+  void scan_list(const NeighborList& list, const NeighborList::PartnerRanges& ranges, const Vec3* q,
+                 const Box& box, const double* radius, bool bonded_pairs, std::size_t first,
+                 std::size_t last, std::vector<Pair>& pairs, std::vector<PairBound>& bounds) const;
   void screen_pairs(const Vec3* q, const Box& box, double reach, const double* particle_reach,
                     double exact_below, double beyond, std::size_t first, std::size_t last,
                     std::vector<Constraint>& out, std::vector<double>& gap_at_q);

@@ -526,10 +526,19 @@ void NeighborList::make_by_particle() const {
   by_particle_.stale.store(false, std::memory_order_release);
 }
 
-NeighborList::BuiltOrder NeighborList::built_order() const {
+NeighborList::PartnerRanges NeighborList::built_order() const {
   if (cell_order_ || built_begin_.empty()) return {};
   return {slot_neighbors_.data(), coded_ ? slot_codes_.data() : nullptr, built_begin_.data(),
           built_end_.data()};
+}
+
+NeighborList::PartnerRanges NeighborList::partner_ranges() const {
+  const PartnerRanges built = built_order();
+  if (built.begin) return built;
+  by_particle();
+  if (offsets_.empty()) return {};
+  return {neighbors_.data(), coded_ ? image_codes_.data() : nullptr, offsets_.data(),
+          offsets_.data() + 1};
 }
 
 void NeighborList::set_cell_order(bool on) {

@@ -53,19 +53,22 @@ class NeighborList {
   }
   std::size_t pair_count() const { return pairs_; }
 
-  // The list as the last build left it, without cell order: particle i's partners (as
-  // particles) and their image codes are entries [begin[i], end[i]) of `neighbors` and
-  // `image_codes` (null when the pairs have none), in neighbors()' order. Read in place, the
-  // list by particle is not made (a copy of the whole list at every build, 4 % of an LJ
-  // liquid's run): NeighborList makes it when first asked for. All null with cell order on,
-  // or before a build.
-  struct BuiltOrder {
+  // Each particle's partners (as particles) and their image codes as ranges: particle i's are
+  // entries [begin[i], end[i]) of `neighbors` and `image_codes` (null when the pairs have
+  // none), in neighbors()' order.
+  struct PartnerRanges {
     const std::int32_t* neighbors = nullptr;
     const std::uint8_t* image_codes = nullptr;
     const std::size_t* begin = nullptr;
     const std::size_t* end = nullptr;
   };
-  BuiltOrder built_order() const;
+  // The list as the last build left it, without cell order: read in place, the list by
+  // particle is not made (a copy of the whole list at every build, 4 % of an LJ liquid's
+  // run); NeighborList makes it when first asked for. All null with cell order on, or
+  // before a build.
+  PartnerRanges built_order() const;
+  // built_order() where there is one, else the list by particle (end = offsets() + 1).
+  PartnerRanges partner_ranges() const;
   std::int64_t builds() const { return builds_; }
 
   // When the box is at least three reaches wide along every periodic axis, each listed pair

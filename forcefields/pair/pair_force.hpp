@@ -88,19 +88,17 @@ class PairForce final : public ForceTerm {
     const bool by_slot = ordered.particle.size() == n && n > 0;
     double energy = 0.0;
     if (vector_loop_applies(neighbors.coded()) && n > 0) {
-      // The list read where the build left it (by particle through ranges, or by slot): the
-      // list by particle is not made for it.
-      const NeighborList::BuiltOrder built = neighbors.built_order();
-      energy =
-          by_slot ? vector_loops(system.particles.position, ordered.particle.data(),
-                                 ordered.neighbors.data(), ordered.image_codes.data(),
-                                 ordered.offsets.data(), nullptr, neighbors, force, virial, tally)
-          : built.begin
-              ? vector_loops(system.particles.position, nullptr, built.neighbors, built.image_codes,
-                             built.begin, built.end, neighbors, force, virial, tally)
-              : vector_loops(system.particles.position, nullptr, neighbors.neighbors().data(),
-                             neighbors.image_codes().data(), neighbors.offsets().data(), nullptr,
-                             neighbors, force, virial, tally);
+      // The list read where the build left it where it can be (by slot, or by particle through
+      // ranges): the list by particle is then not made for it.
+      const NeighborList::PartnerRanges ranges =
+          by_slot ? NeighborList::PartnerRanges{} : neighbors.partner_ranges();
+      energy = by_slot
+                   ? vector_loops(system.particles.position, ordered.particle.data(),
+                                  ordered.neighbors.data(), ordered.image_codes.data(),
+                                  ordered.offsets.data(), nullptr, neighbors, force, virial, tally)
+                   : vector_loops(system.particles.position, nullptr, ranges.neighbors,
+                                  ranges.image_codes, ranges.begin, ranges.end, neighbors, force,
+                                  virial, tally);
       return energy + (tally ? scaled_pairs<true>(system, force, virial)
                              : scaled_pairs<false>(system, force, virial));
     }

@@ -84,10 +84,31 @@ TEST(CellOrder, TheListBySlotIsTheListByParticleRenamed) {
   EXPECT_LT(sum / static_cast<double>(n - 1), 2.0);
 }
 
-// Without cell order the force loop reads the list where the build left it (built_order()),
-// and the list by particle is copied from there when first asked for: particle i's range there
-// is its list by particle, entry for entry, on one thread and on two (the build's chunks
-// joined). With cell order there is no such list (the force loop reads the list by slot).
+// Ranges of a list (NeighborList::PartnerRanges) joined in particle order: the list by
+// particle they stand for.
+struct JoinedRanges {
+  std::vector<std::int32_t> partners;
+  std::vector<std::uint8_t> codes;
+  std::vector<std::size_t> offsets{0};
+};
+JoinedRanges join(const NeighborList::PartnerRanges& ranges, std::size_t n) {
+  JoinedRanges out;
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_LE(ranges.begin[i], ranges.end[i]);
+    out.partners.insert(out.partners.end(), ranges.neighbors + ranges.begin[i],
+                        ranges.neighbors + ranges.end[i]);
+    out.codes.insert(out.codes.end(), ranges.image_codes + ranges.begin[i],
+                     ranges.image_codes + ranges.end[i]);
+    out.offsets.push_back(out.partners.size());
+  }
+  return out;
+}
+
+// Without cell order the force loop and the contact rows' scan read the list where the build
+// left it (built_order()), and the list by particle is copied from there when first asked for:
+// particle i's range there is its list by particle, entry for entry, on one thread and on two
+// (the build's chunks joined). With cell order there is no such list, and partner_ranges()
+// gives the list by particle itself.
 TEST(CellOrder, TheBuiltOrderRangesAreTheListByParticle) {
   const RunInput input = wrapped_chain_melt();
   const std::size_t n = input.system.particles.size();
@@ -95,26 +116,23 @@ TEST(CellOrder, TheBuiltOrderRangesAreTheListByParticle) {
     if (threads == 2 && !testing::kThreaded) continue;
     const testing::ThreadCount count(threads);
     const NeighborList plain = list_for(input, false);
-    const NeighborList::BuiltOrder built = plain.built_order();
+    const NeighborList::PartnerRanges built = plain.built_order();
     ASSERT_NE(built.begin, nullptr);
     ASSERT_NE(built.image_codes, nullptr);
+    EXPECT_EQ(plain.partner_ranges().begin, built.begin);
     // Read before the list by particle is made from the same arrays.
-    std::vector<std::int32_t> partners;
-    std::vector<std::uint8_t> codes;
-    std::vector<std::size_t> offsets{0};
-    for (std::size_t i = 0; i < n; ++i) {
-      ASSERT_LE(built.begin[i], built.end[i]);
-      partners.insert(partners.end(), built.neighbors + built.begin[i],
-                      built.neighbors + built.end[i]);
-      codes.insert(codes.end(), built.image_codes + built.begin[i],
-                   built.image_codes + built.end[i]);
-      offsets.push_back(partners.size());
-    }
-    EXPECT_EQ(partners, plain.neighbors()) << threads << " threads";
-    EXPECT_EQ(codes, plain.image_codes());
-    EXPECT_EQ(offsets, plain.offsets());
-    EXPECT_EQ(partners.size(), plain.pair_count());
-    EXPECT_EQ(list_for(input, true).built_order().begin, nullptr);
+    const JoinedRanges joined = join(built, n);
+    EXPECT_EQ(joined.partners, plain.neighbors()) << threads << " threads";
+    EXPECT_EQ(joined.codes, plain.image_codes());
+    EXPECT_EQ(joined.offsets, plain.offsets());
+    EXPECT_EQ(joined.partners.size(), plain.pair_count());
+
+    const NeighborList sorted = list_for(input, true);
+    EXPECT_EQ(sorted.built_order().begin, nullptr);
+    const JoinedRanges by_particle = join(sorted.partner_ranges(), n);
+    EXPECT_EQ(by_particle.partners, plain.neighbors());
+    EXPECT_EQ(by_particle.codes, plain.image_codes());
+    EXPECT_EQ(by_particle.offsets, plain.offsets());
   }
 }
 

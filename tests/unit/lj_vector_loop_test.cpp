@@ -247,7 +247,7 @@ TEST(LjVectorLoop, OnePairAtATimeGivesTheVectorLoopsBits) {
   for (const double vacancy : {0.0, 0.3}) {
     const System system = lattice_liquid(5, vacancy);
     const NeighborList list = built_list(system, false);
-    const NeighborList::BuiltOrder built = list.built_order();
+    const NeighborList::PartnerRanges built = list.built_order();
     ASSERT_NE(built.end, nullptr);
     const std::size_t n = system.particles.size();
     // The list as built is in another order than the list by particle.
