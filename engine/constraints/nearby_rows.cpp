@@ -20,7 +20,7 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   // serial scan's pairs in its order on any number of threads (chunk 0 writes in place).
   // Split as cheap items: from 1024 particles, hs_4000's 600 us scan took about 100 us more
   // on two threads of an idle 2-core machine than on one (bench/README.md, fuse).
-  const std::size_t listed = ranges.begin ? list.positions_at_build().size() : 0;
+  const std::size_t listed = ranges.particles;
   const int chunks = chunks_for_cheap(listed);
   chunk_pairs_.resize(static_cast<std::size_t>(chunks));
   chunk_bounds_.resize(static_cast<std::size_t>(chunks));

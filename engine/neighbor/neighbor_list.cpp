@@ -528,8 +528,8 @@ void NeighborList::make_by_particle() const {
 
 NeighborList::PartnerRanges NeighborList::built_order() const {
   if (cell_order_ || built_begin_.empty()) return {};
-  return {slot_neighbors_.data(), coded_ ? slot_codes_.data() : nullptr, built_begin_.data(),
-          built_end_.data()};
+  return {built_begin_.size(), slot_neighbors_.data(), coded_ ? slot_codes_.data() : nullptr,
+          built_begin_.data(), built_end_.data()};
 }
 
 NeighborList::PartnerRanges NeighborList::partner_ranges() const {
@@ -537,8 +537,8 @@ NeighborList::PartnerRanges NeighborList::partner_ranges() const {
   if (built.begin) return built;
   by_particle();
   if (offsets_.empty()) return {};
-  return {neighbors_.data(), coded_ ? image_codes_.data() : nullptr, offsets_.data(),
-          offsets_.data() + 1};
+  return {offsets_.size() - 1, neighbors_.data(), coded_ ? image_codes_.data() : nullptr,
+          offsets_.data(), offsets_.data() + 1};
 }
 
 void NeighborList::set_cell_order(bool on) {

@@ -53,10 +53,11 @@ class NeighborList {
   }
   std::size_t pair_count() const { return pairs_; }
 
-  // Each particle's partners (as particles) and their image codes as ranges: particle i's are
-  // entries [begin[i], end[i]) of `neighbors` and `image_codes` (null when the pairs have
-  // none), in neighbors()' order.
+  // Each particle's partners (as particles) and their image codes as ranges: particle i's
+  // (i < particles) are entries [begin[i], end[i]) of `neighbors` and `image_codes` (null when
+  // the pairs have none), in neighbors()' order.
   struct PartnerRanges {
+    std::size_t particles = 0;
     const std::int32_t* neighbors = nullptr;
     const std::uint8_t* image_codes = nullptr;
     const std::size_t* begin = nullptr;

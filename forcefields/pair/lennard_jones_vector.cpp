@@ -315,7 +315,7 @@ double LennardJones::curvature_loop(const Params& p, const CurvatureChunk& c) {
                            _mm512_set1_pd(c.x[i].z)};
     const __m512d vi[3] = {_mm512_set1_pd(c.v[i].x), _mm512_set1_pd(c.v[i].y),
                            _mm512_set1_pd(c.v[i].z)};
-    const std::size_t end = c.offsets[i + 1];
+    const std::size_t end = c.ends ? c.ends[i] : c.offsets[i + 1];
     for (std::size_t k = c.offsets[i]; k < end; k += 8) {
       const std::size_t count = end - k < 8 ? end - k : 8;
       const __mmask8 lanes = static_cast<__mmask8>((1u << count) - 1u);

@@ -63,15 +63,16 @@ class PairForce final : public ForceTerm {
   // sum bit for bit.
   bool pair_curvature(const System& system, const NeighborList& neighbors,
                       const std::vector<Vec3>& velocity, double& sum) const override {
-    const std::size_t n = neighbors.offsets().empty() ? 0 : neighbors.offsets().size() - 1;
+    const NeighborList::PartnerRanges ranges = neighbors.partner_ranges();
+    const std::size_t n = ranges.particles;
     const int chunks = chunks_for(n);
     if (chunks == 1) {
-      sum += listed_curvature(system, neighbors, velocity, 0, n);
+      sum += listed_curvature(system, ranges, velocity, 0, n);
     } else {
       std::vector<double> partial(static_cast<std::size_t>(chunks), 0.0);
       for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
         partial[static_cast<std::size_t>(c)] =
-            listed_curvature(system, neighbors, velocity, begin, end);
+            listed_curvature(system, ranges, velocity, begin, end);
       });
       for (const double p : partial) sum += p;
     }
@@ -138,20 +139,19 @@ class PairForce final : public ForceTerm {
   template <class Visit>
   void for_each_hessian(const System& system, const NeighborList& neighbors,
                         const std::vector<char>& mask, Visit&& visit) const {
-    const std::size_t n = neighbors.offsets().empty() ? 0 : neighbors.offsets().size() - 1;
-    for_each_listed_hessian(system, neighbors, mask, 0, n, visit);
+    const NeighborList::PartnerRanges ranges = neighbors.partner_ranges();
+    const std::size_t n = ranges.particles;
+    for_each_listed_hessian(system, ranges, mask, 0, n, visit);
     for_each_scaled_hessian(system, mask, visit);
   }
   // The listed pairs of particles begin..end-1, in list order.
   template <class Visit>
-  void for_each_listed_hessian(const System& system, const NeighborList& neighbors,
+  void for_each_listed_hessian(const System& system, const NeighborList::PartnerRanges& ranges,
                                const std::vector<char>& mask, std::size_t begin, std::size_t end,
                                Visit&& visit) const {
-    const auto& list = neighbors.neighbors();
-    const auto& offsets = neighbors.offsets();
     for (std::size_t i = begin; i < end; ++i) {
-      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
-        const std::int32_t j = list[k];
+      for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
+        const std::int32_t j = ranges.neighbors[k];
         if (!mask.empty() && !mask[i] && !mask[j]) continue;
         visit_hessian(system, static_cast<std::int32_t>(i), j, 1.0, visit);
       }
@@ -166,28 +166,28 @@ class PairForce final : public ForceTerm {
     }
   }
   // The listed pairs of particles begin..end-1: their curvature terms summed in list order.
-  double listed_curvature(const System& system, const NeighborList& neighbors,
+  double listed_curvature(const System& system, const NeighborList::PartnerRanges& ranges,
                           const std::vector<Vec3>& velocity, std::size_t begin,
                           std::size_t end) const {
-    const auto& list = neighbors.neighbors();
-    const auto& offsets = neighbors.offsets();
     if constexpr (VectorCurvatureEvaluator<Evaluator>) {
       if (type_count_ == 1 && Evaluator::curvature_loop_built()) {
         const CurvatureChunk chunk{system.particles.position.data(),
                                    velocity.data(),
-                                   list.data(),
-                                   offsets.data(),
+                                   ranges.neighbors,
+                                   ranges.begin,
                                    system.box.period(),
                                    system.box.inverse_period(),
                                    begin,
-                                   end};
+                                   end,
+                                   ranges.end};
         return Evaluator::curvature_loop(table_[0], chunk);
       }
     }
     double sum = 0.0;
     for (std::size_t i = begin; i < end; ++i) {
-      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
-        sum += curvature_term(system, velocity, static_cast<std::int32_t>(i), list[k], 1.0);
+      for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
+        sum += curvature_term(system, velocity, static_cast<std::int32_t>(i), ranges.neighbors[k],
+                              1.0);
       }
     }
     return sum;

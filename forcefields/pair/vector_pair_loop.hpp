@@ -53,6 +53,7 @@ struct CurvatureChunk {
   const std::size_t* offsets;
   Vec3 period, inverse_period;
   std::size_t first, last;
+  const std::size_t* ends = nullptr;  // as VectorPairChunk::ends
 };
 
 // An evaluator with a vector form of PairForce's curvature sum for one type pair:

@@ -92,6 +92,7 @@ struct JoinedRanges {
   std::vector<std::size_t> offsets{0};
 };
 JoinedRanges join(const NeighborList::PartnerRanges& ranges, std::size_t n) {
+  EXPECT_EQ(ranges.particles, n);
   JoinedRanges out;
   for (std::size_t i = 0; i < n; ++i) {
     EXPECT_LE(ranges.begin[i], ranges.end[i]);
