@@ -50,10 +50,10 @@ void for_each_inequality(const ConstraintSet& set, const Particles& particles,
                          const NeighborList& list, Visit&& visit) {
   if (set.hard_spheres) {
     for (const auto& [a, b] : set.always_checked_pairs) visit(sphere_pair(a, b, particles));
-    const auto& offsets = list.offsets();
-    const auto& neighbors = list.neighbors();
-    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
-      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+    const NeighborList::PartnerRanges ranges = list.partner_ranges();
+    const std::int32_t* neighbors = ranges.neighbors;
+    for (std::size_t i = 0; i < ranges.particles; ++i) {
+      for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
         const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
         const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
         if (std::binary_search(set.unconstrained_pairs.begin(), set.unconstrained_pairs.end(),
@@ -93,11 +93,11 @@ std::vector<Constraint> ConstraintSet::nearby_inequalities(const Particles& part
       const Constraint c = sphere_pair(a, b, particles);
       if (evaluate(c, q, box).gap <= reach) nearby.push_back(c);
     }
-    const auto& offsets = list.offsets();
-    const auto& neighbors = list.neighbors();
+    const NeighborList::PartnerRanges ranges = list.partner_ranges();
+    const std::int32_t* neighbors = ranges.neighbors;
     const std::vector<double>& radius = particles.radius;
-    for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
-      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+    for (std::size_t i = 0; i < ranges.particles; ++i) {
+      for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
         const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
         const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
         const double within = radius[a] + radius[b] + reach;

@@ -103,12 +103,15 @@ class PairForce final : public ForceTerm {
       return energy + (tally ? scaled_pairs<true>(system, force, virial)
                              : scaled_pairs<false>(system, force, virial));
     }
-    // By slot the list by particle is not read (nor made: NeighborList makes it on demand).
+    // The list by particle is not made for this loop: by slot, or through the ranges.
+    const NeighborList::PartnerRanges ranges =
+        by_slot ? NeighborList::PartnerRanges{} : neighbors.partner_ranges();
     Listed listed{system.particles.position.data(),
                   system.particles.type.data(),
-                  by_slot ? nullptr : neighbors.neighbors().data(),
-                  by_slot ? nullptr : neighbors.image_codes().data(),
-                  by_slot ? nullptr : neighbors.offsets().data(),
+                  ranges.neighbors,
+                  ranges.image_codes,
+                  ranges.begin,
+                  ranges.end,
                   neighbors.coded()};
     if (!by_slot) {
       energy = loops(system.box, neighbors, listed, n, force, virial, tally);
@@ -124,8 +127,13 @@ class PairForce final : public ForceTerm {
         ordered_type_[s] = listed.type[particle[s]];
         ordered_force_[s] = Vec3{};
       });
-      listed = {ordered_position_.data(),   ordered_type_.data(),   ordered.neighbors.data(),
-                ordered.image_codes.data(), ordered.offsets.data(), listed.coded};
+      listed = {ordered_position_.data(),
+                ordered_type_.data(),
+                ordered.neighbors.data(),
+                ordered.image_codes.data(),
+                ordered.offsets.data(),
+                ordered.offsets.data() + 1,
+                listed.coded};
       energy = loops(system.box, neighbors, listed, n, ordered_force_, virial, tally);
       parallel_for(n, [&](std::size_t s) { force[particle[s]] += ordered_force_[s]; });
     }
@@ -226,13 +234,14 @@ class PairForce final : public ForceTerm {
   }
 
   // The particles' positions and types and their listed partners, in the list's order:
-  // by particle, or by slot in cell order.
+  // by particle, or by slot in cell order; particle (slot) i's are list[begin[i] .. end[i]).
   struct Listed {
     const Vec3* x;
     const int* type;
     const std::int32_t* list;
     const std::uint8_t* codes;
-    const std::size_t* offsets;
+    const std::size_t* begin;
+    const std::size_t* end;
     bool coded;  // periodic shifts from image codes (else minimum-image rounding)
   };
 
@@ -317,7 +326,8 @@ class PairForce final : public ForceTerm {
     const Vec3 period = box.period(), inverse = box.inverse_period();
     const std::int32_t* list = listed.list;
     const std::uint8_t* codes = listed.codes;
-    const std::size_t* offsets = listed.offsets;
+    const std::size_t* begin = listed.begin;
+    const std::size_t* end = listed.end;
 
     double energy = 0.0;
     SymTensor w;
@@ -332,10 +342,10 @@ class PairForce final : public ForceTerm {
     for (std::int32_t i = first; i < last; ++i) {
       const Vec3 xi = x[i];
       const Params* row = &table_[static_cast<std::size_t>(type[i] * type_count_)];
-      const std::size_t count = offsets[i + 1] - offsets[i];
+      const std::size_t count = end[i] - begin[i];
       if (inside.size() < count + 1) inside.resize(2 * count + 1);
       std::size_t kept = 0;
-      for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+      for (std::size_t k = begin[i]; k < end[i]; ++k) {
         const std::int32_t j = list[k];
         double dx = xi.x - x[j].x, dy = xi.y - x[j].y, dz = xi.z - x[j].z;
         if constexpr (kCoded) {
