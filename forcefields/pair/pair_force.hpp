@@ -87,12 +87,12 @@ class PairForce final : public ForceTerm {
     const std::size_t n = system.particles.size();
     const NeighborList::CellOrdered& ordered = neighbors.cell_ordered();
     const bool by_slot = ordered.particle.size() == n && n > 0;
+    // The list read where the build left it (by slot, or by particle through the ranges): the
+    // list by particle is not made for these loops.
+    const NeighborList::PartnerRanges ranges =
+        by_slot ? NeighborList::PartnerRanges{} : neighbors.partner_ranges();
     double energy = 0.0;
     if (vector_loop_applies(neighbors.coded()) && n > 0) {
-      // The list read where the build left it where it can be (by slot, or by particle through
-      // ranges): the list by particle is then not made for it.
-      const NeighborList::PartnerRanges ranges =
-          by_slot ? NeighborList::PartnerRanges{} : neighbors.partner_ranges();
       energy = by_slot
                    ? vector_loops(system.particles.position, ordered.particle.data(),
                                   ordered.neighbors.data(), ordered.image_codes.data(),
@@ -100,20 +100,14 @@ class PairForce final : public ForceTerm {
                    : vector_loops(system.particles.position, nullptr, ranges.neighbors,
                                   ranges.image_codes, ranges.begin, ranges.end, neighbors, force,
                                   virial, tally);
-      return energy + (tally ? scaled_pairs<true>(system, force, virial)
-                             : scaled_pairs<false>(system, force, virial));
-    }
-    // The list by particle is not made for this loop: by slot, or through the ranges.
-    const NeighborList::PartnerRanges ranges =
-        by_slot ? NeighborList::PartnerRanges{} : neighbors.partner_ranges();
-    Listed listed{system.particles.position.data(),
-                  system.particles.type.data(),
-                  ranges.neighbors,
-                  ranges.image_codes,
-                  ranges.begin,
-                  ranges.end,
-                  neighbors.coded()};
-    if (!by_slot) {
+    } else if (!by_slot) {
+      const Listed listed{system.particles.position.data(),
+                          system.particles.type.data(),
+                          ranges.neighbors,
+                          ranges.image_codes,
+                          ranges.begin,
+                          ranges.end,
+                          neighbors.coded()};
       energy = loops(system.box, neighbors, listed, n, force, virial, tally);
     } else {
       // Cache order: positions and types gathered into the list's cell order, the forces
@@ -122,18 +116,17 @@ class PairForce final : public ForceTerm {
       ordered_position_.resize(n);
       ordered_type_.resize(n);
       ordered_force_.resize(n);
+      const Vec3* x = system.particles.position.data();
+      const int* type = system.particles.type.data();
       parallel_for(n, [&](std::size_t s) {
-        ordered_position_[s] = listed.x[particle[s]];
-        ordered_type_[s] = listed.type[particle[s]];
+        ordered_position_[s] = x[particle[s]];
+        ordered_type_[s] = type[particle[s]];
         ordered_force_[s] = Vec3{};
       });
-      listed = {ordered_position_.data(),
-                ordered_type_.data(),
-                ordered.neighbors.data(),
-                ordered.image_codes.data(),
-                ordered.offsets.data(),
-                ordered.offsets.data() + 1,
-                listed.coded};
+      const Listed listed{ordered_position_.data(), ordered_type_.data(),
+                          ordered.neighbors.data(), ordered.image_codes.data(),
+                          ordered.offsets.data(),   ordered.offsets.data() + 1,
+                          neighbors.coded()};
       energy = loops(system.box, neighbors, listed, n, ordered_force_, virial, tally);
       parallel_for(n, [&](std::size_t s) { force[particle[s]] += ordered_force_[s]; });
     }
