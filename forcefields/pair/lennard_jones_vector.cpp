@@ -113,10 +113,11 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
                   zi = _mm512_set1_pd(c.x[i].z);
     __m512d fxi = _mm512_setzero_pd(), fyi = fxi, fzi = fxi;
     const std::size_t end = c.ends ? c.ends[i] : c.offsets[i + 1];
-    // The list read in place (ends) is in the build's cell order, particle i's partners not
-    // after i-1's: the entries of the particle four ahead fetched early, as the hardware's
-    // stream prefetch no longer does (LJ 32000: this loop took 1.25x its time on the list by
-    // particle without, 1.03-1.07x with; the build saves the list's copy, 0.87x).
+    // Given as ranges (ends), particle i's partners need not follow i-1's (the list by
+    // particle read in the build's cell order): the entries of the particle four ahead
+    // fetched early, as the hardware's stream prefetch then does not (LJ 32000: this loop
+    // took 1.25x its time on the list by particle without, 1.03-1.07x with; the build saves the
+    // list's copy, 0.87x).
     if (c.ends && i + 4 < c.last) {
       const std::size_t next = c.offsets[i + 4], last = c.ends[i + 4];
       const char* l = reinterpret_cast<const char*>(c.list + next);

@@ -87,26 +87,19 @@ class PairForce final : public ForceTerm {
     const std::size_t n = system.particles.size();
     const NeighborList::CellOrdered& ordered = neighbors.cell_ordered();
     const bool by_slot = ordered.particle.size() == n && n > 0;
-    // The list read where the build left it (by slot, or by particle through the ranges): the
-    // list by particle is not made for these loops.
+    // The list read where the build left it, by slot (partners as slots) or by particle
+    // through the ranges: the list by particle is not made for these loops.
     const NeighborList::PartnerRanges ranges =
-        by_slot ? NeighborList::PartnerRanges{} : neighbors.partner_ranges();
+        by_slot
+            ? NeighborList::PartnerRanges{n, ordered.neighbors.data(), ordered.image_codes.data(),
+                                          ordered.offsets.data(), ordered.offsets.data() + 1}
+            : neighbors.partner_ranges();
     double energy = 0.0;
     if (vector_loop_applies(neighbors.coded()) && n > 0) {
-      energy = by_slot
-                   ? vector_loops(system.particles.position, ordered.particle.data(),
-                                  ordered.neighbors.data(), ordered.image_codes.data(),
-                                  ordered.offsets.data(), nullptr, neighbors, force, virial, tally)
-                   : vector_loops(system.particles.position, nullptr, ranges.neighbors,
-                                  ranges.image_codes, ranges.begin, ranges.end, neighbors, force,
-                                  virial, tally);
+      energy = vector_loops(system.particles.position, by_slot ? ordered.particle.data() : nullptr,
+                            ranges, neighbors, force, virial, tally);
     } else if (!by_slot) {
-      const Listed listed{system.particles.position.data(),
-                          system.particles.type.data(),
-                          ranges.neighbors,
-                          ranges.image_codes,
-                          ranges.begin,
-                          ranges.end,
+      const Listed listed{system.particles.position.data(), system.particles.type.data(), ranges,
                           neighbors.coded()};
       energy = loops(system.box, neighbors, listed, n, force, virial, tally);
     } else {
@@ -123,9 +116,7 @@ class PairForce final : public ForceTerm {
         ordered_type_[s] = type[particle[s]];
         ordered_force_[s] = Vec3{};
       });
-      const Listed listed{ordered_position_.data(), ordered_type_.data(),
-                          ordered.neighbors.data(), ordered.image_codes.data(),
-                          ordered.offsets.data(),   ordered.offsets.data() + 1,
+      const Listed listed{ordered_position_.data(), ordered_type_.data(), ranges,
                           neighbors.coded()};
       energy = loops(system.box, neighbors, listed, n, ordered_force_, virial, tally);
       parallel_for(n, [&](std::size_t s) { force[particle[s]] += ordered_force_[s]; });
@@ -227,14 +218,11 @@ class PairForce final : public ForceTerm {
   }
 
   // The particles' positions and types and their listed partners, in the list's order:
-  // by particle, or by slot in cell order; particle (slot) i's are list[begin[i] .. end[i]).
+  // by particle, or by slot in cell order (partners and positions by slot).
   struct Listed {
     const Vec3* x;
     const int* type;
-    const std::int32_t* list;
-    const std::uint8_t* codes;
-    const std::size_t* begin;
-    const std::size_t* end;
+    NeighborList::PartnerRanges partners;
     bool coded;  // periodic shifts from image codes (else minimum-image rounding)
   };
 
@@ -250,13 +238,11 @@ class PairForce final : public ForceTerm {
 
   // The vector loop over the list by slot: positions gathered into slot order (slot s holds
   // particle[s], or particle s without `particle`) padded to four doubles, chunked as
-  // loops(), the forces found there added back by particle. Slot s's partners: list[offsets[s]
-  // .. ends[s]), or without `ends` list[offsets[s] .. offsets[s + 1]).
+  // loops(), the forces found there added back by particle. Slot s's partners are its range
+  // in `partners`.
   double vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
-                      const std::int32_t* list, const std::uint8_t* codes,
-                      const std::size_t* offsets, const std::size_t* ends,
-                      const NeighborList& neighbors, std::vector<Vec3>& force, SymTensor& virial,
-                      bool tally) const {
+                      const NeighborList::PartnerRanges& partners, const NeighborList& neighbors,
+                      std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
       const std::size_t n = x.size();
       auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
@@ -273,13 +259,13 @@ class PairForce final : public ForceTerm {
           [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
             const VectorPairChunk chunk{padded_position_.data(),
                                         f,
-                                        list,
-                                        codes,
-                                        offsets,
+                                        partners.neighbors,
+                                        partners.image_codes,
+                                        partners.begin,
                                         shifts,
                                         static_cast<std::int32_t>(begin),
                                         static_cast<std::int32_t>(end),
-                                        ends};
+                                        partners.end};
             return Evaluator::vector_loop(table_[0], chunk, tally, w);
           },
           [&](std::size_t s) {
@@ -317,10 +303,10 @@ class PairForce final : public ForceTerm {
     const Vec3* x = listed.x;
     const int* type = listed.type;
     const Vec3 period = box.period(), inverse = box.inverse_period();
-    const std::int32_t* list = listed.list;
-    const std::uint8_t* codes = listed.codes;
-    const std::size_t* begin = listed.begin;
-    const std::size_t* end = listed.end;
+    const std::int32_t* list = listed.partners.neighbors;
+    const std::uint8_t* codes = listed.partners.image_codes;
+    const std::size_t* begin = listed.partners.begin;
+    const std::size_t* end = listed.partners.end;
 
     double energy = 0.0;
     SymTensor w;
