@@ -535,6 +535,37 @@ bool contains(const std::vector<Constraint>& rows, const Constraint& c) {
   return false;
 }
 
+namespace {
+std::uint64_t particle_key(const Constraint& c) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.i)) << 32) |
+         static_cast<std::uint32_t>(c.j);
+}
+}  // namespace
+
+void mark_contained(const std::vector<Constraint>& rows, const std::vector<Constraint>& candidates,
+                    std::vector<std::pair<std::uint64_t, std::int32_t>>& scratch,
+                    std::vector<char>& contained) {
+  contained.assign(candidates.size(), 0);
+  if (rows.empty()) return;
+  scratch.clear();
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    scratch.emplace_back(particle_key(rows[r]), static_cast<std::int32_t>(r));
+  }
+  std::sort(scratch.begin(), scratch.end());
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const std::uint64_t key = particle_key(candidates[k]);
+    auto at = std::lower_bound(scratch.begin(), scratch.end(),
+                               std::pair<std::uint64_t, std::int32_t>{key, -1});
+    // same_row decides among the rows on the same particles (a particle's walls).
+    for (; at != scratch.end() && at->first == key; ++at) {
+      if (same_row(rows[static_cast<std::size_t>(at->second)], candidates[k])) {
+        contained[k] = 1;
+        break;
+      }
+    }
+  }
+}
+
 double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec3>& p,
                        const Particles& P) {
   double v = dot(u, p[c.i]) / P.mass[c.i];

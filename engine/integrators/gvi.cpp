@@ -433,14 +433,7 @@ void Gvi::find_active_set(System& system) {
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     // Per candidate, whether it is in the active set already (the candidates are distinct
     // rows): made again by search when the candidates were refreshed.
-    if (every_row) {
-      ws_.candidate_active.assign(candidates.size(), 0);
-      if (!active.empty()) {
-        for (std::size_t k = 0; k < candidates.size(); ++k) {
-          ws_.candidate_active[k] = contains(active, candidates[k]) ? 1 : 0;
-        }
-      }
-    }
+    if (every_row) mark_contained(active, candidates, ws_.row_keys, ws_.candidate_active);
     bool grew = false;
     filter_in_order(
         candidates.size(), ws_.candidate_passed,

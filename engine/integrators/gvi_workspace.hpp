@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "constraints/constraint.hpp"
@@ -42,7 +43,8 @@ struct GviWorkspace {
   std::vector<std::int32_t> changed_particles;  // those marked in prediction_changed
   std::vector<char> candidate_active;           // per candidate row: in the active set
   std::vector<char> candidate_passed;           // per candidate row: a threaded test's result
-  std::vector<Constraint> rows;                 // equality rows followed by some inequality rows
+  std::vector<std::pair<std::uint64_t, std::int32_t>> row_keys;  // mark_contained's scratch
+  std::vector<Constraint> rows;  // equality rows followed by some inequality rows
 
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
