@@ -7,15 +7,21 @@
 #   ROUNDS=5 DELI_OLD=/tmp/deli-old bench/threads.sh [input.toml:steps ...]
 #   THREADS="1 2 4" bench/threads.sh       other thread (and rank) counts
 #   PEERS=0 bench/threads.sh               deli alone
+#   CEILING=0 bench/threads.sh             without the machine's ceiling (below)
 # The peers run in process from bench/peers (deli-peers, built here on first use): OpenMM's
 # CPU platform on the same thread counts (CCMA at 1e-4 for rods), LAMMPS on as many MPI ranks
 # (mpirun -np N; with rods LAMMPS gets its own model: see deli-peers). The hard-sphere fluid
 # has no peer (neither engine has hard spheres).
+# The machine's ceiling: two one-thread deli runs of the input at once, their rates summed,
+# over one run alone (with the first two thread counts 1 and 2). No two-thread code can beat
+# it; on a machine whose cores slow each other (shared caches, memory bandwidth, a host's
+# other tenants) it is below 2.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 deli=${DELI:-$top/build/deli}
 old=${DELI_OLD:-}
 rounds=${ROUNDS:-3}
+ceiling=${CEILING:-1}
 read -r -a counts <<< "${THREADS:-1 2}"
 source "$top/bench/peers/locate.sh"
 mpirun=${MPIRUN:-$(command -v mpirun || true)}
@@ -29,7 +35,8 @@ mpirun=${MPIRUN:-$(command -v mpirun || true)}
 wait=${OMP_WAIT_POLICY:-}
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
-       inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000)
+       inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000
+       inputs/hard_spheres/hs_32000.toml:200)
 [[ $# -gt 0 ]] && cases=("$@")
 # Reads lines "ENGINE THREADS RATE...": medians, scaling and deli's ratio to each peer.
 summarise=$(cat <<'PY'
@@ -45,7 +52,7 @@ for line in sys.stdin:
           f" (runs: {' '.join(rates)})")
 counts = sorted({t for _, t in order}, key=int)
 for engine in dict.fromkeys(e for e, _ in order):
-    if engine == "old-deli":
+    if engine in ("old-deli", "two-deli"):
         continue
     base = median.get((engine, counts[0]))
     scaling = [f"{t}: {median[(engine, t)] / base:.2f}x" for t in counts[1:]
@@ -57,6 +64,9 @@ for t in counts:
               if ("deli", t) in median and (e, t) in median]
     if ratios:
         print(f"  deli / peer at {t}: {', '.join(ratios)}")
+if ("two-deli", "1") in median and ("deli", "1") in median:
+    print(f"  machine's ceiling (two one-thread runs at once / one alone): "
+          f"{median[('two-deli', '1')] / median[('deli', '1')]:.2f}x")
 if ("old-deli", counts[0]) in median and ("deli", counts[0]) in median:
     print(f"  new / old deli on {counts[0]}: "
           f"{median[('deli', counts[0])] / median[('old-deli', counts[0])]:.3f}x")
@@ -82,6 +92,7 @@ for spec in "${cases[@]}"; do
   variants=()
   [[ -n $old ]] && variants+=("old-deli ${counts[0]}")
   for t in "${counts[@]}"; do variants+=("deli $t"); done
+  [[ $ceiling == 1 && ${counts[0]} == 1 && ${counts[1]:-} == 2 ]] && variants+=("two-deli 1")
   has_peers=
   if [[ -n $peers ]] && (cd "$dir" && "$peers" input.toml 1 openmm > /dev/null 2>&1); then
     has_peers=1
@@ -100,6 +111,17 @@ for spec in "${cases[@]}"; do
         deli)
           line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run input.toml \
             --threads "$threads" | grep "^loop time") ;;
+        two-deli)
+          # Both runs' rates summed, printed as one line for the parse below.
+          runs=$(cd "$dir" && {
+            env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 "$deli" run input.toml \
+              --threads 1 | grep "^loop time" &
+            env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 "$deli" run input.toml \
+              --threads 1 | grep "^loop time"
+            wait
+          })
+          line="$(echo "$runs" | grep -oE '[0-9.]+e[+-]?[0-9]+ atom-steps/s' |
+            awk '{ sum += $1 } END { printf "%.4e atom-steps/s", sum }')" ;;
         openmm)
           line=$(cd "$dir" && "$peers" input.toml "$steps" openmm 1e-4 "$threads") ||
             echo "note: OpenMM on $threads thread(s) failed on $name" >&2 ;;

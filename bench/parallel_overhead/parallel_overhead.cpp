@@ -3,13 +3,17 @@
 // region: for_each_chunk), a barrier inside one region, and a cheap pass over 4000
 // particles (a kick: p += f h/2, as GVI's and velocity Verlet's per-particle passes) on the
 // calling thread alone and split into chunks. A pass of a few microseconds gains from a
-// second thread only where the split saves more than a region costs.
+// second thread only where the split saves more than a region costs. And what moving data
+// between the threads' cores costs: a cache line handed back and forth, and the chunked
+// kick with the chunks' owners swapped every pass (each pass reads the lines the other
+// core wrote last), against the same kick with the chunks kept.
 //   cmake --build build --target deli-parallel-overhead
 //   OMP_NUM_THREADS=2 build/bench/parallel_overhead/deli-parallel-overhead
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <vector>
 
 #include "core/parallel.hpp"
@@ -78,6 +82,49 @@ void KickInChunks(benchmark::State& state) {
   }
 }
 BENCHMARK(KickInChunks)->UseRealTime();
+
+// Two threads hand one cache line back and forth: the time of a round trip, twice what a
+// line written on one core costs the other core to read.
+void CacheLineRoundTrip(benchmark::State& state) {
+  constexpr std::int64_t kTrips = 10000;
+  alignas(64) std::atomic<std::int64_t> turn{0};
+  for (auto _ : state) {
+    turn.store(0);
+#pragma omp parallel num_threads(2)
+    {
+      const std::int64_t me = omp_get_thread_num();
+      if (me < 2 && omp_get_num_threads() == 2) {
+        for (std::int64_t k = me; k < 2 * kTrips; k += 2) {
+          while (turn.load(std::memory_order_acquire) != k) {
+          }
+          turn.store(k + 1, std::memory_order_release);
+        }
+      }
+    }
+  }
+  state.counters["per_round_trip"] = benchmark::Counter(
+      static_cast<double>(kTrips),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(CacheLineRoundTrip)->UseRealTime();
+
+// KickInChunks with the two chunks' threads swapped every pass: thread t kicks chunk
+// (t + pass) mod 2, whose lines the other core wrote in the last pass.
+void KickInSwappedChunks(benchmark::State& state) {
+  Kick kick;
+  std::int64_t pass = 0;
+  for (auto _ : state) {
+#pragma omp parallel num_threads(2)
+    {
+      const int chunk = (omp_get_thread_num() + static_cast<int>(pass % 2)) % 2;
+      const IndexRange r = chunk_range(kParticles, chunk, 2);
+      kick.pass(r.begin, r.end);
+    }
+    ++pass;
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(KickInSwappedChunks)->UseRealTime();
 
 }  // namespace
 }  // namespace deli
