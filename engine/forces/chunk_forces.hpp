@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 #include "core/parallel.hpp"
@@ -23,6 +24,7 @@ class ChunkedForceLoopOf {
   // Runs body(begin, end, f, w) -> energy over the chunks of [0, items): the chunk's
   // items add their forces to f[particle] and their virial to w, and it returns their
   // energy. Returns the sum of the energies; forces added to `force`, virial to `virial`.
+  // A body taking the chunk's number first, body(c, begin, end, f, w), is given it.
   template <class Body>
   double run(std::size_t items, std::vector<Force>& force, SymTensor& virial, Body&& body) {
     return run(items, force, virial, body, [](std::size_t) {});
@@ -40,15 +42,23 @@ class ChunkedForceLoopOf {
     energies_.resize(static_cast<std::size_t>(chunks));
     for_each_chunk(items, chunks, [&](int c, std::size_t begin, std::size_t end) {
       const auto k = static_cast<std::size_t>(c);
+      auto chunk = [&](Force* f, SymTensor& w) {
+        if constexpr (std::is_invocable_v<Body&, int, std::size_t, std::size_t, Force*,
+                                          SymTensor&>) {
+          return body(c, begin, end, f, w);
+        } else {
+          return body(begin, end, f, w);
+        }
+      };
       if (c == 0) {
-        energies_[0] = body(begin, end, force.data(), virial);
+        energies_[0] = chunk(force.data(), virial);
         return;
       }
       // Zeroed by the thread that fills it (its first touch, on a many-socket machine).
       std::vector<Force>& buffer = buffers_[k - 1];
       buffer.assign(force.size(), Force{});
       virials_[k - 1] = SymTensor{};
-      energies_[k] = body(begin, end, buffer.data(), virials_[k - 1]);
+      energies_[k] = chunk(buffer.data(), virials_[k - 1]);
     });
     if (extra == 0) {
       parallel_for(force.size(), finish);

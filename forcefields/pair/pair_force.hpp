@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -239,25 +240,32 @@ class PairForce final : public ForceTerm {
   // The vector loop over the list by slot: positions gathered into slot order (slot s holds
   // particle[s], or particle s without `particle`) padded to four doubles, chunked as
   // loops(), the forces found there added back by particle. Slot s's partners are its range
-  // in `partners`.
+  // in `partners`. Each chunk gathers every position into a copy of its own: its partners'
+  // positions, read in no order, are then in its own core's cache, copied there in one
+  // stream. Read from a copy another core wrote, each line missed cost a round trip between
+  // the cores (about 500 ns on the 2-core machine of bench/README.md), and LJ 4000's pair
+  // loop took as long on two threads as on one.
   double vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                       const NeighborList::PartnerRanges& partners, const NeighborList& neighbors,
                       std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
       const std::size_t n = x.size();
       auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
-      padded_position_.resize(n);
+      padded_positions_.resize(static_cast<std::size_t>(chunks_for(n)));
       padded_force_.resize(n);
-      parallel_for(n, [&](std::size_t s) {
-        const Vec3& p = x[at(s)];
-        padded_position_[s] = {p.x, p.y, p.z, 0.0};
-        padded_force_[s] = PaddedVec3{};
-      });
       const Vec3* shifts = neighbors.image_shifts().data();
       const double energy = padded_chunked_.run(
           n, padded_force_, virial,
-          [&](std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
-            const VectorPairChunk chunk{padded_position_.data(),
+          [&](int c, std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
+            std::vector<PaddedVec3>& position = padded_positions_[static_cast<std::size_t>(c)];
+            position.resize(n);
+            for (std::size_t s = 0; s < n; ++s) {
+              const Vec3& p = x[at(s)];
+              position[s] = {p.x, p.y, p.z, 0.0};
+            }
+            // Chunk 0 adds to padded_force_ (the others to buffers of their own).
+            if (c == 0) std::fill(padded_force_.begin(), padded_force_.end(), PaddedVec3{});
+            const VectorPairChunk chunk{position.data(),
                                         f,
                                         partners.neighbors,
                                         partners.image_codes,
@@ -393,8 +401,9 @@ class PairForce final : public ForceTerm {
   mutable ChunkedForceLoop chunked_;
   mutable std::vector<Vec3> ordered_position_, ordered_force_;  // cache order, by slot
   mutable std::vector<int> ordered_type_;
-  mutable ChunkedForceLoopOf<PaddedVec3> padded_chunked_;  // the vector loop's
-  mutable std::vector<PaddedVec3> padded_position_, padded_force_;
+  mutable ChunkedForceLoopOf<PaddedVec3> padded_chunked_;          // the vector loop's
+  mutable std::vector<std::vector<PaddedVec3>> padded_positions_;  // one per chunk
+  mutable std::vector<PaddedVec3> padded_force_;
 };
 
 }  // namespace deli
