@@ -104,18 +104,26 @@ void parallel_for(std::size_t n, Body&& body) {
 // other and of the joins) on several threads: their outcomes are kept in `passed`, then
 // the joins are made in order on the calling thread. One chunk: the serial loop itself.
 template <class Test, class Join>
-void filter_in_order(std::size_t n, std::vector<char>& passed, Test&& test, Join&& join) {
-  if (chunks_for_cheap(n) == 1) {
+void filter_in_order(std::size_t n, int chunks, std::vector<char>& passed, Test&& test,
+                     Join&& join) {
+  if (chunks <= 1) {
     for (std::size_t k = 0; k < n; ++k) {
       if (test(k)) join(k);
     }
     return;
   }
   passed.resize(n);
-  parallel_for(n, [&](std::size_t k) { passed[k] = test(k); });
+  for_each_chunk(n, chunks, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) passed[k] = test(k);
+  });
   for (std::size_t k = 0; k < n; ++k) {
     if (passed[k]) join(k);
   }
+}
+// The tests split as cheap items.
+template <class Test, class Join>
+void filter_in_order(std::size_t n, std::vector<char>& passed, Test&& test, Join&& join) {
+  filter_in_order(n, chunks_for_cheap(n), passed, test, join);
 }
 
 // What the serial loop `m = start; for (i < n) m = std::max(m, term(i));` finds (term(i) may

@@ -412,6 +412,39 @@ steps = 0
   if (!testing::short_runs()) EXPECT_GT(reflected, 0.0) << reflected;
 }
 
+// 4000 hard spheres, inputs/hard_spheres/hs_4000.toml at a step of 0.02: about 1500 candidate
+// rows a step, past the rows from which the active set's tests and the feasibility guard's
+// scan are cut into chunks where the particles' passes are (the test's cheap-loop minimum is
+// 1024 particles).
+TEST(ThreadsGvi, FourThousandHardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const RunInput input = testing::input_from(R"(
+[system]
+[system.lattice]
+type = "fcc"
+density = 0.5729577951308232
+cells = [10, 10, 10]
+[velocities]
+temperature = 1.0
+seed = 30
+[forcefield.pair]
+style = "none"
+[constraints]
+hard_spheres = { diameter = 1.0 }
+[neighbor]
+skin = 0.4
+[integrator]
+type = "gvi"
+timestep = 0.02
+[run]
+steps = 0
+)");
+  const GviTrajectory one = run_gvi(input, 1, kGviSteps), two = run_gvi(input, 2, kGviSteps),
+                      again = run_gvi(input, 2, kGviSteps);
+  expect_same_trajectory(two, again);
+  expect_same_trajectory(one, two);
+}
+
 // Two chains broken by a second rod of another length on one of their pairs, one in each
 // half of the cluster list (so in different chunks on two threads): the run stops at the
 // first, as a serial loop would, with the same message (and problem file) on 1 and 2 threads.
