@@ -74,7 +74,17 @@ PY
 )
 work=$(mktemp -d /tmp/deli-bench-threads.XXXXXX)
 trap 'rm -rf "$work"' EXIT
+# The cores' distance: a cache line's round trip between two threads (deli-parallel-overhead,
+# when built). On this project's 2-core VM it moved between about 170 and 510 ns as the host
+# placed the two vCPUs, and the GVI inputs' scaling with it (bench/README.md, "Stop 38").
+overhead=$top/build/bench/parallel_overhead/deli-parallel-overhead
+round_trip() {
+  [[ -x $overhead ]] || { echo "not measured (cmake --build build --target deli-parallel-overhead)"; return; }
+  OMP_NUM_THREADS=2 "$overhead" --benchmark_filter=CacheLineRoundTrip 2>/dev/null |
+    grep -oE 'per_round_trip=[0-9.]+[a-z]+' | cut -d= -f2
+}
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=${wait:-unset (libgomp default)}"
+echo "cache line round trip between two threads before: $(round_trip)"
 echo "thread/rank counts: ${counts[*]}; peers: ${peers:-none}; mpirun: ${mpirun:-none}"
 for spec in "${cases[@]}"; do
   input=${spec%%:*} steps=${spec#*:}
@@ -148,3 +158,4 @@ for spec in "${cases[@]}"; do
   unset rate
 done
 echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "cache line round trip between two threads after: $(round_trip)"
