@@ -9,24 +9,20 @@
 
 #include <cmath>
 
+#include "support/constraint_rows.hpp"
+
 namespace deli {
 namespace {
 
-Constraint pair(ConstraintKind kind, int i, int j, double length) {
-  Constraint c{kind};
-  c.i = i;
-  c.j = j;
-  c.length = length;
-  return c;
-}
+using testing::pair_row;
 
 TEST(ContactGroup, HoldsTouchedParticlesAndTheirRodClusters) {
   // Rods 0-1-2 and 4-5; particle 3 free; contact 2-3 touched.
-  const std::vector<Constraint> rods = {pair(ConstraintKind::rod, 0, 1, 1.0),
-                                        pair(ConstraintKind::rod, 1, 2, 1.0),
-                                        pair(ConstraintKind::rod, 4, 5, 1.0)};
+  const std::vector<Constraint> rods = {pair_row(ConstraintKind::rod, 0, 1, 1.0),
+                                        pair_row(ConstraintKind::rod, 1, 2, 1.0),
+                                        pair_row(ConstraintKind::rod, 4, 5, 1.0)};
   const std::vector<char> group =
-      contact_group({pair(ConstraintKind::sphere_pair, 2, 3, 0.6)}, rods, 7);
+      contact_group({pair_row(ConstraintKind::sphere_pair, 2, 3, 0.6)}, rods, 7);
   EXPECT_EQ(group, (std::vector<char>{1, 1, 1, 1, 0, 0, 0}));
 }
 

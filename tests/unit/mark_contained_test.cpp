@@ -4,41 +4,31 @@
 #include <gtest/gtest.h>
 
 #include "integrators/constrained_integrator.hpp"
+#include "support/constraint_rows.hpp"
 
 namespace deli {
 namespace {
 
-Constraint pair(ConstraintKind kind, int i, int j, double length) {
-  Constraint c{kind};
-  c.i = i;
-  c.j = j;
-  c.length = length;
-  return c;
-}
-
-Constraint plane(int i, Vec3 point, Vec3 normal) {
-  Constraint c{ConstraintKind::plane};
-  c.i = i;
-  c.point = point;
-  c.normal = normal;
-  return c;
-}
+using testing::pair_row;
+using testing::plane_row;
 
 TEST(MarkContained, AgreesWithContainsRowByRow) {
-  const std::vector<Constraint> rows = {
-      pair(ConstraintKind::sphere_pair, 3, 7, 1.0), plane(2, {0, 0, 0}, {0, 0, 1}),
-      pair(ConstraintKind::sphere_pair, 0, 1, 1.0), plane(2, {0, 0, 5}, {0, 0, -1}),
-      pair(ConstraintKind::rod, 4, 5, 1.0),         pair(ConstraintKind::sphere_pair, 9, 2, 0.8)};
+  const std::vector<Constraint> rows = {pair_row(ConstraintKind::sphere_pair, 3, 7, 1.0),
+                                        plane_row(2, {0, 0, 0}, {0, 0, 1}),
+                                        pair_row(ConstraintKind::sphere_pair, 0, 1, 1.0),
+                                        plane_row(2, {0, 0, 5}, {0, 0, -1}),
+                                        pair_row(ConstraintKind::rod, 4, 5, 1.0),
+                                        pair_row(ConstraintKind::sphere_pair, 9, 2, 0.8)};
   const std::vector<Constraint> candidates = {
-      pair(ConstraintKind::sphere_pair, 0, 1, 1.0),   // held
-      pair(ConstraintKind::sphere_pair, 1, 0, 1.0),   // the same particles the other way
-      plane(2, {0, 0, 5}, {0, 0, -1}),                // the second of particle 2's walls
-      plane(2, {0, 0, 5}, {0, 0, 1}),                 // another normal
-      plane(3, {0, 0, 0}, {0, 0, 1}),                 // another particle
-      pair(ConstraintKind::sphere_pair, 4, 5, 1.0),   // a rod's particles, another kind
-      pair(ConstraintKind::sphere_pair, 3, 7, 1.01),  // another contact distance
-      pair(ConstraintKind::sphere_pair, 9, 2, 0.8),   // held
-      pair(ConstraintKind::sphere_pair, 3, 7, 1.0)};  // held
+      pair_row(ConstraintKind::sphere_pair, 0, 1, 1.0),   // held
+      pair_row(ConstraintKind::sphere_pair, 1, 0, 1.0),   // the same particles the other way
+      plane_row(2, {0, 0, 5}, {0, 0, -1}),                // the second of particle 2's walls
+      plane_row(2, {0, 0, 5}, {0, 0, 1}),                 // another normal
+      plane_row(3, {0, 0, 0}, {0, 0, 1}),                 // another particle
+      pair_row(ConstraintKind::sphere_pair, 4, 5, 1.0),   // a rod's particles, another kind
+      pair_row(ConstraintKind::sphere_pair, 3, 7, 1.01),  // another contact distance
+      pair_row(ConstraintKind::sphere_pair, 9, 2, 0.8),   // held
+      pair_row(ConstraintKind::sphere_pair, 3, 7, 1.0)};  // held
   std::vector<std::pair<std::uint64_t, std::int32_t>> scratch;
   std::vector<char> contained;
   mark_contained(rows, candidates, scratch, contained);

@@ -375,17 +375,27 @@ TEST(ThreadsGvi, RodsAloneByClusterAreTheTrajectoryOfThePasses) {
   }
 }
 
-// 1372 hard spheres (fcc, 7^3 cells) at packing fraction 0.30, as inputs/hard_spheres/
-// hs_4000.toml, at a step of 0.02 (free flight is exact at any step): 563 reflections
-// in the first 10 steps from the lattice (deli run of the same input).
-TEST(ThreadsGvi, HardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
-  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  const RunInput input = testing::input_from(R"(
+// The input's GVI trajectory on 1 thread, then twice on 2: all three the same bits. Returns
+// the one-thread trajectory.
+GviTrajectory expect_two_threads_repeat_one(const RunInput& input) {
+  const GviTrajectory one = run_gvi(input, 1, kGviSteps), two = run_gvi(input, 2, kGviSteps),
+                      again = run_gvi(input, 2, kGviSteps);
+  expect_same_trajectory(two, again);
+  expect_same_trajectory(one, two);
+  return one;
+}
+
+// A hard-sphere fluid as inputs/hard_spheres/hs_4000.toml (fcc at packing fraction 0.30)
+// with 4 cells^3 spheres, at a step of 0.02 (free flight is exact at any step).
+RunInput hard_sphere_fluid(int cells) {
+  const std::string n = std::to_string(cells);
+  return testing::input_from(R"(
 [system]
 [system.lattice]
 type = "fcc"
 density = 0.5729577951308232
-cells = [7, 7, 7]
+cells = [)" + n + ", " + n + ", " +
+                             n + R"(]
 [velocities]
 temperature = 1.0
 seed = 30
@@ -401,10 +411,13 @@ timestep = 0.02
 [run]
 steps = 0
 )");
-  const GviTrajectory one = run_gvi(input, 1, kGviSteps), two = run_gvi(input, 2, kGviSteps),
-                      again = run_gvi(input, 2, kGviSteps);
-  expect_same_trajectory(two, again);
-  expect_same_trajectory(one, two);
+}
+
+// 1372 hard spheres (7^3 cells): 563 reflections in the first 10 steps from the lattice
+// (deli run of the same input).
+TEST(ThreadsGvi, HardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const GviTrajectory one = expect_two_threads_repeat_one(hard_sphere_fluid(7));
   double reflected = 0.0;
   for (const auto& [name, value] : one.statistics) {
     if (name == "reflected") reflected = value;
@@ -412,37 +425,12 @@ steps = 0
   if (!testing::short_runs()) EXPECT_GT(reflected, 0.0) << reflected;
 }
 
-// 4000 hard spheres, inputs/hard_spheres/hs_4000.toml at a step of 0.02: about 1500 candidate
-// rows a step, past the rows from which the active set's tests and the feasibility guard's
-// scan are cut into chunks where the particles' passes are (the test's cheap-loop minimum is
-// 1024 particles).
+// 4000 hard spheres (10^3 cells): about 1500 candidate rows a step, past the rows from which
+// the active set's tests and the feasibility guard's scan are cut into chunks where the
+// particles' passes are (the test's cheap-loop minimum is 1024 particles).
 TEST(ThreadsGvi, FourThousandHardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  const RunInput input = testing::input_from(R"(
-[system]
-[system.lattice]
-type = "fcc"
-density = 0.5729577951308232
-cells = [10, 10, 10]
-[velocities]
-temperature = 1.0
-seed = 30
-[forcefield.pair]
-style = "none"
-[constraints]
-hard_spheres = { diameter = 1.0 }
-[neighbor]
-skin = 0.4
-[integrator]
-type = "gvi"
-timestep = 0.02
-[run]
-steps = 0
-)");
-  const GviTrajectory one = run_gvi(input, 1, kGviSteps), two = run_gvi(input, 2, kGviSteps),
-                      again = run_gvi(input, 2, kGviSteps);
-  expect_same_trajectory(two, again);
-  expect_same_trajectory(one, two);
+  expect_two_threads_repeat_one(hard_sphere_fluid(10));
 }
 
 // Two chains broken by a second rod of another length on one of their pairs, one in each
