@@ -435,12 +435,10 @@ void Gvi::find_active_set(System& system) {
     // rows): made again by search when the candidates were refreshed.
     if (every_row) mark_contained(active, candidates, ws_.row_keys, ws_.candidate_active);
     bool grew = false;
-    // Split as the pass that wrote the predictions was (as the feasibility guard's scan in
-    // update_positions).
-    const int chunks =
-        chunks_for_cheap(system.particles.size()) > 1 ? chunks_for(candidates.size()) : 1;
+    // Split as the pass that wrote the predictions was.
     filter_in_order(
-        candidates.size(), chunks, ws_.candidate_passed,
+        candidates.size(), chunks_for_rows_of(system.particles.size(), candidates.size()),
+        ws_.candidate_passed,
         [&, every_row, gap_tolerance](std::size_t k) {
           const Constraint& c = candidates[k];
           if (!every_row && !ws_.prediction_changed[c.i] &&
@@ -725,14 +723,10 @@ void Gvi::update_positions(System& system) {
       // be below the smallest so far (or the tolerance) exactly, the others beyond both. Per
       // chunk of candidates, each bounded by its own running minimum: the exact minimum and
       // the serial order of the overlapping rows on any number of threads. Split as the pass
-      // that wrote x was: a gap reads x at two particles anywhere, which, when the pass ran
-      // in chunks, one thread reading them all would fetch from the other cores one line at
-      // a time (hs_32000 on 2 threads: this phase 0.394 -> 0.209 s per 1000 steps split
-      // from 1024 rows; hs_4000, whose x is one thread's, 0.055 -> 0.151 s if split).
+      // that wrote x was.
       const std::vector<Constraint>& candidates =
           candidates_for(system, ws_.x, ws_.x_largest2, true);
-      const int chunks =
-          chunks_for_cheap(system.particles.size()) > 1 ? chunks_for(candidates.size()) : 1;
+      const int chunks = chunks_for_rows_of(system.particles.size(), candidates.size());
       ws_.candidate_passed.resize(candidates.size());
       std::vector<double> chunk_smallest(static_cast<std::size_t>(chunks),
                                          std::numeric_limits<double>::infinity());
