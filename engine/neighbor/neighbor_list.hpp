@@ -95,6 +95,12 @@ class NeighborList {
     std::vector<std::size_t> offsets;       // by slot, as offsets()
     std::vector<std::int32_t> neighbors;    // slots
     std::vector<std::uint8_t> image_codes;  // as image_codes(), pair by pair
+    // The list by slot as ranges (partners as slots): slot s's are [offsets[s], offsets[s + 1]).
+    PartnerRanges ranges() const {
+      if (offsets.empty()) return {};
+      return {particle.size(), neighbors.data(), image_codes.data(), offsets.data(),
+              offsets.data() + 1};
+    }
   };
   // Empty (no particles) unless set_cell_order(true) preceded the last build.
   const CellOrdered& cell_ordered() const { return cell_ordered_; }

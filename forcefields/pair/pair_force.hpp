@@ -91,10 +91,7 @@ class PairForce final : public ForceTerm {
     // The list read where the build left it, by slot (partners as slots) or by particle
     // through the ranges: the list by particle is not made for these loops.
     const NeighborList::PartnerRanges ranges =
-        by_slot
-            ? NeighborList::PartnerRanges{n, ordered.neighbors.data(), ordered.image_codes.data(),
-                                          ordered.offsets.data(), ordered.offsets.data() + 1}
-            : neighbors.partner_ranges();
+        by_slot ? ordered.ranges() : neighbors.partner_ranges();
     double energy = 0.0;
     if (vector_loop_applies(neighbors.coded()) && n > 0) {
       energy = vector_loops(system.particles.position, by_slot ? ordered.particle.data() : nullptr,
