@@ -433,6 +433,24 @@ TEST(ThreadsGvi, FourThousandHardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
   expect_two_threads_repeat_one(hard_sphere_fluid(10));
 }
 
+// The same fluid at twice the step with one active-set round: a reflection can then send a
+// sphere into a contact no prediction saw, and the feasibility guard lands the rows that
+// overlap at the end positions (deli run of the same input: 49 landings in the first 4
+// steps, 6 of them in step 3). Its scan of the candidates at x runs in chunks on 2 threads;
+// a row one chunk found and the join dropped would change the trajectory.
+TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  RunInput input = hard_sphere_fluid(10);
+  input.gvi.timestep = 0.04;
+  input.constraints.limits.active_set_rounds = 1;
+  const GviTrajectory one = expect_two_threads_repeat_one(input);
+  double landings = 0.0;
+  for (const auto& [name, value] : one.statistics) {
+    if (name == "landings") landings = value;
+  }
+  EXPECT_GT(landings, 0.0);
+}
+
 // Two chains broken by a second rod of another length on one of their pairs, one in each
 // half of the cluster list (so in different chunks on two threads): the run stops at the
 // first, as a serial loop would, with the same message (and problem file) on 1 and 2 threads.
