@@ -7,7 +7,16 @@ namespace deli {
 
 namespace {
 std::size_t cheap_minimum = 16384;
+std::size_t cluster_minimum = 2048;
 }  // namespace
+
+std::size_t cluster_work_minimum() {
+  return cluster_minimum;
+}
+
+void set_cluster_work_minimum(std::size_t n) {
+  cluster_minimum = n;
+}
 
 std::size_t cheap_loop_minimum() {
   return cheap_minimum;

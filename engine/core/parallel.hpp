@@ -53,10 +53,21 @@ inline int chunks_for_rows_of(std::size_t particles, std::size_t rows) {
   return chunks_for_cheap(particles) > 1 ? chunks_for(rows) : 1;
 }
 
+// Below this many rows (2048 unless set) a cluster loop (rod chains' solves and projections,
+// by cluster) runs on the calling thread alone. Split from 1024 rows, the default input (60
+// chains of 20 beads: 1140 rods) ran slower on 2 threads than on 1 (loop 1.21 -> 1.40 s per
+// 3000 steps: its prediction 0.100 -> 0.182 s, position update 0.023 -> 0.058, momentum
+// update 0.037 -> 0.067): each thread's share of a call's solves is a few microseconds, less
+// than the region and the other core's lines cost. The rigid melt's 3900 rods still gain
+// (position update 1.19x).
+std::size_t cluster_work_minimum();
+// For tests, which run the split paths of these loops on small systems.
+void set_cluster_work_minimum(std::size_t n);
+
 // Chunks for a loop over `items` items of uneven size holding `work` units in all (a
 // cluster loop: its rows): one where the work is short or there is a single item.
 inline int chunks_for_work(std::size_t items, std::size_t work) {
-  if (items < 2 || work < kParallelMinimum) return 1;
+  if (items < 2 || work < cluster_work_minimum()) return 1;
   return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(thread_count()), items));
 }
 
