@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # deli on 1 and 2 threads (and, with DELI_OLD, an older binary on 1 thread) beside its peers,
 # alternated in one run so that the ratios share the machine's load: the LJ liquid (4000 and
-# 32000), the rigid-rod chain melt (GVI) and the hard-sphere fluid (GVI). Prints atom-steps/s
-# per run, the medians, each engine's scaling and deli's ratio to each peer.
+# 32000), the rigid-rod chain melt (GVI), the hard-sphere fluid (GVI, 4000 and 32000) and the
+# default input (`deli run`: the rigid-rod slit, 1200 beads, GVI with contacts, walls and a
+# Langevin start). Prints atom-steps/s per run, the medians, each engine's scaling and deli's
+# ratio to each peer.
 #   bench/threads.sh                       3 rounds, each input's own step count capped
 #   ROUNDS=5 DELI_OLD=/tmp/deli-old bench/threads.sh [input.toml:steps ...]
 #   THREADS="1 2 4" bench/threads.sh       other thread (and rank) counts
@@ -11,7 +13,7 @@
 # The peers run in process from bench/peers (deli-peers, built here on first use): OpenMM's
 # CPU platform on the same thread counts (CCMA at 1e-4 for rods), LAMMPS on as many MPI ranks
 # (mpirun -np N; with rods LAMMPS gets its own model: see deli-peers). The hard-sphere fluid
-# has no peer (neither engine has hard spheres).
+# has no peer (neither engine has hard spheres), nor has the default input.
 # The machine's ceiling: two one-thread deli runs of the input at once, their rates summed,
 # over one run alone (with the first two thread counts 1 and 2). No two-thread code can beat
 # it; on a machine whose cores slow each other (shared caches, memory bandwidth, a host's
@@ -36,7 +38,7 @@ wait=${OMP_WAIT_POLICY:-}
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000
-       inputs/hard_spheres/hs_32000.toml:200)
+       inputs/hard_spheres/hs_32000.toml:200 inputs/lj_chains/rigid_slit.toml:1500)
 [[ $# -gt 0 ]] && cases=("$@")
 # Reads lines "ENGINE THREADS RATE...": medians, scaling and deli's ratio to each peer.
 summarise=$(cat <<'PY'
