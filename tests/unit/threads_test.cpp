@@ -19,6 +19,7 @@
 #include "neighbor/neighbor_list.hpp"
 #include "support/scratch_files.hpp"
 #include "support/short_runs.hpp"
+#include "support/statistic.hpp"
 #include "support/test_systems.hpp"
 #include "support/thread_count.hpp"
 
@@ -389,7 +390,7 @@ GviTrajectory expect_two_threads_repeat_one(const RunInput& input) {
 }
 
 // A hard-sphere fluid as inputs/hard_spheres/hs_4000.toml (fcc at packing fraction 0.30)
-// with 4 cells^3 spheres, at a step of 0.02 (free flight is exact at any step).
+// with 4 cells^3 spheres (fcc: 4 a cell), at a step of 0.02 (free flight is exact at any step).
 RunInput hard_sphere_fluid(int cells) {
   const std::string n = std::to_string(cells);
   return testing::input_from(R"(
@@ -421,10 +422,7 @@ steps = 0
 TEST(ThreadsGvi, HardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
   const GviTrajectory one = expect_two_threads_repeat_one(hard_sphere_fluid(7));
-  double reflected = 0.0;
-  for (const auto& [name, value] : one.statistics) {
-    if (name == "reflected") reflected = value;
-  }
+  const double reflected = testing::statistic(one.statistics, "reflected");
   if (!testing::short_runs()) EXPECT_GT(reflected, 0.0) << reflected;
 }
 
@@ -447,11 +445,7 @@ TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) 
   input.gvi.timestep = 0.04;
   input.constraints.limits.active_set_rounds = 1;
   const GviTrajectory one = expect_two_threads_repeat_one(input);
-  double landings = 0.0;
-  for (const auto& [name, value] : one.statistics) {
-    if (name == "landings") landings = value;
-  }
-  EXPECT_GT(landings, 0.0);
+  EXPECT_GT(testing::statistic(one.statistics, "landings"), 0.0);
 }
 
 // Two chains broken by a second rod of another length on one of their pairs, one in each
