@@ -113,6 +113,53 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
   }
 }
 
+// for_each_chunk(n, chunks, first), then, once every chunk of it has ended, second(c, begin,
+// end) for the chunks of [0, m): one parallel region, a barrier between the passes, and chunk c
+// of both on one thread. Where the chunks of [0, m) are the particles the first pass's chunk c
+// wrote most of, the second pass finds them in its own core's cache, and starts no region of
+// its own. An exception from the first pass skips the second; the lowest chunk's exception is
+// rethrown once all have finished, the first pass's before the second's.
+template <class First, class Second>
+void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first, Second&& second) {
+  if (chunks <= 1) {
+    first(0, std::size_t{0}, n);
+    second(0, std::size_t{0}, m);
+    return;
+  }
+  const auto slots = static_cast<std::size_t>(chunks);
+  std::vector<std::exception_ptr> failed(2 * slots);
+#pragma omp parallel num_threads(chunks)
+  {
+#ifdef _OPENMP
+    const int start = omp_get_thread_num(), stride = omp_get_num_threads();
+#else
+    const int start = 0, stride = 1;
+#endif
+    for (int c = start; c < chunks; c += stride) {
+      try {
+        const IndexRange r = chunk_range(n, c, chunks);
+        first(c, r.begin, r.end);
+      } catch (...) {
+        failed[static_cast<std::size_t>(c)] = std::current_exception();
+      }
+    }
+#pragma omp barrier
+    bool any = false;
+    for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
+    for (int c = start; c < chunks && !any; c += stride) {
+      try {
+        const IndexRange r = chunk_range(m, c, chunks);
+        second(c, r.begin, r.end);
+      } catch (...) {
+        failed[slots + static_cast<std::size_t>(c)] = std::current_exception();
+      }
+    }
+  }
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
 // body(i) for every i in [0, n), cheap items independent of each other: the same result on
 // any number of threads.
 template <class Body>

@@ -532,6 +532,58 @@ NeighborList::PartnerRanges NeighborList::built_order() const {
           built_begin_.data(), built_end_.data()};
 }
 
+const TouchedBlocks& NeighborList::touched_blocks(int chunks) const {
+  const std::size_t n = position_at_build_.size();
+  if (touched_build_ == builds_ && touched_.chunks() == chunks && touched_.items() == n) {
+    return touched_;
+  }
+  touched_.clear(n, chunks);
+  touched_build_ = builds_;
+  if (n == 0) return touched_;
+  const bool by_slot = cell_order_;
+  const std::size_t* offsets = by_slot ? cell_ordered_.offsets.data() : slot_offsets_.data();
+  const std::int32_t* neighbors = by_slot ? cell_ordered_.neighbors.data() : slot_neighbors_.data();
+  const auto k = static_cast<std::size_t>(chunks);
+  const std::size_t blocks = touched_.marks(0).size();
+  // The slots in chunks of their own, each marking for every chunk of items; then the chunks'
+  // marks joined.
+  std::vector<std::size_t> first(k);
+  for (int c = 0; c < chunks; ++c)
+    first[static_cast<std::size_t>(c)] = chunk_range(n, c, chunks).begin;
+  const int scans = chunks_for(n);
+  scan_marks_.resize(static_cast<std::size_t>(scans));
+  const std::int32_t* member = member_.data();
+  // The pointers by value: behind the lambda's references each char stored (which may alias
+  // them) made the loop load them again, 5 cycles an entry.
+  for_each_chunk(n, scans,
+                 [&, by_slot, offsets, neighbors, member, k, n, blocks](int t, std::size_t begin,
+                                                                        std::size_t end) {
+                   std::vector<char>& mark = scan_marks_[static_cast<std::size_t>(t)];
+                   mark.assign(k * blocks, 0);
+                   char* const marks = mark.data();
+                   for (std::size_t s = begin; s < end; ++s) {
+                     const std::size_t owner = by_slot ? s : static_cast<std::size_t>(member[s]);
+                     std::size_t c = 0;
+                     while (c + 1 < k && owner >= first[c + 1]) ++c;
+                     char* const m = marks + c * blocks;
+                     m[TouchedBlocks::block_of(owner)] = 1;
+                     const std::int32_t* const last = neighbors + offsets[s + 1];
+                     for (const std::int32_t* j = neighbors + offsets[s]; j < last; ++j) {
+                       m[TouchedBlocks::block_of(static_cast<std::size_t>(*j))] = 1;
+                     }
+                   }
+                 });
+  for (int c = 0; c < chunks; ++c) {
+    std::vector<char>& joined = touched_.marks(c);
+    for (const std::vector<char>& mark : scan_marks_) {
+      const char* m = mark.data() + static_cast<std::size_t>(c) * blocks;
+      for (std::size_t b = 0; b < blocks; ++b) joined[b] = static_cast<char>(joined[b] | m[b]);
+    }
+    touched_.make_runs(c);
+  }
+  return touched_;
+}
+
 NeighborList::PartnerRanges NeighborList::partner_ranges() const {
   const PartnerRanges built = built_order();
   if (built.begin) return built;

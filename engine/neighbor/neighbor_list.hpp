@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/vec3.hpp"
+#include "neighbor/touched_blocks.hpp"
 #include "system/box.hpp"
 
 namespace deli {
@@ -104,6 +105,12 @@ class NeighborList {
   };
   // Empty (no particles) unless set_cell_order(true) preceded the last build.
   const CellOrdered& cell_ordered() const { return cell_ordered_; }
+  // For a pair loop over the list in `chunks` chunks (chunk_range) of its items (particles,
+  // or slots with cell order on): the blocks each chunk's items and their partners lie in.
+  // Made when first asked for after a build, the list scanned in the order the build left
+  // it (by particle, its ranges lie in no order: read so, a scan missed the cache on most
+  // particles, 2.6 % of LJ 32000's samples); one caller at a time.
+  const TouchedBlocks& touched_blocks(int chunks) const;
 
  private:
   struct Grid {
@@ -189,6 +196,9 @@ class NeighborList {
   std::int64_t builds_ = 0;
   bool cell_order_ = false;
   CellOrdered cell_ordered_;
+  mutable TouchedBlocks touched_;
+  mutable std::int64_t touched_build_ = -1;
+  mutable std::vector<std::vector<char>> scan_marks_;  // touched_blocks()'s, per chunk of slots
 };
 
 }  // namespace deli

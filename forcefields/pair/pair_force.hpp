@@ -248,7 +248,13 @@ class PairForce final : public ForceTerm {
     if constexpr (VectorPairEvaluator<Evaluator>) {
       const std::size_t n = x.size();
       auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
-      padded_positions_.resize(static_cast<std::size_t>(chunks_for(n)));
+      // Where the passes over the particles are split too (chunks_for_cheap), each thread's
+      // positions and forces stay its own but for the blocks the chunks share.
+      const int chunks = chunks_for(n);
+      if (chunks > 1 && chunks_for_cheap(n) > 1) {
+        return touched_vector_loops(x, particle, partners, neighbors, force, virial, tally, chunks);
+      }
+      padded_positions_.resize(static_cast<std::size_t>(chunks));
       padded_force_.resize(n);
       const Vec3* shifts = neighbors.image_shifts().data();
       const double energy = padded_chunked_.run(
@@ -262,16 +268,9 @@ class PairForce final : public ForceTerm {
             }
             // Chunk 0 adds to padded_force_ (the others to buffers of their own).
             if (c == 0) std::fill(padded_force_.begin(), padded_force_.end(), PaddedVec3{});
-            const VectorPairChunk chunk{position.data(),
-                                        f,
-                                        partners.neighbors,
-                                        partners.image_codes,
-                                        partners.begin,
-                                        shifts,
-                                        static_cast<std::int32_t>(begin),
-                                        static_cast<std::int32_t>(end),
-                                        partners.end};
-            return Evaluator::vector_loop(table_[0], chunk, tally, w);
+            return Evaluator::vector_loop(
+                table_[0], vector_chunk(position.data(), f, partners, shifts, begin, end), tally,
+                w);
           },
           [&](std::size_t s) {
             const PaddedVec3& f = padded_force_[s];
@@ -280,6 +279,89 @@ class PairForce final : public ForceTerm {
       return energy;
     }
     return 0.0;
+  }
+
+  // Slots [begin, end) of the list `partners` for the vector loop, on positions x by slot.
+  static VectorPairChunk vector_chunk(const PaddedVec3* x, PaddedVec3* f,
+                                      const NeighborList::PartnerRanges& partners,
+                                      const Vec3* shifts, std::size_t begin, std::size_t end) {
+    return {x,
+            f,
+            partners.neighbors,
+            partners.image_codes,
+            partners.begin,
+            shifts,
+            static_cast<std::int32_t>(begin),
+            static_cast<std::int32_t>(end),
+            partners.end};
+  }
+
+  // vector_loops() on several chunks of slots, each with positions and forces of its own on
+  // the blocks it touches (TouchedBlocks): gathered and zeroed there by its thread, then, in
+  // the same parallel region, each chunk's slots' forces added up over the chunks in chunk
+  // order (a chunk that touches no slot of a block adds nothing there) and added to `force`.
+  // Energies and virials are summed in chunk order, as ChunkedForceLoopOf sums them.
+  double touched_vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
+                              const NeighborList::PartnerRanges& partners,
+                              const NeighborList& neighbors, std::vector<Vec3>& force,
+                              SymTensor& virial, bool tally, int chunks) const {
+    const std::size_t n = x.size();
+    auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
+    const auto slots = static_cast<std::size_t>(chunks);
+    padded_positions_.resize(slots);
+    padded_forces_.resize(slots);
+    chunk_virials_.assign(slots, SymTensor{});
+    chunk_energies_.assign(slots, 0.0);
+    const TouchedBlocks& touched = neighbors.touched_blocks(chunks);
+    const Vec3* shifts = neighbors.image_shifts().data();
+    auto chunk_loop = [&](int c, std::size_t begin, std::size_t end) {
+      const auto k = static_cast<std::size_t>(c);
+      std::vector<PaddedVec3>& position = padded_positions_[k];
+      std::vector<PaddedVec3>& f = padded_forces_[k];
+      position.resize(n);
+      f.resize(n);
+      for (const TouchedBlocks::Run& run : touched.runs(c)) {
+        for (std::size_t s = run.begin; s < run.end; ++s) {
+          const Vec3& p = x[at(s)];
+          position[s] = {p.x, p.y, p.z, 0.0};
+        }
+        std::fill(f.begin() + static_cast<std::ptrdiff_t>(run.begin),
+                  f.begin() + static_cast<std::ptrdiff_t>(run.end), PaddedVec3{});
+      }
+      chunk_energies_[k] = Evaluator::vector_loop(
+          table_[0], vector_chunk(position.data(), f.data(), partners, shifts, begin, end), tally,
+          chunk_virials_[k]);
+    };
+    // Block by block: the chunks touching the block, then its slots' sums over them.
+    auto add = [&](int, std::size_t begin, std::size_t end) {
+      std::vector<const PaddedVec3*> from(slots);
+      for (std::size_t first = begin; first < end;) {
+        const std::size_t block = TouchedBlocks::block_of(first);
+        const std::size_t last = std::min(end, TouchedBlocks::block_begin(block + 1));
+        std::size_t count = 0;
+        for (int c = 0; c < chunks; ++c) {
+          if (touched.touches(c, block)) {
+            from[count++] = padded_forces_[static_cast<std::size_t>(c)].data();
+          }
+        }
+        for (std::size_t s = first; count > 0 && s < last; ++s) {
+          PaddedVec3 sum = from[0][s];
+          for (std::size_t t = 1; t < count; ++t) sum += from[t][s];
+          force[at(s)] += Vec3{sum.x, sum.y, sum.z};
+        }
+        first = last;
+      }
+    };
+    for_each_chunk_then(n, n, chunks, chunk_loop, add);
+    // Chunk 0's virial was the caller's own in ChunkedForceLoopOf: added first, then the
+    // others in order.
+    virial += chunk_virials_[0];
+    double energy = chunk_energies_[0];
+    for (std::size_t c = 1; c < slots; ++c) {
+      energy += chunk_energies_[c];
+      virial += chunk_virials_[c];
+    }
+    return energy;
   }
 
   // Chunks of consecutive particles (slots), each with its listed pairs.
@@ -401,6 +483,10 @@ class PairForce final : public ForceTerm {
   mutable ChunkedForceLoopOf<PaddedVec3> padded_chunked_;          // the vector loop's
   mutable std::vector<std::vector<PaddedVec3>> padded_positions_;  // one per chunk
   mutable std::vector<PaddedVec3> padded_force_;
+  // touched_vector_loops()'s, one per chunk:
+  mutable std::vector<std::vector<PaddedVec3>> padded_forces_;
+  mutable std::vector<SymTensor> chunk_virials_;
+  mutable std::vector<double> chunk_energies_;
 };
 
 }  // namespace deli

@@ -7,9 +7,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <thread>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
@@ -270,6 +273,58 @@ TEST(Threads, AChunksExceptionIsTheOneASerialLoopMeetsFirst) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "chunk 0");
   }
+}
+
+int this_thread() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+// The second pass of for_each_chunk_then reads what every chunk of the first wrote (the
+// barrier between them), its chunk c on the thread of the first pass's chunk c.
+TEST(Threads, ChunksThenSecondPassSeesTheWholeFirstPass) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const ThreadCount threads(2);
+  const std::size_t n = 4096;
+  std::vector<double> written(n, 0.0), read(n, -1.0);
+  std::vector<int> first_thread(2, -1), second_thread(2, -2);
+  for_each_chunk_then(
+      n, n, 2,
+      [&](int c, std::size_t begin, std::size_t end) {
+        first_thread[static_cast<std::size_t>(c)] = this_thread();
+        // Chunk 0 late: without the barrier chunk 1 would read its items unwritten.
+        if (c == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        for (std::size_t i = begin; i < end; ++i) written[i] = static_cast<double>(i);
+      },
+      [&](int c, std::size_t begin, std::size_t end) {
+        second_thread[static_cast<std::size_t>(c)] = this_thread();
+        // Each item reads one the other chunk wrote.
+        for (std::size_t i = begin; i < end; ++i) read[i] = written[n - 1 - i];
+      });
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(read[i], static_cast<double>(n - 1 - i));
+  EXPECT_EQ(first_thread, second_thread);
+}
+
+// A first-pass exception skips the second pass and is the one a serial loop meets first.
+TEST(Threads, ChunksThenFirstPassExceptionSkipsTheSecond) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const ThreadCount threads(2);
+  std::atomic<int> second{0};
+  try {
+    for_each_chunk_then(
+        100, 100, 2,
+        [](int c, std::size_t, std::size_t) {
+          if (c == 1) throw std::runtime_error("chunk " + std::to_string(c));
+        },
+        [&](int, std::size_t, std::size_t) { ++second; });
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "chunk 1");
+  }
+  EXPECT_EQ(second.load(), 0);
 }
 
 // GVI's constraint phases on several threads: clusters solved and reflected on their own,
