@@ -1,6 +1,7 @@
 // What deli's threading costs per call on this machine (Google Benchmark; not a test), with
-// 2 threads unless OMP_NUM_THREADS says otherwise: an empty chunked loop (one parallel
-// region: for_each_chunk), a barrier inside one region, and a cheap pass over 4000
+// 2 threads unless OMP_NUM_THREADS says otherwise: an empty chunked loop (for_each_chunk, on
+// deli's team) and an empty OpenMP parallel region, a barrier inside one job of the team and
+// inside one OpenMP region, and a cheap pass over 4000
 // particles (a kick: p += f h/2, as GVI's and velocity Verlet's per-particle passes) on the
 // calling thread alone and split into chunks. A pass of a few microseconds gains from a
 // second thread only where the split saves more than a region costs. And what moving data
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "core/parallel.hpp"
+#include "core/thread_team.hpp"
 #include "core/vec3.hpp"
 
 namespace deli {
@@ -37,7 +39,36 @@ void EmptyRegion(benchmark::State& state) {
 }
 BENCHMARK(EmptyRegion)->UseRealTime();
 
-// Barriers inside one region, as a step kept in one region would meet between its phases.
+// The same empty loop as an OpenMP parallel region, as deli's loops ran before they ran on
+// their own team (core/thread_team.hpp): libgomp ends each of its two barriers with a futex
+// system call.
+void EmptyOpenMpRegion(benchmark::State& state) {
+  const int chunks = threads();
+  for (auto _ : state) {
+#pragma omp parallel num_threads(chunks)
+    benchmark::DoNotOptimize(omp_get_thread_num());
+  }
+}
+BENCHMARK(EmptyOpenMpRegion)->UseRealTime();
+
+// Barriers inside one job of deli's team (for_each_chunk_then's between its passes).
+void TeamBarrier(benchmark::State& state) {
+  const int chunks = threads();
+  const auto per_job = static_cast<std::int64_t>(1000);
+  for (auto _ : state) {
+    auto job = [&](int, int) {
+      for (std::int64_t k = 0; k < per_job; ++k) team_barrier();
+    };
+    run_on_team(chunks, job);
+  }
+  state.counters["per_barrier"] = benchmark::Counter(
+      static_cast<double>(per_job),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(TeamBarrier)->UseRealTime();
+
+// OpenMP barriers inside one region, as a step kept in one region would meet between its
+// phases.
 void Barrier(benchmark::State& state) {
   const int chunks = threads();
   const auto per_region = static_cast<std::int64_t>(1000);

@@ -5,14 +5,13 @@
 #include <exception>
 #include <vector>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "core/thread_team.hpp"
 
 namespace deli {
 
-// Threads the loops below use: OpenMP's (OMP_NUM_THREADS, else all cores; `deli run
-// --threads` and [run] threads set it); 1 in a build without OpenMP.
+// Threads the loops below use: OpenMP's count (OMP_NUM_THREADS, else all cores; `deli run
+// --threads` and [run] threads set it); 1 in a build without OpenMP. The loops run on deli's
+// own team of threads (core/thread_team.hpp), not in OpenMP parallel regions.
 int thread_count();
 // n >= 1. Throws std::invalid_argument in a build without OpenMP when n > 1.
 void set_thread_count(int n);
@@ -92,14 +91,8 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
     return;
   }
   std::vector<std::exception_ptr> failed(static_cast<std::size_t>(chunks));
-#pragma omp parallel num_threads(chunks)
-  {
-#ifdef _OPENMP
-    const int first = omp_get_thread_num(), stride = omp_get_num_threads();
-#else
-    const int first = 0, stride = 1;
-#endif
-    for (int c = first; c < chunks; c += stride) {
+  auto job = [&](int thread, int threads) {
+    for (int c = thread; c < chunks; c += threads) {
       try {
         const IndexRange r = chunk_range(n, c, chunks);
         body(c, r.begin, r.end);
@@ -107,7 +100,8 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
         failed[static_cast<std::size_t>(c)] = std::current_exception();
       }
     }
-  }
+  };
+  run_on_team(std::min(chunks, thread_count()), job);
   for (const std::exception_ptr& e : failed) {
     if (e) std::rethrow_exception(e);
   }
@@ -128,14 +122,8 @@ void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first
   }
   const auto slots = static_cast<std::size_t>(chunks);
   std::vector<std::exception_ptr> failed(2 * slots);
-#pragma omp parallel num_threads(chunks)
-  {
-#ifdef _OPENMP
-    const int start = omp_get_thread_num(), stride = omp_get_num_threads();
-#else
-    const int start = 0, stride = 1;
-#endif
-    for (int c = start; c < chunks; c += stride) {
+  auto job = [&](int thread, int threads) {
+    for (int c = thread; c < chunks; c += threads) {
       try {
         const IndexRange r = chunk_range(n, c, chunks);
         first(c, r.begin, r.end);
@@ -143,10 +131,10 @@ void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first
         failed[static_cast<std::size_t>(c)] = std::current_exception();
       }
     }
-#pragma omp barrier
+    team_barrier();
     bool any = false;
     for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
-    for (int c = start; c < chunks && !any; c += stride) {
+    for (int c = thread; c < chunks && !any; c += threads) {
       try {
         const IndexRange r = chunk_range(m, c, chunks);
         second(c, r.begin, r.end);
@@ -154,7 +142,8 @@ void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first
         failed[slots + static_cast<std::size_t>(c)] = std::current_exception();
       }
     }
-  }
+  };
+  run_on_team(std::min(chunks, thread_count()), job);
   for (const std::exception_ptr& e : failed) {
     if (e) std::rethrow_exception(e);
   }

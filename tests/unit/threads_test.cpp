@@ -275,14 +275,6 @@ TEST(Threads, AChunksExceptionIsTheOneASerialLoopMeetsFirst) {
   }
 }
 
-int this_thread() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
-
 // The second pass of for_each_chunk_then reads what every chunk of the first wrote (the
 // barrier between them), its chunk c on the thread of the first pass's chunk c.
 TEST(Threads, ChunksThenSecondPassSeesTheWholeFirstPass) {
@@ -294,13 +286,13 @@ TEST(Threads, ChunksThenSecondPassSeesTheWholeFirstPass) {
   for_each_chunk_then(
       n, n, 2,
       [&](int c, std::size_t begin, std::size_t end) {
-        first_thread[static_cast<std::size_t>(c)] = this_thread();
+        first_thread[static_cast<std::size_t>(c)] = team_thread();
         // Chunk 0 late: without the barrier chunk 1 would read its items unwritten.
         if (c == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
         for (std::size_t i = begin; i < end; ++i) written[i] = static_cast<double>(i);
       },
       [&](int c, std::size_t begin, std::size_t end) {
-        second_thread[static_cast<std::size_t>(c)] = this_thread();
+        second_thread[static_cast<std::size_t>(c)] = team_thread();
         // Each item reads one the other chunk wrote.
         for (std::size_t i = begin; i < end; ++i) read[i] = written[n - 1 - i];
       });

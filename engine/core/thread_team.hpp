@@ -1,0 +1,35 @@
+#pragma once
+
+namespace deli {
+
+// The threads that run deli's parallel loops (core/parallel.hpp): the calling thread as
+// thread 0, and threads kept between calls that wait for work by spinning, then, after a
+// while without any (output, setup), asleep. Not OpenMP's parallel regions: libgomp ends
+// every barrier, two a region, with a futex system call whether or not a thread sleeps, and
+// on the machine of bench/README.md a system call costs 8-20 us: the rigid melt's nine a step
+// were a fifth of its two-thread step. Here a region that finds its threads awake makes no
+// system call.
+using TeamJob = void (*)(void* context, int thread, int threads);
+
+// Runs job(context, t, threads) for t = 0..threads-1, t = 0 on the calling thread, and
+// returns once every one has returned. The job must not throw. Called from within a job (or
+// with threads <= 1), it runs job(context, 0, 1) on the calling thread alone.
+void run_on_team(int threads, TeamJob job, void* context);
+
+// Within a job: returns once every thread of the job has called it (spinning). Outside one,
+// or in a job of one thread, at once.
+void team_barrier();
+
+// The calling thread's number within the running job (0 outside one).
+int team_thread();
+
+// run_on_team() with a callable: job(thread, threads).
+template <class Job>
+void run_on_team(int threads, Job& job) {
+  run_on_team(
+      threads,
+      [](void* context, int thread, int count) { (*static_cast<Job*>(context))(thread, count); },
+      &job);
+}
+
+}  // namespace deli
