@@ -27,13 +27,12 @@ ceiling=${CEILING:-1}
 read -r -a counts <<< "${THREADS:-1 2}"
 source "$top/bench/peers/locate.sh"
 mpirun=${MPIRUN:-$(command -v mpirun || true)}
-# OpenMP's wait policy as a user gets it: libgomp's default (a waiting thread spins briefly,
-# then sleeps) unless OMP_WAIT_POLICY is set. Measured on this project's idle 2-core machine,
-# a parallel region costs about 4 us with the default and 22 us with OMP_WAIT_POLICY=passive
-# (waking a sleeping virtual CPU), which the GVI inputs, a dozen regions a step, feel. On a
-# machine shared with other work the default's spinning thread takes the core its partner
-# needs (a 4000-atom LJ run 30x slower, measured): run this on an idle machine, or set
-# OMP_WAIT_POLICY=passive there. The load before and after is printed.
+# The wait policy as a user gets it: deli's team's default (a waiting worker spins a few
+# milliseconds, then sleeps; core/thread_team.hpp) unless OMP_WAIT_POLICY is set, which deli's
+# team and the peers' OpenMP honour. On a machine shared with other work spinning threads take
+# the core their partners need (a 4000-atom LJ run 30x slower, measured with libgomp's regions):
+# run this on an idle machine, or set OMP_WAIT_POLICY=passive there. The load before and after
+# is printed.
 wait=${OMP_WAIT_POLICY:-}
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
@@ -85,7 +84,7 @@ round_trip() {
   OMP_NUM_THREADS=2 "$overhead" --benchmark_filter=CacheLineRoundTrip 2>/dev/null |
     grep -oE 'per_round_trip=[0-9.]+[a-z]+' | cut -d= -f2
 }
-echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=${wait:-unset (libgomp default)}"
+echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores; OMP_WAIT_POLICY=${wait:-unset (default)}"
 echo "cache line round trip between two threads before: $(round_trip)"
 echo "thread/rank counts: ${counts[*]}; peers: ${peers:-none}; mpirun: ${mpirun:-none}"
 for spec in "${cases[@]}"; do
