@@ -108,10 +108,10 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
 }
 
 // for_each_chunk(n, chunks, first), then, once every chunk of it has ended, second(c, begin,
-// end) for the chunks of [0, m): one parallel region, a barrier between the passes, and chunk c
-// of both on one thread. Where the chunks of [0, m) are the particles the first pass's chunk c
-// wrote most of, the second pass finds them in its own core's cache, and starts no region of
-// its own. An exception from the first pass skips the second; the lowest chunk's exception is
+// end) for the chunks of [0, m): one job of the team, a barrier between the passes, and chunk
+// c of both on one thread. Where the chunks of [0, m) are the particles the first pass's chunk c
+// wrote most of, the second pass finds them in its own core's cache, and starts no job of its
+// own. An exception from the first pass skips the second; the lowest chunk's exception is
 // rethrown once all have finished, the first pass's before the second's.
 template <class First, class Second>
 void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first, Second&& second) {

@@ -5,10 +5,10 @@ namespace deli {
 // The threads that run deli's parallel loops (core/parallel.hpp): the calling thread as
 // thread 0, and threads kept between calls that wait for work by spinning, then, after a
 // while without any (output, setup), asleep. Not OpenMP's parallel regions: libgomp ends
-// every barrier, two a region, with a futex system call whether or not a thread sleeps, and
-// on the machine of bench/README.md a system call costs 8-20 us: the rigid melt's nine a step
-// were a fifth of its two-thread step. Here a region that finds its threads awake makes no
-// system call.
+// every barrier, two a region, with a futex system call whether or not a thread sleeps (the
+// rigid melt: nine a step; without them its two-thread loop took 0.464 s for 1000 steps
+// against 0.474, the 32000-sphere fluid's 0.819 s for 300 against 0.859: bench/README.md,
+// "Stop 40"). Here a loop that finds its threads awake makes no system call.
 using TeamJob = void (*)(void* context, int thread, int threads);
 
 // Runs job(context, t, threads) for t = 0..threads-1, t = 0 on the calling thread, and
