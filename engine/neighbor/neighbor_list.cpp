@@ -548,16 +548,17 @@ const TouchedBlocks& NeighborList::touched_blocks(int chunks) const {
   // The slots in chunks of their own, each marking for every chunk of items; then the chunks'
   // marks joined.
   std::vector<std::size_t> first(k);
-  for (int c = 0; c < chunks; ++c)
+  for (int c = 0; c < chunks; ++c) {
     first[static_cast<std::size_t>(c)] = chunk_range(n, c, chunks).begin;
+  }
   const int scans = chunks_for(n);
   scan_marks_.resize(static_cast<std::size_t>(scans));
   const std::int32_t* member = member_.data();
   // The pointers by value: behind the lambda's references each char stored (which may alias
   // them) made the loop load them again, 5 cycles an entry.
   for_each_chunk(n, scans,
-                 [&, by_slot, offsets, neighbors, member, k, n, blocks](int t, std::size_t begin,
-                                                                        std::size_t end) {
+                 [&, by_slot, offsets, neighbors, member, k, blocks, first = first.data()](
+                     int t, std::size_t begin, std::size_t end) {
                    std::vector<char>& mark = scan_marks_[static_cast<std::size_t>(t)];
                    mark.assign(k * blocks, 0);
                    char* const marks = mark.data();

@@ -298,7 +298,7 @@ class PairForce final : public ForceTerm {
 
   // vector_loops() on several chunks of slots, each with positions and forces of its own on
   // the blocks it touches (TouchedBlocks): gathered and zeroed there by its thread, then, in
-  // the same parallel region, each chunk's slots' forces added up over the chunks in chunk
+  // the same job of the team, each chunk's slots' forces added up over the chunks in chunk
   // order (a chunk that touches no slot of a block adds nothing there) and added to `force`.
   // Energies and virials are summed in chunk order, as ChunkedForceLoopOf sums them.
   double touched_vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
