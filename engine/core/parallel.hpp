@@ -79,6 +79,23 @@ inline IndexRange chunk_range(std::size_t n, int c, int chunks) {
   return {n * static_cast<std::size_t>(c) / k, n * static_cast<std::size_t>(c + 1) / k};
 }
 
+namespace detail {
+// One thread's share of a chunked loop: body(c, begin, end) for its chunks c = thread,
+// thread + threads, ... of [0, n), each exception kept in failed[c] (the caller rethrows).
+template <class Body>
+void chunks_of_thread(std::size_t n, int chunks, int thread, int threads, Body& body,
+                      std::exception_ptr* failed) {
+  for (int c = thread; c < chunks; c += threads) {
+    try {
+      const IndexRange r = chunk_range(n, c, chunks);
+      body(c, r.begin, r.end);
+    } catch (...) {
+      failed[c] = std::current_exception();
+    }
+  }
+}
+}  // namespace detail
+
 // Runs body(c, begin, end) for the chunks c = 0..chunks-1 of [0, n), in parallel. The
 // partition depends on n and `chunks` alone (never on which thread runs a chunk), so a
 // result combined chunk by chunk in chunk order is the same on every run. An exception from
@@ -92,14 +109,7 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
   }
   std::vector<std::exception_ptr> failed(static_cast<std::size_t>(chunks));
   auto job = [&](int thread, int threads) {
-    for (int c = thread; c < chunks; c += threads) {
-      try {
-        const IndexRange r = chunk_range(n, c, chunks);
-        body(c, r.begin, r.end);
-      } catch (...) {
-        failed[static_cast<std::size_t>(c)] = std::current_exception();
-      }
-    }
+    detail::chunks_of_thread(n, chunks, thread, threads, body, failed.data());
   };
   run_on_team(std::min(chunks, thread_count()), job);
   for (const std::exception_ptr& e : failed) {
@@ -123,25 +133,11 @@ void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first
   const auto slots = static_cast<std::size_t>(chunks);
   std::vector<std::exception_ptr> failed(2 * slots);
   auto job = [&](int thread, int threads) {
-    for (int c = thread; c < chunks; c += threads) {
-      try {
-        const IndexRange r = chunk_range(n, c, chunks);
-        first(c, r.begin, r.end);
-      } catch (...) {
-        failed[static_cast<std::size_t>(c)] = std::current_exception();
-      }
-    }
+    detail::chunks_of_thread(n, chunks, thread, threads, first, failed.data());
     team_barrier();
     bool any = false;
     for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
-    for (int c = thread; c < chunks && !any; c += threads) {
-      try {
-        const IndexRange r = chunk_range(m, c, chunks);
-        second(c, r.begin, r.end);
-      } catch (...) {
-        failed[slots + static_cast<std::size_t>(c)] = std::current_exception();
-      }
-    }
+    if (!any) detail::chunks_of_thread(m, chunks, thread, threads, second, failed.data() + slots);
   };
   run_on_team(std::min(chunks, thread_count()), job);
   for (const std::exception_ptr& e : failed) {

@@ -36,8 +36,9 @@ class TouchedBlocks {
     items_ = items;
     marks_.resize(static_cast<std::size_t>(chunks));
     runs_.resize(static_cast<std::size_t>(chunks));
-    for (std::vector<char>& m : marks_)
+    for (std::vector<char>& m : marks_) {
       m.assign(block_of(items + (std::size_t{1} << kShift) - 1), 0);
+    }
   }
   std::vector<char>& marks(int c) { return marks_[static_cast<std::size_t>(c)]; }
   // Chunk c's runs from its marks.

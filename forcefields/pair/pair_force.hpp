@@ -310,6 +310,8 @@ class PairForce final : public ForceTerm {
     const auto slots = static_cast<std::size_t>(chunks);
     padded_positions_.resize(slots);
     padded_forces_.resize(slots);
+    chunk_sources_.resize(slots);
+    for (std::vector<const PaddedVec3*>& from : chunk_sources_) from.resize(slots);
     chunk_virials_.assign(slots, SymTensor{});
     chunk_energies_.assign(slots, 0.0);
     const TouchedBlocks& touched = neighbors.touched_blocks(chunks);
@@ -333,8 +335,8 @@ class PairForce final : public ForceTerm {
           chunk_virials_[k]);
     };
     // Block by block: the chunks touching the block, then its slots' sums over them.
-    auto add = [&](int, std::size_t begin, std::size_t end) {
-      std::vector<const PaddedVec3*> from(slots);
+    auto add = [&](int chunk, std::size_t begin, std::size_t end) {
+      std::vector<const PaddedVec3*>& from = chunk_sources_[static_cast<std::size_t>(chunk)];
       for (std::size_t first = begin; first < end;) {
         const std::size_t block = TouchedBlocks::block_of(first);
         const std::size_t last = std::min(end, TouchedBlocks::block_begin(block + 1));
@@ -485,6 +487,7 @@ class PairForce final : public ForceTerm {
   mutable std::vector<PaddedVec3> padded_force_;
   // touched_vector_loops()'s, one per chunk:
   mutable std::vector<std::vector<PaddedVec3>> padded_forces_;
+  mutable std::vector<std::vector<const PaddedVec3*>> chunk_sources_;  // a block's summed chunks
   mutable std::vector<SymTensor> chunk_virials_;
   mutable std::vector<double> chunk_energies_;
 };
