@@ -10,35 +10,38 @@
 namespace deli {
 
 void NearbyRows::make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-                      const NeighborList& list, const Box& box) {
+                      const NeighborList& list, const Box& box, const double* particle_reach) {
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
   if (bonded_pairs) index_bonded_pairs(set, particles.size());
   shifted_ = list.coded();
   // The list where the build left it (its list by particle is not made for this).
   const NeighborList::PartnerRanges ranges = list.partner_ranges();
-  // By chunks of the list's particles, each into its own pairs, joined in chunk order: the
-  // serial scan's pairs in its order on any number of threads (chunk 0 writes in place).
+  // By chunks of the list's particles, each into its own pairs: joined in chunk order, the
+  // serial scan's pairs in its order on any number of threads.
   // Split as cheap items: from 1024 particles, hs_4000's 600 us scan took about 100 us more
   // on two threads of an idle 2-core machine than on one (bench/README.md, fuse).
   const std::size_t listed = ranges.particles;
   const int chunks = chunks_for_cheap(listed);
-  chunk_pairs_.resize(static_cast<std::size_t>(chunks));
-  chunk_bounds_.resize(static_cast<std::size_t>(chunks));
+  scanned_.resize(static_cast<std::size_t>(chunks));
+  // The anchor positions and the displacements since (none yet: each particle's reach, or
+  // zero) are set by the chunk that scans the particle, on the thread whose lines they are.
+  const std::size_t n = particles.size();
+  anchor_.resize(n);
+  moved_.resize(n);
+  auto anchor = [&](std::size_t begin, std::size_t end) {
+    std::copy(q + begin, q + end, anchor_.begin() + static_cast<std::ptrdiff_t>(begin));
+    for (std::size_t i = begin; i < end; ++i) moved_[i] = particle_reach ? particle_reach[i] : 0.0;
+  };
+  const bool anchored_by_chunk = listed == n;
   for_each_chunk(listed, chunks, [&](int c, std::size_t begin, std::size_t end) {
-    std::vector<Pair>& pairs = c == 0 ? pairs_ : chunk_pairs_[static_cast<std::size_t>(c)];
-    std::vector<PairBound>& bounds = c == 0 ? bounds_ : chunk_bounds_[static_cast<std::size_t>(c)];
-    pairs.clear();
-    bounds.clear();
-    scan_list(list, ranges, q, box, particles.radius.data(), bonded_pairs, begin, end, pairs,
-              bounds);
+    ScannedChunk& chunk = scanned_[static_cast<std::size_t>(c)];
+    chunk.pairs.clear();
+    chunk.bounds.clear();
+    if (anchored_by_chunk) anchor(begin, end);
+    scan_list(list, ranges, q, box, particles.radius.data(), bonded_pairs, begin, end, chunk.pairs,
+              chunk.bounds);
   });
-  for (int c = 1; c < chunks; ++c) {
-    const auto k = static_cast<std::size_t>(c);
-    pairs_.insert(pairs_.end(), chunk_pairs_[k].begin(), chunk_pairs_[k].end());
-    bounds_.insert(bounds_.end(), chunk_bounds_[k].begin(), chunk_bounds_[k].end());
-  }
-  anchor_.assign(q, q + particles.size());
-  moved_.assign(particles.size(), 0.0);
+  if (!anchored_by_chunk) anchor(0, n);
   list_ = &list;
   list_builds_ = list.builds();
 }
@@ -145,28 +148,40 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);
       fresh = largest2 <= room * room;
     }
-    if (!fresh) {
-      make(set, particles, q, list, box);
-      if (particle_reach) moved_.assign(particle_reach, particle_reach + particles.size());
-    }
+    if (!fresh) make(set, particles, q, list, box, particle_reach);
     // With particle reaches, `moved_` holds each particle's displacement plus its reach.
     const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
-    const std::size_t pair_count = bounds_.size();
-    near_.resize(pair_count);
-    near_d2_.resize(pair_count);
-    // By chunks of the pairs, each screened into its own rows, joined in chunk order: the
-    // serial screen's rows in its order on any number of threads (chunk 0 appends in place).
-    // A pair's screen is a few operations (the hard-sphere fluid's 12700 pairs took 80 us a
-    // call on one thread), so split as cheap items: on 2 threads of the loaded 2-core machine
-    // the split call took 460 us (the sleeping partner's wake-up), see bench/README.md.
-    const int chunks = chunks_for_cheap(pair_count);
+    // Each scanned chunk screened on its own thread into its own rows, joined in chunk order:
+    // the serial screen's rows in its order on any number of threads (chunk 0 appends in
+    // place). One scanned chunk (fewer particles than split as cheap items) has its pairs
+    // split as cheap items: a pair's screen is a few operations (the 4000-sphere fluid's
+    // 12700 pairs took 80 us a call on one thread), and on 2 threads of the loaded 2-core
+    // machine a split call took 460 us (the sleeping partner's wake-up), bench/README.md.
+    const bool by_scanned_chunk = scanned_.size() > 1;
+    const std::size_t first_count = scanned_[0].pairs.size();
+    const std::size_t items = by_scanned_chunk ? scanned_.size() : first_count;
+    const int chunks =
+        by_scanned_chunk ? static_cast<int>(scanned_.size()) : chunks_for_cheap(first_count);
+    if (!by_scanned_chunk) {
+      scanned_[0].near.resize(first_count);
+      scanned_[0].near_d2.resize(first_count);
+    }
     chunk_rows_.resize(static_cast<std::size_t>(chunks));
     chunk_gaps_.resize(static_cast<std::size_t>(chunks));
-    for_each_chunk(pair_count, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    for_each_chunk(items, chunks, [&](int c, std::size_t begin, std::size_t end) {
       std::vector<Constraint>& rows = c == 0 ? out : chunk_rows_[static_cast<std::size_t>(c)];
       std::vector<double>& gaps = c == 0 ? gap_at_q : chunk_gaps_[static_cast<std::size_t>(c)];
       if (c != 0) rows.clear(), gaps.clear();
-      screen_pairs(q, box, reach, particle_reach, exact_below, beyond, begin, end, rows, gaps);
+      if (by_scanned_chunk) {
+        ScannedChunk& chunk = scanned_[static_cast<std::size_t>(c)];
+        chunk.near.resize(chunk.pairs.size());
+        chunk.near_d2.resize(chunk.pairs.size());
+        screen_pairs(chunk, q, box, reach, particle_reach, exact_below, beyond, 0,
+                     chunk.pairs.size(), rows, gaps);
+      } else {
+        screen_pairs(scanned_[0], q, box, reach, particle_reach, exact_below, beyond, begin, end,
+                     rows, gaps);
+      }
     });
     for (int c = 1; c < chunks; ++c) {
       const auto k = static_cast<std::size_t>(c);
@@ -193,10 +208,10 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
 // the nearest image): it differs from the minimum image by rounding at most, far inside the
 // screen's margin. A pair inside contact + reach by far more than rounding is kept without
 // its square root, and its gap is needed only if it may be at most `exact_below`.
-void NearbyRows::screen_pairs(const Vec3* q, const Box& box, double reach,
+void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box, double reach,
                               const double* particle_reach, double exact_below, double beyond,
                               std::size_t first, std::size_t last, std::vector<Constraint>& out,
-                              std::vector<double>& gap_at_q) {
+                              std::vector<double>& gap_at_q) const {
   const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
   const double infinity = std::numeric_limits<double>::infinity();
   // A row's reach: the pair's two particle reaches, or the one reach for all.
@@ -208,12 +223,12 @@ void NearbyRows::screen_pairs(const Vec3* q, const Box& box, double reach,
   // The others' indices are gathered first without a branch (about half the pairs pass,
   // unpredictably), then, again without a branch, those within the screen with their
   // squared distances, which are then tested in order. This chunk's indices go to its own
-  // stretch of near_ / near_d2_, [first, last).
+  // stretch of the chunk's near / near_d2, [first, last).
   const double* moved = moved_.data();
-  const PairBound* bounds = bounds_.data();
-  const Pair* pairs = pairs_.data();
-  std::int32_t* near = near_.data() + first;
-  double* near_d2 = near_d2_.data() + first;
+  const PairBound* bounds = chunk.bounds.data();
+  const Pair* pairs = chunk.pairs.data();
+  std::int32_t* near = chunk.near.data() + first;
+  double* near_d2 = chunk.near_d2.data() + first;
   std::size_t count = 0;
   for (std::size_t k = first; k < last; ++k) {
     const PairBound& bound = bounds[k];

@@ -33,8 +33,10 @@ class NearbyRows {
                double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q);
 
  private:
+  // The short list at q; each particle's displacement since (moved_) starts at its reach
+  // (zero without particle reaches).
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-            const NeighborList& list, const Box& box);
+            const NeighborList& list, const Box& box, const double* particle_reach);
 
   // ConstraintSet::unconstrained_pairs by first particle (a particle has a bond or two, so
   // a short scan instead of a binary search over all bonds, whose branches mispredict).
@@ -50,30 +52,37 @@ class NearbyRows {
     double contact, anchor_gap;
     Vec3 shift;
   };
-  std::vector<Pair> pairs_;
   // What the first screen reads of each pair, packed apart (a third of Pair's bytes).
   struct PairBound {
     std::int32_t a, b;
     double anchor_gap;
   };
-  std::vector<PairBound> bounds_;
+  // The short list as make()'s chunks of the list's particles scanned it, each chunk's pairs
+  // kept where its thread wrote them and screened there (joined in chunk order, they are the
+  // serial scan's). Joined by the calling thread, the other threads' pairs crossed to its
+  // core at every make, and back at every screen.
+  struct ScannedChunk {
+    std::vector<Pair> pairs;
+    std::vector<PairBound> bounds;
+    std::vector<std::int32_t> near;  // pairs that may be within reach, by index
+    std::vector<double> near_d2;     // their squared distances at q, after the second screen
+  };
+  std::vector<ScannedChunk> scanned_;
   // The list's pairs of particles [first, last) within contact + margin at q, appended.
   void scan_list(const NeighborList& list, const NeighborList::PartnerRanges& ranges, const Vec3* q,
                  const Box& box, const double* radius, bool bonded_pairs, std::size_t first,
                  std::size_t last, std::vector<Pair>& pairs, std::vector<PairBound>& bounds) const;
-  void screen_pairs(const Vec3* q, const Box& box, double reach, const double* particle_reach,
-                    double exact_below, double beyond, std::size_t first, std::size_t last,
-                    std::vector<Constraint>& out, std::vector<double>& gap_at_q);
-  // Chunks 1.. of make()'s scan and of collect()'s screen (chunk 0 writes in place).
-  std::vector<std::vector<Pair>> chunk_pairs_;
-  std::vector<std::vector<PairBound>> chunk_bounds_;
+  // The screen of the scanned chunk's pairs [first, last), their scratch at the same indices.
+  void screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box, double reach,
+                    const double* particle_reach, double exact_below, double beyond,
+                    std::size_t first, std::size_t last, std::vector<Constraint>& out,
+                    std::vector<double>& gap_at_q) const;
+  // Screen chunks 1.. of collect() (chunk 0 writes in place).
   std::vector<std::vector<Constraint>> chunk_rows_;
   std::vector<std::vector<double>> chunk_gaps_;
   bool shifted_ = false;
   std::vector<Vec3> anchor_;
-  std::vector<double> moved_;       // per particle, |q - anchor| at the last call (+ its reach)
-  std::vector<std::int32_t> near_;  // pairs that may be within reach, by index
-  std::vector<double> near_d2_;     // their squared distances at q, after the second screen
+  std::vector<double> moved_;  // per particle, |q - anchor| at the last call (+ its reach)
   const NeighborList* list_ = nullptr;
   std::int64_t list_builds_ = -1;
   std::vector<std::int32_t> bonded_first_, bonded_partner_;

@@ -154,6 +154,21 @@ void parallel_for(std::size_t n, Body&& body) {
   });
 }
 
+// to = from, chunk by chunk as the particle passes split (cheap items): each thread copies
+// the lines it holds. Copied by the calling thread alone, every line of the other threads'
+// chunks crossed to its core, and their next writes to either array waited for its copy to be
+// dropped. (Only elements `to` gains are made by the calling thread, once.)
+template <class T>
+void copy_in_chunks(const std::vector<T>& from, std::vector<T>& to) {
+  const std::size_t n = from.size();
+  to.resize(n);
+  for_each_chunk(n, chunks_for_cheap(n), [&](int, std::size_t begin, std::size_t end) {
+    std::copy(from.begin() + static_cast<std::ptrdiff_t>(begin),
+              from.begin() + static_cast<std::ptrdiff_t>(end),
+              to.begin() + static_cast<std::ptrdiff_t>(begin));
+  });
+}
+
 // The serial loop `for (k < n) if (test(k)) join(k);` with the tests (independent of each
 // other and of the joins) on several threads: their outcomes are kept in `passed`, then
 // the joins are made in order on the calling thread. One chunk: the serial loop itself.

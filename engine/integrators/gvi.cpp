@@ -175,6 +175,11 @@ void Gvi::start_step(System& system) {
   bool prediction_covered = false;  // known to be covered (else asked below)
   bool q_copied = false;            // ws_.q holds P.position
   bool prediction_known = false;    // prediction_covered is neighbors_cover's answer
+  // Read only by the energy restoration of landed rows (inequality rows alone land) and the
+  // impact-time step.
+  const bool keep_start_momenta = (feasibility_ == Feasibility::restore && has_inequalities()) ||
+                                  contact_ == ContactTreatment::impact_time;
+  bool p_start_made = false;  // ws_.p_start holds ws_.p
   ws_.half_kicked = false;
   if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
@@ -219,6 +224,11 @@ void Gvi::start_step(System& system) {
     pass.list_limit2 = list.valid_distance2();
     pass.q = numbers(ws_.q);
     pass.p = kick ? nullptr : numbers(ws_.p);
+    // Made in this pass, each thread on its own particles: copied after it by the calling
+    // thread, the other threads' momenta crossed to its core and back every step.
+    p_start_made = keep_start_momenta && !kick;
+    if (p_start_made) ws_.p_start.resize(n);
+    pass.p_start = p_start_made ? numbers(ws_.p_start) : nullptr;
     pass.half = kick ? numbers(ws_.half) : nullptr;
     pass.free = kick ? numbers(ws_.free) : nullptr;
     pass.impulse = zero ? numbers(ws_.impulse) : nullptr;
@@ -254,13 +264,8 @@ void Gvi::start_step(System& system) {
                             "step; increase [neighbor] skin or reduce the timestep");
     }
   }
-  if (!q_copied) ws_.q = P.position;
-  // Read only by the energy restoration of landed rows (inequality rows alone land) and the
-  // impact-time step.
-  if ((feasibility_ == Feasibility::restore && has_inequalities()) ||
-      contact_ == ContactTreatment::impact_time) {
-    ws_.p_start = ws_.p;
-  }
+  if (!q_copied) copy_in_chunks(P.position, ws_.q);
+  if (keep_start_momenta && !p_start_made) copy_in_chunks(ws_.p, ws_.p_start);
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.reach = -1.0;
@@ -372,7 +377,7 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   const bool first = ws_.reach < 0.0;
   ws_.displacement2.resize(n);
   ws_.reach_limit2.resize(n);
-  if (first) ws_.particle_reach.assign(n, 0.0);
+  ws_.particle_reach.resize(n);
   const Vec3* at = x.data();
   const Vec3* q = ws_.q.data();
   double* moved2 = ws_.displacement2.data();
@@ -386,11 +391,13 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   const double floor2 = floor * floor;
   double* reach = ws_.particle_reach.data();
   double* limit2 = ws_.reach_limit2.data();
-  // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk.
+  // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk; the
+  // step's first reaches grow from zero, set here by the thread that holds the lines.
   for_each_chunk(n, chunks_for_cheap(n), [=](int, std::size_t begin, std::size_t end) {
     const auto length = static_cast<Eigen::Index>(end - begin);
     Eigen::Map<Eigen::ArrayXd> out(reach + begin, length), out_limit2(limit2 + begin, length);
     const Eigen::Map<const Eigen::ArrayXd> in(moved2 + begin, length);
+    if (first) out.setZero();
     out = out.max(2.0 * in.max(floor2).sqrt() + gap_tolerance);
     out_limit2 = (out - 0.5 * gap_tolerance).square();
   });
@@ -420,7 +427,9 @@ void Gvi::find_active_set(System& system) {
   // made again (the same numbers a whole prediction would give).
   const bool local_predictions =
       lagrangian_ == Lagrangian::verlet && constraints_.equalities.empty();
-  ws_.prediction_changed.assign(n, local_predictions ? 0 : 1);
+  ws_.prediction_changed.resize(n);
+  const char initial = local_predictions ? 0 : 1;
+  parallel_for(n, [&, initial](std::size_t i) { ws_.prediction_changed[i] = initial; });
   ws_.changed_particles.clear();
   bool settled = false;
   // After the first round: a bound on max |prediction - q|^2, from the last round's and the

@@ -85,6 +85,7 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
       if (at_build) moved.v[k] = x.v[k] - load(at_build + e);
     }
     if (pass.p) store_triples(pass.p + o, momentum);
+    if (pass.p_start) store_triples(pass.p_start + o, momentum);
     if (pass.half) store_triples(pass.half + o, half);
     if (pass.free) store_triples(pass.free + o, d);
     if (pass.impulse) store_triples(pass.impulse + o, Triples{});
@@ -102,6 +103,7 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
     const Three d{half.x * hm, half.y * hm, half.z * hm};
     const Three x{start.x + d.x, start.y + d.y, start.z + d.z};
     if (pass.p) put(pass.p, i, momentum);
+    if (pass.p_start) put(pass.p_start, i, momentum);
     if (pass.half) put(pass.half, i, half);
     if (pass.free) put(pass.free, i, d);
     if (pass.impulse) put(pass.impulse, i, Three{0.0, 0.0, 0.0});

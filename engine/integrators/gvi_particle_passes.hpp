@@ -12,7 +12,7 @@ namespace deli::gvi_passes {
 // includes no header with inline code that the rest of the engine would share.
 
 // The start of a Verlet step, per particle i with m = mass[i]:
-//   q = position; momentum = velocity * m; p = momentum;
+//   q = position; momentum = velocity * m; p = momentum; p_start = momentum;
 //   half = momentum + force * (0.5 h); free = half * (h / m); impulse = 0;
 //   predicted = position + free;
 // and the count of particles whose predicted position is not within the neighbour list's
@@ -28,6 +28,7 @@ struct StepStart {
   double list_limit2 = 0.0;
   double* q = nullptr;
   double* p = nullptr;
+  double* p_start = nullptr;
   double* half = nullptr;
   double* free = nullptr;
   double* impulse = nullptr;

@@ -107,14 +107,15 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
           // The definition, as start_step wrote it.
           std::vector<Vec3> q(kPassParticles), p(kPassParticles), half(kPassParticles),
               free(kPassParticles), impulse(kPassParticles, Vec3{7, 7, 7}),
-              predicted(kPassParticles);
+              predicted(kPassParticles), p_start(kPassParticles, Vec3{5, 5, 5});
           std::vector<Vec3> q2 = q, p2 = p, half2 = half, free2 = free, impulse2 = impulse,
-                            predicted2 = predicted;
+                            predicted2 = predicted, p_start2 = p_start;
           std::size_t expected = 0;
           for (std::size_t i = begin; i < end; ++i) {
             q[i] = s.position[i];
             const Vec3 momentum = s.velocity[i] * s.mass[i];
             p[i] = momentum;
+            p_start[i] = momentum;
             half[i] = momentum + s.force[i] * (0.5 * h);
             free[i] = half[i] * (h / s.mass[i]);
             impulse[i] = Vec3{};
@@ -131,6 +132,7 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
           pass.list_limit2 = list_limit2;
           pass.q = pass_numbers(q2);
           pass.p = kick ? nullptr : pass_numbers(p2);
+          pass.p_start = kick ? nullptr : pass_numbers(p_start2);
           pass.half = kick ? pass_numbers(half2) : nullptr;
           pass.free = kick ? pass_numbers(free2) : nullptr;
           pass.impulse = kick ? pass_numbers(impulse2) : nullptr;
@@ -145,6 +147,7 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
             expect_same_triples(impulse, impulse2, "impulse", begin, end);
           } else {
             expect_same_triples(p, p2, "p", begin, end);
+            expect_same_triples(p_start, p_start2, "p_start", begin, end);
             expect_same_triples(predicted, predicted2, "predicted", begin, end);
           }
           ++ranges;
