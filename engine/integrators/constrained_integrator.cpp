@@ -644,13 +644,16 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
 // index `first_inequality`) that holds an inequality, at positions x.
 void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<Constraint>& rows,
                                              std::size_t first_inequality,
-                                             const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+                                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                                             const AfterReflection* after) {
   const Particles& P = system.particles;
   // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
   // the same single-row problem with H as its energy.
   const bool lone_rows_closed =
       energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
-  if (lone_rows_closed && first_inequality == 0) return reflect_inequalities(system, rows, x, p);
+  if (lone_rows_closed && first_inequality == 0) {
+    return reflect_inequalities(system, rows, x, p, after);
+  }
   const std::vector<Cluster> clusters = find_clusters(rows, P.size());
   std::vector<bool> holds_inequality(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c) {
@@ -661,29 +664,35 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   if (energy_ == ReflectionEnergy::shadow && any) {
     gather_hessian_blocks(system, clusters, holds_inequality);
   }
+  // Each row makes one virial term at most.
+  reflection_terms_.reset(1, [&](std::size_t) { return rows.size(); });
+  const ReflectionTally tally{reflection_terms_, 0, stats_};
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!holds_inequality[c]) continue;
     const Cluster& cluster = clusters[c];
     if (lone_rows_closed && cluster.rows.size() == 1 &&
-        reflect_closed_form(system, rows[cluster.rows.front()], x, p)) {
-      continue;
-    }
-    if (energy_ == ReflectionEnergy::shadow) {
+        reflect_closed_form(system, rows[cluster.rows.front()], x, p, tally)) {
+    } else if (energy_ == ReflectionEnergy::shadow) {
       const ShadowOperator shadow = shadow_operator(system, c, p);
-      reflect_cluster(system, rows, first_inequality, cluster, x, p, &shadow);
+      reflect_cluster(system, rows, first_inequality, cluster, x, p, &shadow, tally);
     } else {
-      reflect_cluster(system, rows, first_inequality, cluster, x, p, nullptr);
+      reflect_cluster(system, rows, first_inequality, cluster, x, p, nullptr, tally);
+    }
+    if (after) {
+      for (const std::int32_t i : cluster.particles) (*after)(0, i);
     }
   }
+  reflection_terms_.add_to(step_virial_);
 }
 
-bool ConstrainedIntegrator::reflect_closed_form(System& system, const Constraint& row,
-                                                const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Constraint& row,
+                                                const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                                                const ReflectionTally& tally) const {
   const double lambda = reflect_lone_row(row, x.data(), system.box, system.particles.mass,
                                          constraints_.tolerances.velocity, p.data());
   if (lambda < 0.0) return false;
-  step_virial_ += pair_virial(row, lambda, x.data(), system.box);
-  stats_.reflected += lambda > 0.0 ? 1 : 0;
+  tally.terms.add(tally.item, pair_virial(row, lambda, x.data(), system.box));
+  tally.stats.reflected += lambda > 0.0 ? 1 : 0;
   return true;
 }
 
@@ -691,21 +700,51 @@ bool ConstrainedIntegrator::reflect_closed_form(System& system, const Constraint
 // with another is a cluster of its own, reflected in closed form without clustering; only
 // the rows that share particles are clustered. Clusters are taken in find_clusters' order
 // (by smallest particle), which orders the virial's sum.
+//
+// Where the particle passes run in chunks, each chunk's thread reflects the clusters whose
+// smallest particle is in its chunk: their momenta are lines it holds (reflected by one
+// thread, every other thread's lines crossed to its core and back within the step). The
+// clusters share no particle, so any thread may reflect any of them with the same result;
+// their virial terms are added in the serial order.
 void ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const std::vector<Constraint>& rows,
-                                                 const std::vector<Vec3>& x, std::vector<Vec3>& p) {
+                                                 const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                                                 const AfterReflection* after) {
+  const std::size_t n = system.particles.size();
+  // Below this many rows a job's start (about a microsecond) costs more than the rows'
+  // lines fetched from the other cores.
+  constexpr std::size_t kSplitRows = 64;
+  const int chunks = rows.size() < kSplitRows ? 1 : chunks_for_cheap(n);
+  const auto slots = static_cast<std::size_t>(chunks);
+  // The particles' chunk starts, as the particle passes split them.
+  std::vector<std::int32_t> chunk_end(slots);
+  for (int c = 0; c < chunks; ++c) {
+    chunk_end[static_cast<std::size_t>(c)] =
+        static_cast<std::int32_t>(chunk_range(n, c, chunks).end);
+  }
+  auto chunk_of = [&](std::int32_t particle) {
+    std::size_t c = 0;
+    while (particle >= chunk_end[c]) ++c;
+    return c;
+  };
+  auto first = [&](std::int32_t r) {
+    const Constraint& c = rows[r];
+    return c.j >= 0 ? std::min(c.i, c.j) : c.i;
+  };
   // Zero for every particle outside a call.
-  rows_at_particle_.resize(system.particles.size(), 0);
+  rows_at_particle_.resize(n, 0);
   for (const Constraint& c : rows) {
     ++rows_at_particle_[c.i];
     if (c.j >= 0) ++rows_at_particle_[c.j];
   }
-  lone_order_.clear();
+  lone_rows_of_chunk_.resize(slots);
+  for (std::vector<std::int32_t>& lone : lone_rows_of_chunk_) lone.clear();
   shared_rows_.clear();
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Constraint& c = rows[r];
     if (rows_at_particle_[c.i] == 1 && (c.j < 0 || rows_at_particle_[c.j] == 1)) {
-      lone_order_.push_back(static_cast<std::int32_t>(r));
+      const auto row = static_cast<std::int32_t>(r);
+      lone_rows_of_chunk_[chunk_of(first(row))].push_back(row);
     } else {
       shared_rows_.push_back(c);
     }
@@ -714,40 +753,61 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     rows_at_particle_[c.i] = 0;
     if (c.j >= 0) rows_at_particle_[c.j] = 0;
   }
-  auto first = [&](std::int32_t r) {
-    const Constraint& c = rows[r];
-    return c.j >= 0 ? std::min(c.i, c.j) : c.i;
-  };
-  std::sort(lone_order_.begin(), lone_order_.end(),
-            [&](std::int32_t a, std::int32_t b) { return first(a) < first(b); });
-  const std::vector<Cluster> shared = shared_rows_.empty()
-                                          ? std::vector<Cluster>{}
-                                          : find_clusters(shared_rows_, system.particles.size());
-  std::size_t next_shared = 0;
-  auto reflect_shared_before = [&](std::int32_t particle) {
-    for (; next_shared < shared.size() && shared[next_shared].particles.front() < particle;
-         ++next_shared) {
-      reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr);
+  const std::vector<Cluster> shared =
+      shared_rows_.empty() ? std::vector<Cluster>{} : find_clusters(shared_rows_, n);
+  // Each row makes one virial term at most.
+  reflection_terms_.reset(slots, [&](std::size_t) { return rows.size(); });
+  reflection_stats_.assign(slots, ConstraintStatistics{});
+  for_each_chunk(slots, chunks, [&](int chunk, std::size_t, std::size_t) {
+    const auto c = static_cast<std::size_t>(chunk);
+    const ReflectionTally tally{reflection_terms_, c, reflection_stats_[c]};
+    // The lone rows' first particles are distinct: any sort orders them alike.
+    std::vector<std::int32_t>& lone = lone_rows_of_chunk_[c];
+    std::sort(lone.begin(), lone.end(),
+              [&](std::int32_t a, std::int32_t b) { return first(a) < first(b); });
+    // The shared clusters come by smallest particle: this chunk's are a run of them.
+    const std::int32_t begin = c == 0 ? 0 : chunk_end[c - 1];
+    std::size_t next_shared = static_cast<std::size_t>(
+        std::partition_point(shared.begin(), shared.end(),
+                             [&](const Cluster& k) { return k.particles.front() < begin; }) -
+        shared.begin());
+    auto reflect_shared_before = [&](std::int32_t particle) {
+      for (; next_shared < shared.size() && shared[next_shared].particles.front() < particle;
+           ++next_shared) {
+        reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr, tally);
+        if (after) {
+          for (const std::int32_t i : shared[next_shared].particles) (*after)(chunk, i);
+        }
+      }
+    };
+    for (const std::int32_t r : lone) {
+      reflect_shared_before(first(r));
+      const Constraint& row = rows[r];
+      if (!reflect_closed_form(system, row, x, p, tally)) {
+        Cluster cluster;  // a row without a closed form (no direction): the general reflection
+        cluster.particles.push_back(row.i);
+        if (row.j >= 0) cluster.particles.push_back(row.j);
+        std::sort(cluster.particles.begin(), cluster.particles.end());
+        cluster.rows.push_back(r);
+        reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally);
+      }
+      if (after) {
+        (*after)(chunk, row.i);
+        if (row.j >= 0) (*after)(chunk, row.j);
+      }
     }
-  };
-  for (const std::int32_t r : lone_order_) {
-    reflect_shared_before(first(r));
-    if (reflect_closed_form(system, rows[r], x, p)) continue;
-    Cluster cluster;  // a row without a closed form (no direction): the general reflection
-    const Constraint& c = rows[r];
-    cluster.particles.push_back(c.i);
-    if (c.j >= 0) cluster.particles.push_back(c.j);
-    std::sort(cluster.particles.begin(), cluster.particles.end());
-    cluster.rows.push_back(r);
-    reflect_cluster(system, rows, 0, cluster, x, p, nullptr);
-  }
-  reflect_shared_before(std::numeric_limits<std::int32_t>::max());
+    reflect_shared_before(chunk_end[c]);
+  });
+  reflection_terms_.add_to(step_virial_);
+  for (const ConstraintStatistics& figures : reflection_stats_) stats_.add(figures);
 }
 
-void ConstrainedIntegrator::reflect_cluster(System& system, const std::vector<Constraint>& rows,
+void ConstrainedIntegrator::reflect_cluster(const System& system,
+                                            const std::vector<Constraint>& rows,
                                             std::size_t first_inequality, const Cluster& cluster,
                                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                                            const ShadowOperator* shadow) {
+                                            const ShadowOperator* shadow,
+                                            const ReflectionTally& tally) const {
   const Particles& P = system.particles;
   const LocalCluster local = localize(cluster, rows, P.mass);
   std::vector<bool> equality;
@@ -758,13 +818,14 @@ void ConstrainedIntegrator::reflect_cluster(System& system, const std::vector<Co
   const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
                                     constraints_.tolerances.velocity, constraints_.limits, shadow);
   for (std::size_t k = 0; k < local.rows.size(); ++k) {
-    step_virial_ += pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box);
+    tally.terms.add(tally.item,
+                    pair_virial(local.rows[k], r.row_impulse[k], x_local.data(), system.box));
   }
-  stats_.reflected += r.reflected;
-  stats_.shadow_fallbacks += r.shadow_fallbacks;
-  stats_.stalled += r.capped ? 1 : 0;
-  stats_.cycled += r.cycled ? 1 : 0;
-  stats_.qp_caps += r.qp_caps;
+  tally.stats.reflected += r.reflected;
+  tally.stats.shadow_fallbacks += r.shadow_fallbacks;
+  tally.stats.stalled += r.capped ? 1 : 0;
+  tally.stats.cycled += r.cycled ? 1 : 0;
+  tally.stats.qp_caps += r.qp_caps;
   scatter(p_local, cluster.particles, p);
 }
 

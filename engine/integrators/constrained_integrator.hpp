@@ -138,21 +138,33 @@ class ConstrainedIntegrator : public Integrator {
                              const std::vector<bool>& reflected);
   ShadowOperator shadow_operator(const System& system, std::size_t c,
                                  const std::vector<Vec3>& p) const;
+  // Called with each particle of each reflected cluster once the cluster is reflected, on the
+  // thread that reflected it; `chunk` (below thread_count()) numbers that thread's share.
+  using AfterReflection = std::function<void(int chunk, std::int32_t particle)>;
   // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
   // index `first_inequality`) that holds an inequality, at positions x.
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
-                        std::vector<Vec3>& p);
+                        std::vector<Vec3>& p, const AfterReflection* after = nullptr);
+  // Where reflections leave their figures: the virial's terms (as item `item` of `terms`,
+  // added to the step's virial in item order) and the counters. One per thread where
+  // reflections run on several.
+  struct ReflectionTally {
+    OrderedTerms& terms;
+    std::size_t item;
+    ConstraintStatistics& stats;
+  };
   // Parts of reflect_clusters: one cluster through reflect(); one row in closed form (false,
   // with nothing done, where it has none); rows without equalities, with closed forms.
-  void reflect_cluster(System& system, const std::vector<Constraint>& rows,
+  void reflect_cluster(const System& system, const std::vector<Constraint>& rows,
                        std::size_t first_inequality, const Cluster& cluster,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                       const ShadowOperator* shadow);
-  bool reflect_closed_form(System& system, const Constraint& row, const std::vector<Vec3>& x,
-                           std::vector<Vec3>& p);
+                       const ShadowOperator* shadow, const ReflectionTally& tally) const;
+  bool reflect_closed_form(const System& system, const Constraint& row, const std::vector<Vec3>& x,
+                           std::vector<Vec3>& p, const ReflectionTally& tally) const;
   void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
-                            const std::vector<Vec3>& x, std::vector<Vec3>& p);
+                            const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                            const AfterReflection* after);
   // Projects the momenta p onto the rows' tangent space at x, cluster by cluster (`passes`
   // as for solve_positions); returns the projection's virial.
   double project_momenta(System& system, const std::vector<Constraint>& rows,
@@ -244,8 +256,11 @@ class ConstrainedIntegrator : public Integrator {
   // reflect_inequalities' scratch: rows per particle (zero between calls), the rows sharing
   // no particle, the others.
   std::vector<std::int32_t> rows_at_particle_;
-  std::vector<std::int32_t> lone_order_;
+  std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
   std::vector<Constraint> shared_rows_;
+  // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
+  OrderedTerms reflection_terms_;
+  std::vector<ConstraintStatistics> reflection_stats_;
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);

@@ -467,17 +467,25 @@ void Gvi::find_active_set(System& system) {
       settled = true;
       break;
     }
-    ws_.rows = constraints_.equalities;
-    ws_.rows.insert(ws_.rows.end(), active.begin(), active.end());
-    {
-      const TimedPhase reflecting(Phase::reflections);
-      reflect_clusters(system, ws_.rows, constraints_.equalities.size(), ws_.q, ws_.p);
+    // Without equality rows the active rows are the rows: not copied.
+    const std::vector<Constraint>* rows = &active;
+    if (!constraints_.equalities.empty()) {
+      ws_.rows = constraints_.equalities;
+      ws_.rows.insert(ws_.rows.end(), active.begin(), active.end());
+      rows = &ws_.rows;
     }
-    const TimedPhase predicting(Phase::prediction);
     if (local_predictions) {
-      largest2_bound = predict_reflected(system);
+      // Each reflected particle's prediction made again on the thread that reflected it,
+      // which holds its lines (timed as the reflections).
+      const TimedPhase reflecting(Phase::reflections);
+      largest2_bound = reflect_and_predict(system, *rows);
       continue;
     }
+    {
+      const TimedPhase reflecting(Phase::reflections);
+      reflect_clusters(system, *rows, constraints_.equalities.size(), ws_.q, ws_.p);
+    }
+    const TimedPhase predicting(Phase::prediction);
     std::swap(ws_.previous_prediction, ws_.predicted);
     predict(system, ws_.p, ws_.predicted, constrained_predictor_, true);
     largest2_bound = ordered_max(n, ws_.largest2, [&](std::size_t i) {
@@ -493,30 +501,38 @@ void Gvi::find_active_set(System& system) {
   if (!settled) ++stats_.active_set_caps;
 }
 
-// The free Verlet prediction made again for the particles of the active rows (the only ones
-// reflections move), as free_displacement and predict make it; marks those whose prediction
-// changed and returns the bound on max |prediction - q|^2.
-double Gvi::predict_reflected(const System& system) {
+// The active rows reflected, and the free Verlet prediction made again for their particles
+// (the only ones reflections move), as free_displacement and predict make it: marks those
+// whose prediction changed and returns the bound on max |prediction - q|^2.
+double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& rows) {
   const Particles& P = system.particles;
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
   for (std::int32_t i : ws_.changed_particles) ws_.prediction_changed[i] = 0;
   ws_.changed_particles.clear();
-  double largest2_bound = ws_.largest2;
-  auto again = [&](std::int32_t i) {
+  // Per share of the reflections: its changed particles and its bound.
+  const auto shares = static_cast<std::size_t>(thread_count());
+  ws_.changed_of_chunk.resize(shares);
+  for (std::vector<std::int32_t>& changed : ws_.changed_of_chunk) changed.clear();
+  ws_.changed_largest2.assign(shares, ws_.largest2);
+  const AfterReflection again = [&, h](int chunk, std::int32_t i) {
     const Vec3 d = free_step(half_kicked(ws_.p[i], f[i], h), h, P.mass[i]);
     const Vec3 next = P.position[i] + d;
     Vec3& now = ws_.predicted[i];
     if (next.x != now.x || next.y != now.y || next.z != now.z) {
+      const auto c = static_cast<std::size_t>(chunk);
       now = next;
       ws_.prediction_changed[i] = 1;
-      ws_.changed_particles.push_back(i);
-      largest2_bound = std::max(largest2_bound, norm2(next - ws_.q[i]));
+      ws_.changed_of_chunk[c].push_back(i);
+      ws_.changed_largest2[c] = std::max(ws_.changed_largest2[c], norm2(next - ws_.q[i]));
     }
   };
-  for (const Constraint& c : ws_.active) {
-    again(c.i);
-    if (c.j >= 0) again(c.j);
+  reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again);
+  double largest2_bound = ws_.largest2;
+  for (std::size_t c = 0; c < shares; ++c) {
+    const std::vector<std::int32_t>& changed = ws_.changed_of_chunk[c];
+    ws_.changed_particles.insert(ws_.changed_particles.end(), changed.begin(), changed.end());
+    largest2_bound = std::max(largest2_bound, ws_.changed_largest2[c]);
   }
   return largest2_bound;
 }

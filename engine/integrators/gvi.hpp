@@ -132,9 +132,9 @@ class Gvi final : public ConstrainedIntegrator {
   bool reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const;
   void collect_by_particle_reach(const System& system, const std::vector<Vec3>& x);
   static constexpr double kReachFloor = 0.5;
-  // After a reflection, without equality rows and with Verlet: the free prediction made again
-  // for the reflected particles alone.
-  double predict_reflected(const System& system);
+  // Without equality rows and with Verlet: the rows reflected, and the free prediction made
+  // again for the reflected particles alone.
+  double reflect_and_predict(System& system, const std::vector<Constraint>& rows);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   void solve_held_positions(System& system);
   // Whether the step's per-particle passes go with the cluster solves: on several threads,

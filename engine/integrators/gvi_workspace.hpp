@@ -41,8 +41,12 @@ struct GviWorkspace {
   std::vector<Vec3> previous_prediction;
   std::vector<char> prediction_changed;
   std::vector<std::int32_t> changed_particles;  // those marked in prediction_changed
-  std::vector<char> candidate_active;           // per candidate row: in the active set
-  std::vector<char> candidate_passed;           // per candidate row: a threaded test's result
+  // By share of the reflections: the particles whose prediction changed, and the bound on
+  // their max |prediction - q|^2.
+  std::vector<std::vector<std::int32_t>> changed_of_chunk;
+  std::vector<double> changed_largest2;
+  std::vector<char> candidate_active;  // per candidate row: in the active set
+  std::vector<char> candidate_passed;  // per candidate row: a threaded test's result
   std::vector<std::pair<std::uint64_t, std::int32_t>> row_keys;  // mark_contained's scratch
   std::vector<Constraint> rows;  // equality rows followed by some inequality rows
 
