@@ -670,12 +670,12 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!holds_inequality[c]) continue;
     const Cluster& cluster = clusters[c];
-    if (lone_rows_closed && cluster.rows.size() == 1 &&
-        reflect_closed_form(system, rows[cluster.rows.front()], x, p, tally)) {
-    } else if (energy_ == ReflectionEnergy::shadow) {
+    const bool closed = lone_rows_closed && cluster.rows.size() == 1 &&
+                        reflect_closed_form(system, rows[cluster.rows.front()], x, p, tally);
+    if (!closed && energy_ == ReflectionEnergy::shadow) {
       const ShadowOperator shadow = shadow_operator(system, c, p);
       reflect_cluster(system, rows, first_inequality, cluster, x, p, &shadow, tally);
-    } else {
+    } else if (!closed) {
       reflect_cluster(system, rows, first_inequality, cluster, x, p, nullptr, tally);
     }
     if (after) {
@@ -716,7 +716,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   constexpr std::size_t kSplitRows = 64;
   const int chunks = rows.size() < kSplitRows ? 1 : chunks_for_cheap(n);
   const auto slots = static_cast<std::size_t>(chunks);
-  // The particles' chunk starts, as the particle passes split them.
+  // Where each chunk's particles end, as the particle passes split them.
   std::vector<std::int32_t> chunk_end(slots);
   for (int c = 0; c < chunks; ++c) {
     chunk_end[static_cast<std::size_t>(c)] =

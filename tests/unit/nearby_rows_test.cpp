@@ -91,9 +91,11 @@ TEST(NearbyRows, RowsWithinTheReachInTheScansOrder) {
   }
 }
 
-// On two threads the list's scan and the screen (both cheap items: here split from 1024
-// particles and 1024 pairs on) run in chunks joined in chunk order: the same rows, in the same
-// order, with the same gaps bit for bit as on one thread, and those of the plain scan.
+// On two threads the list's scan and the screen (both cheap items) run in chunks joined in
+// chunk order: the same rows, in the same order, with the same gaps bit for bit as on one
+// thread, and those of the plain scan. Split from 1024 items, the 1200 particles' scan is cut
+// in two and each thread screens its own chunk's pairs; split from 2000, the scan is whole and
+// its pairs (several times the rows) are cut in two for the screen.
 TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
 #ifndef _OPENMP
   GTEST_SKIP() << "built without OpenMP";
@@ -110,11 +112,11 @@ TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
     std::vector<Constraint> rows;
     std::vector<double> gaps;
   };
-  auto collect = [&](int threads) {
+  auto collect = [&](int threads, std::size_t minimum) {
     const int before = thread_count();
     const std::size_t cheap_before = cheap_loop_minimum();
     set_thread_count(threads);
-    set_cheap_loop_minimum(kParallelMinimum);
+    set_cheap_loop_minimum(minimum);
     NearbyRows rows;
     std::vector<Collected> out(2);
     for (std::size_t pass = 0; pass < 2; ++pass) {
@@ -127,14 +129,17 @@ TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
     set_cheap_loop_minimum(cheap_before);
     return out;
   };
-  const std::vector<Collected> one = collect(1), two = collect(2);
-  for (std::size_t pass = 0; pass < 2; ++pass) {
-    // Enough rows that both chunks keep some (the screened pairs are several times more).
-    EXPECT_GT(one[pass].rows.size(), kParallelMinimum);
-    ASSERT_EQ(one[pass].rows.size(), two[pass].rows.size());
-    for (std::size_t k = 0; k < one[pass].rows.size(); ++k) {
-      EXPECT_TRUE(same_row(one[pass].rows[k], two[pass].rows[k])) << "row " << k;
-      EXPECT_EQ(one[pass].gaps[k], two[pass].gaps[k]) << "row " << k;
+  for (const std::size_t minimum : {kParallelMinimum, std::size_t{2000}}) {
+    SCOPED_TRACE(minimum);
+    const std::vector<Collected> one = collect(1, minimum), two = collect(2, minimum);
+    for (std::size_t pass = 0; pass < 2; ++pass) {
+      // Enough rows that both chunks keep some (the screened pairs are several times more).
+      EXPECT_GT(one[pass].rows.size(), kParallelMinimum);
+      ASSERT_EQ(one[pass].rows.size(), two[pass].rows.size());
+      for (std::size_t k = 0; k < one[pass].rows.size(); ++k) {
+        EXPECT_TRUE(same_row(one[pass].rows[k], two[pass].rows[k])) << "row " << k;
+        EXPECT_EQ(one[pass].gaps[k], two[pass].gaps[k]) << "row " << k;
+      }
     }
   }
 }
