@@ -19,11 +19,19 @@ table() {
     on && NF >= 3 { name = $1; for (i = 2; i < NF - 1; ++i) name = name "_" $i; line = line " " name "=" $(NF - 1) }
     END { print line }'
 }
+# On one thread both binaries of a round run on the same core, the core moving round by round:
+# this machine's two virtual cores ran one binary at 0.87-0.97 s and 1.25-1.34 s minutes
+# apart, and unpinned, consecutive runs tended to land on alternate cores, so that one binary
+# ran on the slow core far more often (bench/README.md, "Stop 41").
+cores=$(nproc)
 runs=$(for ((k = 0; k < rounds; ++k)); do
+  pin=()
+  [[ ${THREADS:-1} == 1 && $cores -gt 1 ]] && command -v taskset > /dev/null &&
+    pin=(taskset -c $((k % cores)))
   for side in old new; do
     bin=$old
     [[ $side == new ]] && bin=$new
-    (cd "$work" && "$bin" run input.toml --threads "${THREADS:-1}") | table "$side"
+    (cd "$work" && "${pin[@]}" "$bin" run input.toml --threads "${THREADS:-1}") | table "$side"
   done
 done)
 for side in old new; do

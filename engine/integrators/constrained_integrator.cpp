@@ -678,9 +678,7 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
     } else if (!closed) {
       reflect_cluster(system, rows, first_inequality, cluster, x, p, nullptr, tally);
     }
-    if (after) {
-      for (const std::int32_t i : cluster.particles) (*after)(0, i);
-    }
+    if (after) (*after)(0, cluster.particles.data(), cluster.particles.size());
   }
   reflection_terms_.add_to(step_virial_);
 }
@@ -776,7 +774,8 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
            ++next_shared) {
         reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr, tally);
         if (after) {
-          for (const std::int32_t i : shared[next_shared].particles) (*after)(chunk, i);
+          const std::vector<std::int32_t>& particles = shared[next_shared].particles;
+          (*after)(chunk, particles.data(), particles.size());
         }
       }
     };
@@ -792,8 +791,8 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
         reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally);
       }
       if (after) {
-        (*after)(chunk, row.i);
-        if (row.j >= 0) (*after)(chunk, row.j);
+        const std::int32_t particles[2] = {row.i, row.j};
+        (*after)(chunk, particles, row.j >= 0 ? 2 : 1);
       }
     }
     reflect_shared_before(chunk_end[c]);

@@ -138,9 +138,10 @@ class ConstrainedIntegrator : public Integrator {
                              const std::vector<bool>& reflected);
   ShadowOperator shadow_operator(const System& system, std::size_t c,
                                  const std::vector<Vec3>& p) const;
-  // Called with each particle of each reflected cluster once the cluster is reflected, on the
+  // Called with each reflected cluster's particles once the cluster is reflected, on the
   // thread that reflected it; `chunk` (below thread_count()) numbers that thread's share.
-  using AfterReflection = std::function<void(int chunk, std::int32_t particle)>;
+  using AfterReflection =
+      std::function<void(int chunk, const std::int32_t* particles, std::size_t count)>;
   // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
   // index `first_inequality`) that holds an inequality, at positions x.
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,

@@ -515,16 +515,27 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
   ws_.changed_of_chunk.resize(shares);
   for (std::vector<std::int32_t>& changed : ws_.changed_of_chunk) changed.clear();
   ws_.changed_largest2.assign(shares, ws_.largest2);
-  const AfterReflection again = [&, h](int chunk, std::int32_t i) {
-    const Vec3 d = free_step(half_kicked(ws_.p[i], f[i], h), h, P.mass[i]);
-    const Vec3 next = P.position[i] + d;
-    Vec3& now = ws_.predicted[i];
-    if (next.x != now.x || next.y != now.y || next.z != now.z) {
-      const auto c = static_cast<std::size_t>(chunk);
-      now = next;
-      ws_.prediction_changed[i] = 1;
-      ws_.changed_of_chunk[c].push_back(i);
-      ws_.changed_largest2[c] = std::max(ws_.changed_largest2[c], norm2(next - ws_.q[i]));
+  // The arrays by value: behind references they would be loaded again at every particle.
+  const Vec3* p = ws_.p.data();
+  const Vec3* force = f.data();
+  const double* mass = P.mass.data();
+  const Vec3* position = P.position.data();
+  const Vec3* q = ws_.q.data();
+  Vec3* predicted = ws_.predicted.data();
+  char* changed = ws_.prediction_changed.data();
+  const AfterReflection again = [&, h, p, force, mass, position, q, predicted, changed](
+                                    int chunk, const std::int32_t* particles, std::size_t count) {
+    const auto c = static_cast<std::size_t>(chunk);
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::int32_t i = particles[k];
+      const Vec3 next = position[i] + free_step(half_kicked(p[i], force[i], h), h, mass[i]);
+      Vec3& now = predicted[i];
+      if (next.x != now.x || next.y != now.y || next.z != now.z) {
+        now = next;
+        changed[i] = 1;
+        ws_.changed_of_chunk[c].push_back(i);
+        ws_.changed_largest2[c] = std::max(ws_.changed_largest2[c], norm2(next - q[i]));
+      }
     }
   };
   reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again);
