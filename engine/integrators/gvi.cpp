@@ -541,8 +541,8 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
   reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again);
   double largest2_bound = ws_.largest2;
   for (std::size_t c = 0; c < shares; ++c) {
-    const std::vector<std::int32_t>& changed = ws_.changed_of_chunk[c];
-    ws_.changed_particles.insert(ws_.changed_particles.end(), changed.begin(), changed.end());
+    const std::vector<std::int32_t>& of_chunk = ws_.changed_of_chunk[c];
+    ws_.changed_particles.insert(ws_.changed_particles.end(), of_chunk.begin(), of_chunk.end());
     largest2_bound = std::max(largest2_bound, ws_.changed_largest2[c]);
   }
   return largest2_bound;
