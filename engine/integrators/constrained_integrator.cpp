@@ -714,15 +714,11 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   constexpr std::size_t kSplitRows = 64;
   const int chunks = rows.size() < kSplitRows ? 1 : chunks_for_cheap(n);
   const auto slots = static_cast<std::size_t>(chunks);
-  // Where each chunk's particles end, as the particle passes split them.
-  std::vector<std::int32_t> chunk_end(slots);
-  for (int c = 0; c < chunks; ++c) {
-    chunk_end[static_cast<std::size_t>(c)] =
-        static_cast<std::int32_t>(chunk_range(n, c, chunks).end);
-  }
+  // Chunk c's particles, as the particle passes split them.
+  auto particles_of = [&](std::size_t c) { return chunk_range(n, static_cast<int>(c), chunks); };
   auto chunk_of = [&](std::int32_t particle) {
     std::size_t c = 0;
-    while (particle >= chunk_end[c]) ++c;
+    while (static_cast<std::size_t>(particle) >= particles_of(c).end) ++c;
     return c;
   };
   auto first = [&](std::int32_t r) {
@@ -764,7 +760,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     std::sort(lone.begin(), lone.end(),
               [&](std::int32_t a, std::int32_t b) { return first(a) < first(b); });
     // The shared clusters come by smallest particle: this chunk's are a run of them.
-    const std::int32_t begin = c == 0 ? 0 : chunk_end[c - 1];
+    const auto begin = static_cast<std::int32_t>(particles_of(c).begin);
     std::size_t next_shared = static_cast<std::size_t>(
         std::partition_point(shared.begin(), shared.end(),
                              [&](const Cluster& k) { return k.particles.front() < begin; }) -
@@ -795,7 +791,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
         (*after)(chunk, particles, row.j >= 0 ? 2 : 1);
       }
     }
-    reflect_shared_before(chunk_end[c]);
+    reflect_shared_before(static_cast<std::int32_t>(particles_of(c).end));
   });
   reflection_terms_.add_to(step_virial_);
   for (const ConstraintStatistics& figures : reflection_stats_) stats_.add(figures);
