@@ -14,6 +14,8 @@
 # CPU platform on the same thread counts (CCMA at 1e-4 for rods), LAMMPS on as many MPI ranks
 # (mpirun -np N; with rods LAMMPS gets its own model: see deli-peers). The hard-sphere fluid
 # has no peer (neither engine has hard spheres), nor has the default input.
+# Every one-thread run (deli's, the old binary's, OpenMM's, serial LAMMPS') is pinned with
+# taskset: a round's on one core, the next round's on the next; multi-thread runs are not.
 # The machine's ceiling: two one-thread deli runs of the input at once, their rates summed,
 # over one run alone (with the first two thread counts 1 and 2). No two-thread code can beat
 # it; on a machine whose cores slow each other (shared caches, memory bandwidth, a host's
@@ -34,6 +36,7 @@ mpirun=${MPIRUN:-$(command -v mpirun || true)}
 # run this on an idle machine, or set OMP_WAIT_POLICY=passive there. The load before and after
 # is printed.
 wait=${OMP_WAIT_POLICY:-}
+ncores=$(nproc)
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000
@@ -113,32 +116,39 @@ for spec in "${cases[@]}"; do
     done
   fi
   for ((r = 0; r < rounds; ++r)); do
+    # The one-thread runs of a round share one core, the next round's the next core: the two
+    # vCPUs of this project's machine have run at speeds 1.5x apart for minutes at a time
+    # (bench/README.md, "Stop 41"), and unpinned consecutive runs tended to land on alternate
+    # cores, so that which engine got the fast core decided the ratio.
+    one=(taskset -c $((r % ncores)))
     for v in "${variants[@]}"; do
       read -r engine threads <<< "$v"
+      pin=()
+      [[ $threads == 1 && $engine != two-deli ]] && pin=("${one[@]}")
       case $engine in
         old-deli)
-          line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$old" run input.toml |
+          line=$(cd "$dir" && "${pin[@]}" env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$old" run input.toml |
             grep "^loop time") ;;
         deli)
-          line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run input.toml \
+          line=$(cd "$dir" && "${pin[@]}" env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run input.toml \
             --threads "$threads" | grep "^loop time") ;;
         two-deli)
-          # Both runs' rates summed, printed as one line for the parse below.
+          # Both runs' rates summed, printed as one line for the parse below; one run a core.
           runs=$(cd "$dir" && {
-            env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 "$deli" run input.toml \
-              --threads 1 | grep "^loop time" &
-            env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 "$deli" run input.toml \
-              --threads 1 | grep "^loop time"
+            taskset -c 0 env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 "$deli" run \
+              input.toml --threads 1 | grep "^loop time" &
+            taskset -c $((1 % ncores)) env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 \
+              "$deli" run input.toml --threads 1 | grep "^loop time"
             wait
           })
           line="$(echo "$runs" | grep -oE '[0-9.]+e[+-]?[0-9]+ atom-steps/s' |
             awk '{ sum += $1 } END { printf "%.4e atom-steps/s", sum }')" ;;
         openmm)
-          line=$(cd "$dir" && "$peers" input.toml "$steps" openmm 1e-4 "$threads") ||
+          line=$(cd "$dir" && "${pin[@]}" "$peers" input.toml "$steps" openmm 1e-4 "$threads") ||
             echo "note: OpenMM on $threads thread(s) failed on $name" >&2 ;;
         lammps)
           if [[ $threads == 1 ]]; then
-            line=$(cd "$dir" && OMP_NUM_THREADS=1 "$peers" input.toml "$steps" lammps) ||
+            line=$(cd "$dir" && "${pin[@]}" env OMP_NUM_THREADS=1 "$peers" input.toml "$steps" lammps) ||
               echo "note: LAMMPS failed on $name" >&2
           else
             line=$(cd "$dir" && OMP_NUM_THREADS=1 OMPI_ALLOW_RUN_AS_ROOT=1 \

@@ -30,12 +30,22 @@ flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-o
 # faults). Measured (`perf stat`, a test binary listing no test): 233-239 ms of CPU with PIE,
 # 181-204 ms without. Run every time, so that an existing
 # build-asan/ takes these settings too (a quick no-op when they have not changed).
+# DELI_TEST_COMPILE_OPTIONS=-O0: the test files (never deli's libraries, which stay at -O1)
+# compiled unoptimised: their code is mostly calls into deli and GoogleTest's assertions, and
+# the optimiser's passes over the instrumented templates they instantiate (Eigen's, above all)
+# were most of their compile time: the test binaries' translation units (and their
+# precompiled header) took 346 CPU s at -O1, 216 at -O0 (g++ 12, each timed by a compiler
+# launcher). Still instrumented. The cost: the linker keeps the first copy of an inline
+# function it meets, the test files' (they come before the libraries), so deli's code calls
+# unoptimised copies of the small templates it does not inline at -O1 (std::vector<Vec3>'s
+# iterators and copies: 19 % of ContactTreatment's samples); still instrumented too.
 # DELI_TEST_GROUPS: ctest runs the cases of a suite in groups of up to 16, one process each
 # (cmake/test_groups.cmake), not one process per case: a process here costs about 0.2 s to
 # start and leak-check at exit (10 ms in the plain build), which over ~600 cases was about a
 # fifth of this pass's test time. Extra arguments to ctest (-R) match the groups' names
 # (a suite's, or "Suite[1-16]").
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_UNITY_BUILD=ON -DDELI_TEST_GROUPS=16 \
+  -DDELI_TEST_COMPILE_OPTIONS=-O0 \
   -DCMAKE_CXX_FLAGS_SANITIZE="$flags" -DCMAKE_C_FLAGS_SANITIZE="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS_SANITIZE="-fsanitize=address,undefined -no-pie" >/dev/null
 cmake --build build-asan -j "$jobs"
