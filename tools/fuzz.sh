@@ -23,7 +23,7 @@ flags="$opt -g1 -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefi
 # CMAKE_UNITY_BUILD: the libraries' files compiled in batches of 8 (as the tests are in every
 # build), since at -O0 parsing the shared headers is most of a file's time: 161 against 285
 # CPU s for the three targets (measured back to back). The sanitizer build does the same;
-# the plain build compiles deli file by file.
+# the plain build compiles the engine and the force fields file by file.
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Fuzz -DDELI_FUZZ=ON -DDELI_OPENMP=OFF \
   -DCMAKE_UNITY_BUILD=ON \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \

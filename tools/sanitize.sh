@@ -23,7 +23,9 @@ flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-o
 # build: the engine's, forcefields', io's and the cross-check's 450 CPU s become 322 (from
 # scratch, back to back, g++ 12). Results do not depend on it (no -ffast-math, contraction
 # off: the same operations in the same order), and the plain build still compiles the
-# libraries file by file, so a name clash between two files is still found there.
+# engine and the force fields file by file, so a name clash between two of their files is
+# still found there (io/, the cross-check and app/ are batched there too:
+# DELI_UNITY_OUTER_LAYERS in CMakeLists.txt).
 # -no-pie: each of the ~570 test processes otherwise applies about 600000 relative
 # relocations to its own executable at start-up (the sanitizers' metadata is full of
 # pointers; perf put half of a start-up's samples in the relocations and their page
