@@ -36,7 +36,8 @@ mpirun=${MPIRUN:-$(command -v mpirun || true)}
 # run this on an idle machine, or set OMP_WAIT_POLICY=passive there. The load before and after
 # is printed.
 wait=${OMP_WAIT_POLICY:-}
-ncores=$(nproc)
+# The cores this process may run on (taskset's numbering; a cpuset may leave out core 0).
+read -r -a cores <<< "$(/usr/bin/python3 -c 'import os; print(*sorted(os.sched_getaffinity(0)))')"
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000
@@ -120,7 +121,7 @@ for spec in "${cases[@]}"; do
     # vCPUs of this project's machine have run at speeds 1.5x apart for minutes at a time
     # (bench/README.md, "Stop 41"), and unpinned consecutive runs tended to land on alternate
     # cores, so that which engine got the fast core decided the ratio.
-    one=(taskset -c $((r % ncores)))
+    one=(taskset -c "${cores[r % ${#cores[@]}]}")
     for v in "${variants[@]}"; do
       read -r engine threads <<< "$v"
       pin=()
@@ -135,10 +136,10 @@ for spec in "${cases[@]}"; do
         two-deli)
           # Both runs' rates summed, printed as one line for the parse below; one run a core.
           runs=$(cd "$dir" && {
-            taskset -c 0 env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 "$deli" run \
-              input.toml --threads 1 | grep "^loop time" &
-            taskset -c $((1 % ncores)) env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 \
-              "$deli" run input.toml --threads 1 | grep "^loop time"
+            taskset -c "${cores[0]}" env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=1 \
+              "$deli" run input.toml --threads 1 | grep "^loop time" &
+            taskset -c "${cores[1 % ${#cores[@]}]}" env ${wait:+OMP_WAIT_POLICY=$wait} \
+              OMP_NUM_THREADS=1 "$deli" run input.toml --threads 1 | grep "^loop time"
             wait
           })
           line="$(echo "$runs" | grep -oE '[0-9.]+e[+-]?[0-9]+ atom-steps/s' |
