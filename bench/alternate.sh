@@ -23,11 +23,11 @@ table() {
 # this machine's two virtual cores ran one binary at 0.87-0.97 s and 1.25-1.34 s minutes
 # apart, and unpinned, consecutive runs tended to land on alternate cores, so that one binary
 # ran on the slow core far more often (bench/README.md, "Stop 41").
-cores=$(nproc)
+source "$(dirname "$0")/cores.sh"
 runs=$(for ((k = 0; k < rounds; ++k)); do
   pin=()
-  [[ ${THREADS:-1} == 1 && $cores -gt 1 ]] && command -v taskset > /dev/null &&
-    pin=(taskset -c $((k % cores)))
+  [[ ${THREADS:-1} == 1 && ${#cores[@]} -gt 1 ]] && command -v taskset > /dev/null &&
+    pin=(taskset -c "${cores[k % ${#cores[@]}]}")
   for side in old new; do
     bin=$old
     [[ $side == new ]] && bin=$new

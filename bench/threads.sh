@@ -36,8 +36,7 @@ mpirun=${MPIRUN:-$(command -v mpirun || true)}
 # run this on an idle machine, or set OMP_WAIT_POLICY=passive there. The load before and after
 # is printed.
 wait=${OMP_WAIT_POLICY:-}
-# The cores this process may run on (taskset's numbering; a cpuset may leave out core 0).
-read -r -a cores <<< "$(/usr/bin/python3 -c 'import os; print(*sorted(os.sched_getaffinity(0)))')"
+source "$top/bench/cores.sh"
 # input:steps (shortened; throughput, not physics)
 cases=(inputs/lj_liquid/lj_4000.toml:2000 inputs/lj_liquid/lj_32000.toml:300
        inputs/lj_chains/chains_4000_rigid.toml:300 inputs/hard_spheres/hs_4000.toml:1000
