@@ -49,16 +49,18 @@ struct LennardJones {
     energy = r6inv * (p.lj3 * r6inv - p.lj4);
   }
 
-  // PairForce's loop eight pairs at a time (lennard_jones_vector.cpp: AVX-512 under
-  // DELI_NATIVE on a CPU that has it). Each pair's f/r and energy are evaluate()'s bits, and
-  // the energy and virial are summed in the scalar loop's order (the same bits); a
-  // particle's own force is summed by lane, so forces differ from the scalar loop's in the
-  // last bits (the same on every run, and in every build: see lane_order_loop).
+  // PairForce's loop eight pairs at a time (lennard_jones_vector.cpp, under DELI_NATIVE:
+  // one AVX-512 vector on a CPU that has it, two AVX2 vectors of four on one that has AVX2). Each
+  // pair's f/r and energy are evaluate()'s bits, and the energy and virial are summed in the scalar
+  // loop's order (the same bits); a particle's own force is summed by lane, so forces differ from
+  // the scalar loop's in the last bits (the same on every run, and in every build: see
+  // lane_order_loop).
   static bool vector_loop_built();
   static double vector_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                             SymTensor& virial);
-  // vector_loop's sums one pair at a time, in its order: the same bits in any build (the
-  // portable build's vector_loop, and PairForce's loop for one type wherever it runs).
+  // vector_loop's sums one pair at a time, in its order: the same bits in any build (AVX-512,
+  // AVX2 or the portable build's vector_loop, and PairForce's loop for one type wherever it
+  // runs).
   static double lane_order_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                                 SymTensor& virial);
   // The shadow energy's curvature sum eight pairs at a time (AVX-512 where built; false

@@ -11,9 +11,60 @@
 // uninitialized inside the extracts and reductions (a false positive: GCC PR 105593).
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#elif defined(__AVX2__)
+#include <immintrin.h>
+#define DELI_LJ_AVX2 1
 #endif
 
 namespace deli {
+
+#if defined(DELI_LJ_AVX512) || defined(DELI_LJ_AVX2)
+namespace {
+
+// Given as ranges (ends), particle i's partners need not follow i-1's (the list by particle
+// read in the build's cell order): the entries of the particle four ahead fetched early, as
+// the hardware's stream prefetch then does not (LJ 32000: this loop took 1.25x its time on
+// the list by particle without, 1.03-1.07x with; the build saves the list's copy, 0.87x).
+inline void prefetch_partners_ahead(const VectorPairChunk& c, std::int32_t i) {
+  if (c.ends && i + 4 < c.last) {
+    const std::size_t next = c.offsets[i + 4], last = c.ends[i + 4];
+    const char* l = reinterpret_cast<const char*>(c.list + next);
+    const char* l_end = reinterpret_cast<const char*>(c.list + last);
+    for (; l < l_end + 63; l += 64) _mm_prefetch(l, _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(c.codes + next), _MM_HINT_T0);
+    _mm_prefetch(reinterpret_cast<const char*>(c.codes + last), _MM_HINT_T0);
+  }
+}
+
+// Energy and virial pair by pair in list order, as the scalar loop adds them: the same sums
+// bit for bit (a lattice's equal terms round alike, and eight lane sums moved a 32000-atom
+// energy by 3.5e-12 of itself from the other engines', whose sums are in this order too).
+// pair[q][l]: lane l's energy less the shift (q = 0) and its virial terms xx, yy, zz, xy,
+// xz, yz (q = 1..6); `in`: the lanes inside the cutoff. Tallies are rare steps: the cost
+// does not show.
+inline void add_tallies_in_lane_order(const double (&pair)[7][8], unsigned in, double& energy,
+                                      SymTensor& w) {
+  for (unsigned m = in; m != 0; m &= m - 1) {
+    const int l = __builtin_ctz(m);
+    energy += pair[0][l];
+    w.xx += pair[1][l], w.yy += pair[2][l], w.zz += pair[3][l];
+    w.xy += pair[4][l], w.xz += pair[5][l], w.yz += pair[6][l];
+  }
+}
+
+// The code of a zero image shift (the list's numbering, not assumed here), or 255, never a
+// code, if there is none: vectors whose lanes all have it skip the shift.
+inline int zero_shift_code(const Vec3* shifts) {
+  int zero_shift = 255;
+  for (int code = 26; code >= 0; --code) {
+    const Vec3& s = shifts[code];
+    if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) zero_shift = code;
+  }
+  return zero_shift;
+}
+
+}  // namespace
+#endif
 
 #ifdef DELI_LJ_AVX512
 namespace {
@@ -97,14 +148,7 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
   const __m512d lj3 = _mm512_set1_pd(p.lj3), lj4 = _mm512_set1_pd(p.lj4);
   const __m512d shift = _mm512_set1_pd(p.energy_shift);
   const ShiftTable sx(c.shifts, 0), sy(c.shifts, 1), sz(c.shifts, 2);
-  // The code of a zero shift (the list's numbering, not assumed here; 255, never a code,
-  // if there were none): vectors whose lanes all have it skip the shift.
-  int zero_shift = 255;
-  for (int code = 26; code >= 0; --code) {
-    const Vec3& s = c.shifts[code];
-    if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) zero_shift = code;
-  }
-  const __m128i unshifted = _mm_set1_epi8(static_cast<char>(zero_shift));
+  const __m128i unshifted = _mm_set1_epi8(static_cast<char>(zero_shift_code(c.shifts)));
   double energy = 0.0;
   SymTensor w;
   alignas(32) std::int32_t tail[8];
@@ -113,19 +157,7 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
                   zi = _mm512_set1_pd(c.x[i].z);
     __m512d fxi = _mm512_setzero_pd(), fyi = fxi, fzi = fxi;
     const std::size_t end = c.ends ? c.ends[i] : c.offsets[i + 1];
-    // Given as ranges (ends), particle i's partners need not follow i-1's (the list by
-    // particle read in the build's cell order): the entries of the particle four ahead
-    // fetched early, as the hardware's stream prefetch then does not (LJ 32000: this loop
-    // took 1.25x its time on the list by particle without, 1.03-1.07x with; the build saves the
-    // list's copy, 0.87x).
-    if (c.ends && i + 4 < c.last) {
-      const std::size_t next = c.offsets[i + 4], last = c.ends[i + 4];
-      const char* l = reinterpret_cast<const char*>(c.list + next);
-      const char* l_end = reinterpret_cast<const char*>(c.list + last);
-      for (; l < l_end + 63; l += 64) _mm_prefetch(l, _MM_HINT_T0);
-      _mm_prefetch(reinterpret_cast<const char*>(c.codes + next), _MM_HINT_T0);
-      _mm_prefetch(reinterpret_cast<const char*>(c.codes + last), _MM_HINT_T0);
-    }
+    prefetch_partners_ahead(c, i);
     for (std::size_t k = c.offsets[i]; k < end; k += 8) {
       // The partners' slots read one by one from the list (cheaper than from a vector);
       // in the last, partial vector lanes past the list's end take particle i itself: its
@@ -164,10 +196,6 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
       fxi = _mm512_add_pd(fxi, fx), fyi = _mm512_add_pd(fyi, fy), fzi = _mm512_add_pd(fzi, fz);
       subtract_transposed(c.f, j, fx, fy, fz);
       if constexpr (kTally) {
-        // Energy and virial pair by pair in list order, as the scalar loop adds them: the
-        // same sums bit for bit (a lattice's equal terms round alike, and eight lane sums
-        // moved a 32000-atom energy by 3.5e-12 of itself from the other engines', whose
-        // sums are in this order too). Tallies are rare steps: the cost does not show.
         const __m512d e = _mm512_mul_pd(r6inv, _mm512_sub_pd(_mm512_mul_pd(lj3, r6inv), lj4));
         alignas(64) double pair[7][8];
         _mm512_store_pd(pair[0], _mm512_sub_pd(e, shift));
@@ -177,12 +205,7 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
         _mm512_store_pd(pair[4], _mm512_mul_pd(dx, fy));
         _mm512_store_pd(pair[5], _mm512_mul_pd(dx, fz));
         _mm512_store_pd(pair[6], _mm512_mul_pd(dy, fz));
-        for (unsigned m = in; m != 0; m &= m - 1) {
-          const int l = __builtin_ctz(m);
-          energy += pair[0][l];
-          w.xx += pair[1][l], w.yy += pair[2][l], w.zz += pair[3][l];
-          w.xy += pair[4][l], w.xz += pair[5][l], w.yz += pair[6][l];
-        }
+        add_tallies_in_lane_order(pair, in, energy, w);
       }
     }
     PaddedVec3& fi = c.f[i];
@@ -195,7 +218,180 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& c, SymTensor& 
 }
 
 }  // namespace
+#endif
 
+#ifdef DELI_LJ_AVX2
+namespace {
+
+// Four partners' positions (padded, 32 bytes each) as x, y and z vectors: lanes 0 and 2's
+// halves (x y, then z pad) in one register and 1 and 3's in another, by 128-bit loads, then
+// unpacked (no lane-crossing shuffle).
+inline void load_transposed(const PaddedVec3* x, const std::int32_t* j, __m256d& px, __m256d& py,
+                            __m256d& pz) {
+  auto halves = [&](int a, int b, int half) {
+    return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_load_pd(&x[j[a]].x + 2 * half)),
+                                _mm_load_pd(&x[j[b]].x + 2 * half), 1);
+  };
+  const __m256d xy02 = halves(0, 2, 0), xy13 = halves(1, 3, 0);  // x0 y0 x2 y2, x1 y1 x3 y3
+  const __m256d z02 = halves(0, 2, 1), z13 = halves(1, 3, 1);    // z0 - z2 -, z1 - z3 -
+  px = _mm256_unpacklo_pd(xy02, xy13);
+  py = _mm256_unpackhi_pd(xy02, xy13);
+  pz = _mm256_unpacklo_pd(z02, z13);
+}
+
+// f[j[l]] -= (fx, fy, fz)[l] for the four lanes l: the transpose back, then one 256-bit load,
+// subtract and store per lane (a lane without a pair subtracts +0: no change).
+inline void subtract_transposed(PaddedVec3* f, const std::int32_t* j, __m256d fx, __m256d fy,
+                                __m256d fz) {
+  const __m256d xy02 = _mm256_unpacklo_pd(fx, fy);  // x0 y0 x2 y2
+  const __m256d xy13 = _mm256_unpackhi_pd(fx, fy);
+  const __m256d z02 = _mm256_unpacklo_pd(fz, _mm256_setzero_pd());  // z0 0 z2 0
+  const __m256d z13 = _mm256_unpackhi_pd(fz, _mm256_setzero_pd());
+  auto subtract = [&](int lane, __m256d v) {
+    double* q = &f[j[lane]].x;
+    _mm256_store_pd(q, _mm256_sub_pd(_mm256_load_pd(q), v));
+  };
+  subtract(0, _mm256_permute2f128_pd(xy02, z02, 0x20));
+  subtract(1, _mm256_permute2f128_pd(xy13, z13, 0x20));
+  subtract(2, _mm256_permute2f128_pd(xy02, z02, 0x31));
+  subtract(3, _mm256_permute2f128_pd(xy13, z13, 0x31));
+}
+
+// Lanes 0-3 and 4-7's sum in lane_order_loop's order: ((0 + 4) + (2 + 6)) + ((1 + 5) + (3 + 7)).
+inline double lane_sum(__m256d low, __m256d high) {
+  const __m256d half = _mm256_add_pd(low, high);
+  const __m128d quarter = _mm_add_pd(_mm256_castpd256_pd128(half), _mm256_extractf128_pd(half, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(quarter, _mm_unpackhi_pd(quarter, quarter)));
+}
+
+// All ones in the lanes first..first+3 below `count`.
+inline __m256d lanes_below(std::size_t count, long long first) {
+  return _mm256_castsi256_pd(
+      _mm256_cmpgt_epi64(_mm256_set1_epi64x(static_cast<long long>(count)),
+                         _mm256_setr_epi64x(first, first + 1, first + 2, first + 3)));
+}
+
+// The AVX-512 loop's vectors of eight partners as two halves of four (lanes 0-3 and 4-7), the
+// same operations by lane and the same lane sums: the same bits.
+template <bool kTally>
+double loop(const LennardJones::Params& p, const VectorPairChunk& chunk, SymTensor& virial) {
+  // A copy: the intrinsics' stores may alias anything, and through the reference every
+  // iteration loaded the chunk's pointers again.
+  const VectorPairChunk c = chunk;
+  const __m256d cutoff2 = _mm256_set1_pd(p.cutoff2), one = _mm256_set1_pd(1.0);
+  const __m256d lj1 = _mm256_set1_pd(p.lj1), lj2 = _mm256_set1_pd(p.lj2);
+  const __m256d lj3 = _mm256_set1_pd(p.lj3), lj4 = _mm256_set1_pd(p.lj4);
+  const __m256d shift = _mm256_set1_pd(p.energy_shift);
+  // The image shifts by code, padded as the positions are, so that a vector's shifts load
+  // and transpose as its partners' positions do; codes 27-31 (none) are zero.
+  alignas(32) PaddedVec3 shift_table[32] = {};
+  for (int code = 0; code < 27; ++code) {
+    shift_table[code] = {c.shifts[code].x, c.shifts[code].y, c.shifts[code].z, 0.0};
+  }
+  const int zero_shift = zero_shift_code(c.shifts);
+  std::uint64_t unshifted;
+  std::memset(&unshifted, zero_shift, sizeof unshifted);
+  // A partial vector's lanes past the list's end take a code that reads the table.
+  const auto fill_code = static_cast<std::uint8_t>(zero_shift < 27 ? zero_shift : 0);
+  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  double energy = 0.0;
+  SymTensor w;
+  alignas(32) std::int32_t tail[8];
+  alignas(32) std::int32_t code_slots[8];
+  for (std::int32_t i = c.first; i < c.last; ++i) {
+    const __m256d xi = _mm256_set1_pd(c.x[i].x), yi = _mm256_set1_pd(c.x[i].y),
+                  zi = _mm256_set1_pd(c.x[i].z);
+    __m256d fxi[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()}, fyi[2] = {fxi[0], fxi[0]},
+            fzi[2] = {fxi[0], fxi[0]};
+    const std::size_t end = c.ends ? c.ends[i] : c.offsets[i + 1];
+    prefetch_partners_ahead(c, i);
+    for (std::size_t k = c.offsets[i]; k < end; k += 8) {
+      // As the AVX-512 loop: lanes past the list's end take particle i itself, outside
+      // `lanes`, and subtract +0 from its force.
+      const std::size_t left = end - k;
+      const std::int32_t* j = c.list + k;
+      std::uint64_t codes = unshifted;
+      __m256d lanes[2] = {all, all};
+      if (left < 8) {
+        // The listed slots (a masked load reads nothing past the list's end), i elsewhere.
+        const __m256i listed = _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(left)),
+                                                  _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        _mm256_store_si256(
+            reinterpret_cast<__m256i*>(tail),
+            _mm256_blendv_epi8(_mm256_set1_epi32(i), _mm256_maskload_epi32(j, listed), listed));
+        j = tail;
+        std::memset(&codes, fill_code, sizeof codes);
+        std::memcpy(&codes, c.codes + k, left);
+        lanes[0] = lanes_below(left, 0);
+        lanes[1] = lanes_below(left, 4);
+      } else {
+        std::memcpy(&codes, c.codes + k, sizeof codes);
+      }
+      // Most vectors cross no periodic boundary: every lane's code the unshifted image's.
+      const bool shifted = codes != unshifted;
+      if (shifted) {
+        _mm256_store_si256(reinterpret_cast<__m256i*>(code_slots),
+                           _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(codes))));
+      }
+      [[maybe_unused]] alignas(32) double pair[7][8];
+      [[maybe_unused]] unsigned in_lanes = 0;
+      // Unrolled: the halves' accumulators then stay in registers.
+#pragma GCC unroll 2
+      for (int h = 0; h < 2; ++h) {
+        // A partial vector of at most four lanes has nothing in its second half.
+        if (h == 1 && left <= 4) break;
+        __m256d xj, yj, zj;
+        load_transposed(c.x, j + 4 * h, xj, yj, zj);
+        __m256d dx = _mm256_sub_pd(xi, xj), dy = _mm256_sub_pd(yi, yj), dz = _mm256_sub_pd(zi, zj);
+        if (shifted) {
+          __m256d sx, sy, sz;
+          load_transposed(shift_table, code_slots + 4 * h, sx, sy, sz);
+          dx = _mm256_sub_pd(dx, sx);
+          dy = _mm256_sub_pd(dy, sy);
+          dz = _mm256_sub_pd(dz, sz);
+        }
+        const __m256d r2 = _mm256_add_pd(
+            _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+        const __m256d in = _mm256_and_pd(lanes[h], _mm256_cmp_pd(r2, cutoff2, _CMP_LT_OQ));
+        // Lanes outside take r^2 = 1 (no infinity from a lane at r = 0), their results +0.
+        const __m256d r2inv = _mm256_div_pd(one, _mm256_blendv_pd(one, r2, in));
+        const __m256d r6inv = _mm256_mul_pd(_mm256_mul_pd(r2inv, r2inv), r2inv);
+        const __m256d f_over_r = _mm256_mul_pd(
+            _mm256_mul_pd(r6inv, _mm256_sub_pd(_mm256_mul_pd(lj1, r6inv), lj2)), r2inv);
+        const __m256d fx = _mm256_and_pd(in, _mm256_mul_pd(dx, f_over_r));
+        const __m256d fy = _mm256_and_pd(in, _mm256_mul_pd(dy, f_over_r));
+        const __m256d fz = _mm256_and_pd(in, _mm256_mul_pd(dz, f_over_r));
+        fxi[h] = _mm256_add_pd(fxi[h], fx);
+        fyi[h] = _mm256_add_pd(fyi[h], fy);
+        fzi[h] = _mm256_add_pd(fzi[h], fz);
+        subtract_transposed(c.f, j + 4 * h, fx, fy, fz);
+        if constexpr (kTally) {
+          const __m256d e = _mm256_mul_pd(r6inv, _mm256_sub_pd(_mm256_mul_pd(lj3, r6inv), lj4));
+          _mm256_store_pd(pair[0] + 4 * h, _mm256_sub_pd(e, shift));
+          _mm256_store_pd(pair[1] + 4 * h, _mm256_mul_pd(dx, fx));
+          _mm256_store_pd(pair[2] + 4 * h, _mm256_mul_pd(dy, fy));
+          _mm256_store_pd(pair[3] + 4 * h, _mm256_mul_pd(dz, fz));
+          _mm256_store_pd(pair[4] + 4 * h, _mm256_mul_pd(dx, fy));
+          _mm256_store_pd(pair[5] + 4 * h, _mm256_mul_pd(dx, fz));
+          _mm256_store_pd(pair[6] + 4 * h, _mm256_mul_pd(dy, fz));
+          in_lanes |= static_cast<unsigned>(_mm256_movemask_pd(in)) << (4 * h);
+        }
+      }
+      if constexpr (kTally) add_tallies_in_lane_order(pair, in_lanes, energy, w);
+    }
+    PaddedVec3& fi = c.f[i];
+    fi.x += lane_sum(fxi[0], fxi[1]);
+    fi.y += lane_sum(fyi[0], fyi[1]);
+    fi.z += lane_sum(fzi[0], fzi[1]);
+  }
+  if constexpr (kTally) virial += w;
+  return energy;
+}
+
+}  // namespace
+#endif
+
+#if defined(DELI_LJ_AVX512) || defined(DELI_LJ_AVX2)
 bool LennardJones::vector_loop_built() {
   return true;
 }

@@ -1,10 +1,10 @@
 // The Lennard-Jones pair loop's vector form (PairForce with one type and an image-coded
-// list: LennardJones::vector_loop, AVX-512 where the build has it) against the definition,
+// list: LennardJones::vector_loop, AVX-512 or AVX2 where the build has it) against the definition,
 // every pair of particles by minimum image with r^2 < cutoff^2 (strict), and against the
 // scalar loop (the same model as a two-type table, which PairForce runs pair by pair). The
 // vector loop sums a particle's pairs by lane, so the forces agree to round-off (1e-12 of the
 // largest force), not bit for bit; energy and virial are summed in the scalar order (its
-// bits). Without AVX-512 in the build both sides are scalar and the
+// bits). Without AVX-512 or AVX2 in the build both sides are scalar and the
 // test still checks the loop against the definition.
 #include <gtest/gtest.h>
 
@@ -238,8 +238,8 @@ TEST(LjVectorLoop, VectorsThroughOneCornerImage) {
   }
 }
 
-// The vector loop (where built) and its one-pair-at-a-time form, which a build without
-// AVX-512 runs: the same forces, energy and virial bit for bit. Each also reads the list in
+// The vector loop (where built: AVX-512 or AVX2) and its one-pair-at-a-time form, which a
+// portable build runs: the same forces, energy and virial bit for bit. Each also reads the list in
 // place through the build's ranges (VectorPairChunk::ends, the list as built: particle i's
 // partners not at offsets[i + 1]) with the same bits as through the list by particle.
 TEST(LjVectorLoop, OnePairAtATimeGivesTheVectorLoopsBits) {
