@@ -12,8 +12,9 @@ namespace deli {
 // within) is appended, in slot order, as its slot to slot_out and `code` to code_out from
 // position `hits` on; returns the new hit count. The output arrays must have room for
 // hits + (last - first) + kScanSlack entries: the vector form stores whole vectors past the
-// last hit. Built for the build machine's CPU under DELI_NATIVE (AVX-512: the test by
-// vector and the hits compressed in registers); the same hits in the same order either way.
+// last hit. Built for the build machine's CPU under DELI_NATIVE (AVX-512 or AVX2: the test
+// by vector of eight or four and the hits compressed in registers); the same hits in the
+// same order either way.
 inline constexpr std::size_t kScanSlack = 16;
 std::size_t scan_candidates(const double* x, const double* y, const double* z, std::size_t first,
                             std::size_t last, double ox, double oy, double oz, double within2,

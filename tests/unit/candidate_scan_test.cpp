@@ -1,4 +1,4 @@
-// The list build's candidate scan (vectorised where the CPU has AVX-512) finds exactly the
+// The list build's candidate scan (vectorised where the CPU has AVX-512 or AVX2) finds exactly the
 // candidates a plain loop finds, in slot order, with the run's code: on runs of every length
 // around the vector width, at offsets that leave partial vectors, with candidates exactly at
 // the reach (not within: the test is strict), NaN positions (never within) and hits appended
