@@ -63,8 +63,8 @@ struct LennardJones {
   // runs).
   static double lane_order_loop(const Params& p, const VectorPairChunk& chunk, bool tally,
                                 SymTensor& virial);
-  // The shadow energy's curvature sum eight pairs at a time (AVX-512 where built; false
-  // otherwise, and PairForce sums it pair by pair).
+  // The shadow energy's curvature sum by vector (eight pairs at a time with AVX-512, four with
+  // AVX2, where built; false otherwise, and PairForce sums it pair by pair).
   static bool curvature_loop_built();
   static double curvature_loop(const Params& p, const CurvatureChunk& chunk);
 };

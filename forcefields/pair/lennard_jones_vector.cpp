@@ -552,6 +552,95 @@ double LennardJones::curvature_loop(const Params& p, const CurvatureChunk& c) {
   }
   return sum;
 }
+#elif defined(DELI_LJ_AVX2)
+namespace {
+
+// Box::round_to_integer by lane: half away from zero where |x| < 2^52, x itself elsewhere
+// (NaN too). Truncated as the conversion truncates; + 0 turns a -0 (from -0.5 < x < 0) into
+// the conversion's +0.
+inline __m256d round_to_integer(__m256d x) {
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  const __m256d half = _mm256_or_pd(_mm256_set1_pd(0.5), _mm256_and_pd(sign, x));
+  const __m256d convertible =
+      _mm256_cmp_pd(_mm256_andnot_pd(sign, x), _mm256_set1_pd(0x1p52), _CMP_LT_OQ);
+  const __m256d whole =
+      _mm256_add_pd(_mm256_round_pd(_mm256_add_pd(x, half), _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC),
+                    _mm256_setzero_pd());
+  return _mm256_blendv_pd(x, whole, convertible);
+}
+
+}  // namespace
+
+bool LennardJones::curvature_loop_built() {
+  return true;
+}
+
+// The AVX-512 curvature loop's operations by lane in vectors of four (partners' components
+// gathered), the lanes added to the sum one at a time in list order.
+double LennardJones::curvature_loop(const Params& p, const CurvatureChunk& chunk) {
+  const CurvatureChunk c = chunk;  // as in loop(): not reloaded after each store
+  const __m256d cutoff2 = _mm256_set1_pd(p.cutoff2);
+  const __m256d lj1 = _mm256_set1_pd(p.lj1), lj2 = _mm256_set1_pd(p.lj2);
+  const __m256d lj1_13 = _mm256_set1_pd(13.0 * p.lj1), lj2_7 = _mm256_set1_pd(7.0 * p.lj2);
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d period[3] = {_mm256_set1_pd(c.period.x), _mm256_set1_pd(c.period.y),
+                             _mm256_set1_pd(c.period.z)};
+  const __m256d inverse[3] = {_mm256_set1_pd(c.inverse_period.x),
+                              _mm256_set1_pd(c.inverse_period.y),
+                              _mm256_set1_pd(c.inverse_period.z)};
+  double sum = 0.0;
+  alignas(32) double terms[4];
+  for (std::size_t i = c.first; i < c.last; ++i) {
+    const __m256d xi[3] = {_mm256_set1_pd(c.x[i].x), _mm256_set1_pd(c.x[i].y),
+                           _mm256_set1_pd(c.x[i].z)};
+    const __m256d vi[3] = {_mm256_set1_pd(c.v[i].x), _mm256_set1_pd(c.v[i].y),
+                           _mm256_set1_pd(c.v[i].z)};
+    const std::size_t end = c.ends ? c.ends[i] : c.offsets[i + 1];
+    for (std::size_t k = c.offsets[i]; k < end; k += 4) {
+      const std::size_t count = end - k < 4 ? end - k : 4;
+      const __m128i listed =
+          _mm_cmpgt_epi32(_mm_set1_epi32(static_cast<int>(count)), _mm_setr_epi32(0, 1, 2, 3));
+      const __m256d lanes = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(listed));
+      const __m128i j = _mm_maskload_epi32(c.list + k, listed);
+      const __m128i j3 = _mm_add_epi32(_mm_slli_epi32(j, 1), j);
+      auto gather = [&](const Vec3* v, int axis) {
+        return _mm256_mask_i32gather_pd(_mm256_setzero_pd(),
+                                        reinterpret_cast<const double*>(v) + axis, j3, lanes, 8);
+      };
+      __m256d d[3], w[3];
+      for (int a = 0; a < 3; ++a) {
+        d[a] = _mm256_sub_pd(xi[a], gather(c.x, a));
+        d[a] = _mm256_sub_pd(
+            d[a], _mm256_mul_pd(period[a], round_to_integer(_mm256_mul_pd(d[a], inverse[a]))));
+        w[a] = _mm256_sub_pd(vi[a], gather(c.v, a));
+      }
+      const __m256d r2 =
+          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(d[0], d[0]), _mm256_mul_pd(d[1], d[1])),
+                        _mm256_mul_pd(d[2], d[2]));
+      // In reach as the scalar term decides it: not r2 >= cutoff2.
+      const __m256d inside = _mm256_and_pd(lanes, _mm256_cmp_pd(r2, cutoff2, _CMP_NGE_UQ));
+      const __m256d r2inv = _mm256_div_pd(one, r2);
+      const __m256d r6inv = _mm256_mul_pd(_mm256_mul_pd(r2inv, r2inv), r2inv);
+      const __m256d f_over_r =
+          _mm256_mul_pd(_mm256_mul_pd(r6inv, _mm256_sub_pd(_mm256_mul_pd(lj1, r6inv), lj2)), r2inv);
+      const __m256d curvature = _mm256_mul_pd(
+          _mm256_mul_pd(r6inv, _mm256_sub_pd(_mm256_mul_pd(lj1_13, r6inv), lj2_7)), r2inv);
+      const __m256d along =
+          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(d[0], w[0]), _mm256_mul_pd(d[1], w[1])),
+                        _mm256_mul_pd(d[2], w[2]));
+      const __m256d along2 = _mm256_div_pd(_mm256_mul_pd(along, along), r2);
+      const __m256d w2 =
+          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(w[0], w[0]), _mm256_mul_pd(w[1], w[1])),
+                        _mm256_mul_pd(w[2], w[2]));
+      const __m256d term = _mm256_sub_pd(_mm256_mul_pd(curvature, along2),
+                                         _mm256_mul_pd(f_over_r, _mm256_sub_pd(w2, along2)));
+      // Out of reach: the scalar term's +0, which leaves the sum as it is.
+      _mm256_store_pd(terms, _mm256_and_pd(inside, term));
+      for (std::size_t l = 0; l < count; ++l) sum += terms[l];
+    }
+  }
+  return sum;
+}
 #else
 bool LennardJones::curvature_loop_built() {
   return false;

@@ -312,7 +312,7 @@ TEST(LjVectorLoop, SeveralTypesFallBackToTheScalarLoop) {
 }
 
 // The shadow energy's curvature sum, v^T H v over the listed pairs (PairForce::pair_curvature):
-// with one type LennardJones::curvature_loop (eight pairs at a time where built), with the
+// with one type LennardJones::curvature_loop (by vector where built), with the
 // same model as a two-type table PairForce's pair-by-pair sum. Each term is the scalar one's
 // bits and the terms are added in list order, so the two sums are equal bit for bit; both
 // agree with the definition (every pair by minimum image, its Hessian block's closed form
