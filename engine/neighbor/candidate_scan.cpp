@@ -334,6 +334,88 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
   return kept;
 }
 }  // namespace
+#elif defined(DELI_SCAN_AVX2)
+namespace {
+// For each mask of eight lanes, its set lanes' numbers in order, then 0x80 (a byte shuffle's
+// zero): widened, a permutation of 32-bit lanes that moves the set lanes to the front; as
+// bytes, the same for eight bytes.
+struct CompressTable8 {
+  alignas(8) std::uint8_t lanes[256][8] = {};
+  constexpr CompressTable8() {
+    for (int mask = 0; mask < 256; ++mask) {
+      int place = 0;
+      for (int lane = 0; lane < 8; ++lane) {
+        if (mask >> lane & 1) lanes[mask][place++] = static_cast<std::uint8_t>(lane);
+      }
+      for (; place < 8; ++place) lanes[mask][place] = 0x80;
+    }
+  }
+};
+constexpr CompressTable8 kCompress8;
+
+// The AVX-512 keep_hits_by_vector's form in eight-lane AVX2 vectors: the members and moved
+// keys gathered, the excluded partners compared, the kept lanes moved to the front by a
+// permutation from a table and stored whole (the outputs have slack), the codes by a byte
+// shuffle with the same table; the hits to recode, rare, listed lane by lane.
+std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* moved_key,
+                                std::int32_t key, const std::int32_t* hit_slot,
+                                const std::uint8_t* hit_code, std::size_t hits,
+                                const std::int32_t* excluded, std::size_t excluded_count,
+                                std::int32_t* j_out, std::uint8_t* code_out,
+                                std::uint32_t* recode_kept, std::uint32_t* recode_hit,
+                                std::size_t* recode_count) {
+  __m256i partner[kVectorExcluded];
+  for (std::size_t e = 0; e < kVectorExcluded; ++e) {
+    // Unused places repeat a partner: the same test again.
+    partner[e] = _mm256_set1_epi32(excluded_count ? excluded[e < excluded_count ? e : 0] : -1);
+  }
+  const __m256i key_v = _mm256_set1_epi32(key);
+  const __m256i iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  std::size_t kept = 0, recode = 0;
+  for (std::size_t h = 0; h < hits; h += 8) {
+    const std::size_t count = hits - h < 8 ? hits - h : 8;
+    const __m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(count)), iota);
+    const __m256i slot = _mm256_maskload_epi32(hit_slot + h, lanes);
+    const __m256i j = _mm256_mask_i32gather_epi32(_mm256_set1_epi32(-1), member, slot, lanes, 4);
+    const __m256i moved = _mm256_mask_i32gather_epi32(key_v, moved_key, slot, lanes, 4);
+    __m256i keep_v = lanes;
+    if (excluded_count) {
+      for (std::size_t e = 0; e < kVectorExcluded; ++e) {
+        keep_v = _mm256_andnot_si256(_mm256_cmpeq_epi32(j, partner[e]), keep_v);
+      }
+    }
+    const auto keep = static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(keep_v)));
+    std::uint64_t order;
+    std::memcpy(&order, kCompress8.lanes[keep], sizeof order);
+    const __m128i order_bytes = _mm_cvtsi64_si128(static_cast<long long>(order));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(j_out + kept),
+                        _mm256_permutevar8x32_epi32(j, _mm256_cvtepu8_epi32(order_bytes)));
+    // Eight codes read whole: hit_code has room for kScanSlack past the hits (the lanes past
+    // them are not kept).
+    std::uint64_t codes;
+    std::memcpy(&codes, hit_code + h, sizeof codes);
+    _mm_storel_epi64(
+        reinterpret_cast<__m128i*>(code_out + kept),
+        _mm_shuffle_epi8(_mm_cvtsi64_si128(static_cast<long long>(codes)), order_bytes));
+    const auto differs = keep & ~static_cast<unsigned>(_mm256_movemask_ps(
+                                    _mm256_castsi256_ps(_mm256_cmpeq_epi32(moved, key_v))));
+    if (differs) {
+      // In the kept lanes' order: their places in j_out and hit numbers, for those to recode.
+      auto place = static_cast<std::uint32_t>(kept);
+      for (unsigned m = keep; m != 0; m &= m - 1, ++place) {
+        const int lane = __builtin_ctz(m);
+        if (differs >> lane & 1u) {
+          recode_kept[recode] = place;
+          recode_hit[recode++] = static_cast<std::uint32_t>(h) + static_cast<std::uint32_t>(lane);
+        }
+      }
+    }
+    kept += static_cast<std::size_t>(__builtin_popcount(keep));
+  }
+  *recode_count = recode;
+  return kept;
+}
+}  // namespace
 #endif
 
 std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
@@ -341,7 +423,7 @@ std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key,
                       const std::int32_t* excluded, std::size_t excluded_count, std::int32_t* j_out,
                       std::uint8_t* code_out, std::uint32_t* recode_kept, std::uint32_t* recode_hit,
                       std::size_t* recode_count) {
-#ifdef DELI_SCAN_AVX512
+#if defined(DELI_SCAN_AVX512) || defined(DELI_SCAN_AVX2)
   if (excluded_count <= kVectorExcluded) {
     return keep_hits_by_vector(member, moved_key, key, hit_slot, hit_code, hits, excluded,
                                excluded_count, j_out, code_out, recode_kept, recode_hit,

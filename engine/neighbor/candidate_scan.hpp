@@ -48,8 +48,8 @@ std::size_t scan_stencil(const double* x, const double* y, const double* z, cons
 // `key` needs its own image code: its place in j_out goes to recode_kept and h to recode_hit
 // (the caller makes the code). Returns the number kept; *recode_count gets the number to
 // recode. The outputs need room for hits + kScanSlack entries. Under DELI_NATIVE with AVX-512,
-// sixteen hits a vector (the partners compared by vector, at most kVectorExcluded of them;
-// more are looked up one hit at a time): the same entries either way.
+// sixteen hits a vector, with AVX2 eight (the partners compared by vector, at most kVectorExcluded
+// of them; more are looked up one hit at a time): the same entries either way.
 inline constexpr std::size_t kVectorExcluded = 4;
 std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
                       const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
