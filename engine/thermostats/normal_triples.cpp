@@ -9,6 +9,9 @@
 // uninitialized inside the conversions (a false positive: GCC PR 105593).
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#elif defined(__AVX2__)
+#include <immintrin.h>
+#define DELI_NORMALS_AVX2 1
 #endif
 
 namespace deli {
@@ -131,6 +134,119 @@ void normal_triples(std::uint64_t seed, const PhiloxCounter* start, std::size_t 
     _mm512_store_pd(z, _mm512_mul_pd(u2, f2));
     for (int l = 0; l < 8; ++l) {
       if (second_found >> l & 1) {
+        out[k + l] = {x[l], y[l], z[l]};
+      } else {
+        normal_triples_by_stream(seed, start + k + l, 1, out + k + l);
+      }
+    }
+  }
+  normal_triples_by_stream(seed, start + k, count - k, out + k);
+}
+#elif defined(DELI_NORMALS_AVX2)
+namespace {
+
+// The AVX-512 form's Philox4x32-10 on four counters: each 32-bit word in the low half of a
+// 64-bit lane.
+struct Block4 {
+  __m256i w[4];
+};
+
+Block4 philox4(Block4 c, std::uint32_t key0, std::uint32_t key1) {
+  const __m256i low = _mm256_set1_epi64x(0xffffffffLL);
+  const __m256i multiplier0 = _mm256_set1_epi64x(0xD2511F53),
+                multiplier1 = _mm256_set1_epi64x(0xCD9E8D57);
+  for (int round = 0; round < 10; ++round) {
+    if (round > 0) key0 += 0x9E3779B9u, key1 += 0xBB67AE85u;
+    const __m256i p0 = _mm256_mul_epu32(multiplier0, c.w[0]);
+    const __m256i p1 = _mm256_mul_epu32(multiplier1, c.w[2]);
+    const __m256i k0 = _mm256_set1_epi64x(key0), k1 = _mm256_set1_epi64x(key1);
+    c.w[0] = _mm256_xor_si256(_mm256_xor_si256(_mm256_srli_epi64(p1, 32), c.w[1]), k0);
+    c.w[1] = _mm256_and_si256(p1, low);
+    c.w[2] = _mm256_xor_si256(_mm256_xor_si256(_mm256_srli_epi64(p0, 32), c.w[3]), k1);
+    c.w[3] = _mm256_and_si256(p0, low);
+  }
+  return c;
+}
+
+// RandomStream::symmetric_uniform of a word: (int32 + 0.5) 2^-31, exact in doubles.
+__m256d symmetric(__m256i word) {
+  const __m128i as_int = _mm256_castsi256_si128(
+      _mm256_permutevar8x32_epi32(word, _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6)));
+  return _mm256_mul_pd(_mm256_add_pd(_mm256_cvtepi32_pd(as_int), _mm256_set1_pd(0.5)),
+                       _mm256_set1_pd(0x1.0p-31));
+}
+
+// The polar method's factor sqrt(-2 log(s) / s), in RandomStream::normal's operations; the
+// logarithm lane by lane from libm (its bits).
+__m256d polar_factor(__m256d s) {
+  alignas(32) double lanes[4];
+  _mm256_store_pd(lanes, s);
+  for (double& x : lanes) x = std::log(x);
+  const __m256d log_s = _mm256_load_pd(lanes);
+  return _mm256_sqrt_pd(_mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(-2.0), log_s), s));
+}
+
+}  // namespace
+
+bool normal_triples_vectorised() {
+  return true;
+}
+
+// The AVX-512 form four streams at a time, its masks as lanes of all ones.
+constexpr int kBlocks = 3;
+
+void normal_triples(std::uint64_t seed, const PhiloxCounter* start, std::size_t count, Vec3* out) {
+  const auto key0 = static_cast<std::uint32_t>(seed), key1 = static_cast<std::uint32_t>(seed >> 32);
+  const __m256d one = _mm256_set1_pd(1.0);
+  std::size_t k = 0;
+  for (; k + 4 <= count; k += 4) {
+    alignas(32) std::uint64_t word[4][4];
+    for (int l = 0; l < 4; ++l) {
+      for (int q = 0; q < 4; ++q) word[q][l] = start[k + l][q];
+    }
+    Block4 counter;
+    for (int q = 0; q < 4; ++q) {
+      counter.w[q] = _mm256_load_si256(reinterpret_cast<const __m256i*>(word[q]));
+    }
+    Block4 block[kBlocks];
+    for (int b = 0; b < kBlocks; ++b) {
+      block[b] = philox4(counter, key0, key1);
+      counter.w[3] = _mm256_and_si256(_mm256_add_epi64(counter.w[3], _mm256_set1_epi64x(1)),
+                                      _mm256_set1_epi64x(0xffffffffLL));
+    }
+    constexpr int pairs = 2 * kBlocks;
+    __m256d u[pairs], v[pairs], s[pairs], accepted[pairs];
+    for (int q = 0; q < pairs; ++q) {
+      const Block4& b = block[q / 2];
+      u[q] = symmetric(b.w[2 * (q % 2)]);
+      v[q] = symmetric(b.w[2 * (q % 2) + 1]);
+      s[q] = _mm256_add_pd(_mm256_mul_pd(u[q], u[q]), _mm256_mul_pd(v[q], v[q]));
+      accepted[q] = _mm256_cmp_pd(s[q], one, _CMP_LT_OQ);
+    }
+    __m256d u1 = u[0], v1 = v[0], s1 = s[0];
+    __m256d u2 = u[0], s2 = s[0];
+    __m256d none_before = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    __m256d one_before = _mm256_setzero_pd(), second_found = _mm256_setzero_pd();
+    for (int q = 0; q < pairs; ++q) {
+      const __m256d first_here = _mm256_and_pd(none_before, accepted[q]);
+      const __m256d second_here = _mm256_and_pd(one_before, accepted[q]);
+      u1 = _mm256_blendv_pd(u1, u[q], first_here);
+      v1 = _mm256_blendv_pd(v1, v[q], first_here);
+      s1 = _mm256_blendv_pd(s1, s[q], first_here);
+      u2 = _mm256_blendv_pd(u2, u[q], second_here);
+      s2 = _mm256_blendv_pd(s2, s[q], second_here);
+      second_found = _mm256_or_pd(second_found, second_here);
+      one_before = _mm256_or_pd(_mm256_andnot_pd(accepted[q], one_before), first_here);
+      none_before = _mm256_andnot_pd(accepted[q], none_before);
+    }
+    const __m256d f1 = polar_factor(s1), f2 = polar_factor(s2);
+    alignas(32) double x[4], y[4], z[4];
+    _mm256_store_pd(x, _mm256_mul_pd(u1, f1));
+    _mm256_store_pd(y, _mm256_mul_pd(v1, f1));
+    _mm256_store_pd(z, _mm256_mul_pd(u2, f2));
+    const auto found = static_cast<unsigned>(_mm256_movemask_pd(second_found));
+    for (int l = 0; l < 4; ++l) {
+      if (found >> l & 1) {
         out[k + l] = {x[l], y[l], z[l]};
       } else {
         normal_triples_by_stream(seed, start + k + l, 1, out + k + l);

@@ -76,9 +76,9 @@ TEST(RandomStream, SameCounterSameNumbersOtherSeedOthers) {
 }
 
 // The Langevin thermostat's draws (normal_triples: eight streams at a time where the build
-// has AVX-512) are three RandomStream::normal() calls per stream, bit for bit: streams whose
-// two accepted pairs lie in their first two Philox blocks, in the third, and those
-// RandomStream draws itself (fewer than two of their first six pairs accepted) all occur.
+// has AVX-512, four where it has AVX2) are three RandomStream::normal() calls per stream, bit for
+// bit: streams whose two accepted pairs lie in their first two Philox blocks, in the third, and
+// those RandomStream draws itself (fewer than two of their first six pairs accepted) all occur.
 // 4099 counters (a tail shorter than eight), ids and steps over their 32-bit halves, a last
 // word near 2^32 - 1 (the next blocks' counters wrap), two seeds with both halves set.
 TEST(RandomStream, NormalTriplesAreThreeNormalCallsBitForBit) {
