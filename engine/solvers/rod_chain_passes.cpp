@@ -392,6 +392,31 @@ inline void store_lanes(double* out, const Lanes& v) {
   for (std::size_t l = 0; l < w; ++l) out[l] = v[l];
 }
 const LaneMask all_lanes = broadcast(0.0) == 0.0;
+
+// Four lanes of the eight, for the passes that run them in halves.
+typedef double Quarter __attribute__((vector_size(4 * sizeof(double))));
+template <class V>
+inline V load_as(const double* p) {
+  V v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class V>
+inline void store_as(double* p, const V& v) {
+  __builtin_memcpy(p, &v, sizeof v);
+}
+inline Quarter absolute(Quarter v) {
+  typedef long QuarterMask __attribute__((vector_size(4 * sizeof(double))));
+  QuarterMask bits;
+  __builtin_memcpy(&bits, &v, sizeof bits);
+  bits &= 0x7fffffffffffffffL;
+  __builtin_memcpy(&v, &bits, sizeof v);
+  return v;
+}
+inline Quarter square_root(Quarter v) {
+  for (std::size_t l = 0; l < 4; ++l) v[l] = __builtin_sqrt(v[l]);
+  return v;
+}
 }  // namespace
 
 void differences(std::size_t m, const double* x, const double* forward, const double* image,
@@ -522,41 +547,46 @@ namespace {
 // bead b read from x; then rod b-1 measured from beads b-1 (kept in registers) and b, and
 // (with `residual`) normalised with its residual. Each value by the operations of the lanes'
 // z + step, positions(), differences(), held_bound() and normalize_residual(), in their order.
-template <bool place, bool residual>
-void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* hold, double* bound,
-             double* phi, double* norm, double* merit) {
+template <bool place, bool residual, class V>
+void measure_lanes(const Measured& in, std::size_t half, double* x, double* d, double* r,
+                   std::uint8_t* hold, double* bound, double* phi, double* norm, double* merit) {
+  using M = decltype(V{} < V{});
+  constexpr std::size_t v_lanes = sizeof(V) / sizeof(double);
+  auto load = [half](const double* p) { return load_as<V>(p + half); };
+  auto store = [half](double* p, const V& v) { store_as<V>(p + half, v); };
   const std::size_t m = in.m;
   const std::size_t n = m + 1;
-  const std::size_t all = m * w;
+  const std::size_t rods = m * w;
   const std::size_t beads = n * w;
   const double px = in.period[0], py = in.period[1], pz = in.period[2];
   const double lx = in.limit[0], ly = in.limit[1], lz = in.limit[2];
-  LaneMask taken;
-  for (std::size_t l = 0; l < w; ++l) taken[l] = in.take && in.take[l] ? -1L : 0L;
-  LaneMask within = all_lanes, usable = all_lanes, finite = all_lanes;
-  Lanes largest = broadcast(0.0), largest_phi = largest, squares = largest;
-  Lanes z_before = broadcast(0.0), ux_before = z_before, uy_before = z_before, uz_before = z_before;
-  Lanes ax = z_before, ay = z_before, az = z_before;  // bead b-1
+  M taken;
+  for (std::size_t l = 0; l < v_lanes; ++l) taken[l] = in.take && in.take[half + l] ? -1L : 0L;
+  const M all = V{} == V{};
+  M within = all, usable = all, finite = all;
+  V largest{}, largest_phi{}, squares{};
+  V z_before{}, ux_before{}, uy_before{}, uz_before{};
+  V ax{}, ay{}, az{};  // bead b-1
   for (std::size_t b = 0; b < n; ++b) {
     const std::size_t i = b * w;
-    Lanes cx, cy, cz;
+    V cx, cy, cz;
     if constexpr (place) {
       const double* z = in.z;
       const double* u = in.u;
-      Lanes ix, iy, iz;
+      V ix, iy, iz;
       if (b < m) {
-        const Lanes now = load(z + i);
-        const Lanes z_b = taken ? now + load(in.step + i) : now;
+        const V now = load(z + i);
+        const V z_b = taken ? now + load(in.step + i) : now;
         store(in.z + i, z_b);
-        const Lanes ux = load(u + i), uy = load(u + all + i), uz = load(u + 2 * all + i);
-        const Lanes sb = load(in.second_sign + i) * z_b;
+        const V ux = load(u + i), uy = load(u + rods + i), uz = load(u + 2 * rods + i);
+        const V sb = load(in.second_sign + i) * z_b;
         if (b == 0) {
-          const Lanes s = load(in.first_sign) * z_b;
+          const V s = load(in.first_sign) * z_b;
           ix = 0.0 + ux * s;
           iy = 0.0 + uy * s;
           iz = 0.0 + uz * s;
         } else {
-          const Lanes sa = load(in.first_sign + i) * z_before;
+          const V sa = load(in.first_sign + i) * z_before;
           ix = (0.0 + ux_before * sa) + ux * sb;
           iy = (0.0 + uy_before * sa) + uy * sb;
           iz = (0.0 + uz_before * sa) + uz * sb;
@@ -566,7 +596,7 @@ void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* 
         uy_before = uy;
         uz_before = uz;
       } else {
-        const Lanes sa = load(in.first_sign + i) * z_before;
+        const V sa = load(in.first_sign + i) * z_before;
         ix = 0.0 + ux_before * sa;
         iy = 0.0 + uy_before * sa;
         iz = 0.0 + uz_before * sa;
@@ -576,7 +606,7 @@ void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* 
         store(in.impulse + beads + i, iy);
         store(in.impulse + 2 * beads + i, iz);
       }
-      const Lanes h = load(in.hw + i);
+      const V h = load(in.hw + i);
       cx = load(in.x0 + i) + ix * h;
       cy = load(in.x0 + beads + i) + iy * h;
       cz = load(in.x0 + 2 * beads + i) + iz * h;
@@ -590,38 +620,38 @@ void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* 
     }
     if (b > 0) {
       const std::size_t k = i - w;  // rod b-1
-      const LaneMask f = load(in.forward + k) > 0;
-      Lanes ex = (f ? ax : cx) - (f ? cx : ax);
-      Lanes ey = (f ? ay : cy) - (f ? cy : ay);
-      Lanes ez = (f ? az : cz) - (f ? cz : az);
+      const M f = load(in.forward + k) > 0;
+      V ex = (f ? ax : cx) - (f ? cx : ax);
+      V ey = (f ? ay : cy) - (f ? cy : ay);
+      V ez = (f ? az : cz) - (f ? cz : az);
       ex -= px * load(in.image + k);
-      ey -= py * load(in.image + all + k);
-      ez -= pz * load(in.image + 2 * all + k);
+      ey -= py * load(in.image + rods + k);
+      ez -= pz * load(in.image + 2 * rods + k);
       within &= (absolute(ex) <= lx) & (absolute(ey) <= ly) & (absolute(ez) <= lz);
-      const Lanes r2 = ex * ex + ey * ey + ez * ez;
-      const Lanes l = load(in.length + k);
-      const Lanes relative_gap = absolute(r2 - l * l) * load(in.inverse_length + k);
-      const Lanes rod_bound = relative_gap * (1 + bound_slack) + l * bound_slack;
+      const V r2 = ex * ex + ey * ey + ez * ez;
+      const V l = load(in.length + k);
+      const V relative_gap = absolute(r2 - l * l) * load(in.inverse_length + k);
+      const V rod_bound = relative_gap * (1 + bound_slack) + l * bound_slack;
       usable &= (relative_gap <= 0.25 * l) & (rod_bound <= in.tolerance);
       largest = rod_bound > largest ? rod_bound : largest;
       if constexpr (residual) {
-        const Lanes length = square_root(r2);
-        const Lanes inverse = 1.0 / length;
-        const LaneMask positive = length > 0;
+        const V length = square_root(r2);
+        const V inverse = 1.0 / length;
+        const M positive = length > 0;
         store(r + k, length);
         store(d + k, positive ? ex * inverse : 0.0);
-        store(d + all + k, positive ? ey * inverse : 0.0);
-        store(d + 2 * all + k, positive ? ez * inverse : 0.0);
-        const Lanes p = length - l;
+        store(d + rods + k, positive ? ey * inverse : 0.0);
+        store(d + 2 * rods + k, positive ? ez * inverse : 0.0);
+        const V p = length - l;
         store(phi + k, p);
         finite &= (p - p) == 0;
-        const Lanes magnitude_p = absolute(p);
+        const V magnitude_p = absolute(p);
         largest_phi = magnitude_p > largest_phi ? magnitude_p : largest_phi;
         squares += p * p;
       } else {
         store(d + k, ex);
-        store(d + all + k, ey);
-        store(d + 2 * all + k, ez);
+        store(d + rods + k, ey);
+        store(d + 2 * rods + k, ez);
         store(r + k, r2);
       }
     }
@@ -629,14 +659,29 @@ void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* 
     ay = cy;
     az = cz;
   }
-  for (std::size_t l = 0; l < w; ++l) {
-    hold[l] = static_cast<std::uint8_t>(within[l] != 0);
-    bound[l] = usable[l] ? largest[l] : __builtin_inf();
+  for (std::size_t l = 0; l < v_lanes; ++l) {
+    hold[half + l] = static_cast<std::uint8_t>(within[l] != 0);
+    bound[half + l] = usable[l] ? largest[l] : __builtin_inf();
     if constexpr (residual) {
-      norm[l] = finite[l] ? largest_phi[l] : __builtin_inf();
-      merit[l] = squares[l];
+      norm[half + l] = finite[l] ? largest_phi[l] : __builtin_inf();
+      merit[half + l] = squares[l];
     }
   }
+}
+
+// Lanes in vectors of four where the CPU has AVX2 and not AVX-512: as eight (two registers
+// each), the pass's live vectors did not fit the sixteen registers and half its instructions
+// were spills. Each lane's operations are the same either way.
+template <bool place, bool residual>
+void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* hold, double* bound,
+             double* phi, double* norm, double* merit) {
+#if defined(__AVX2__) && !defined(__AVX512F__)
+  for (std::size_t half = 0; half < w; half += 4) {
+    measure_lanes<place, residual, Quarter>(in, half, x, d, r, hold, bound, phi, norm, merit);
+  }
+#else
+  measure_lanes<place, residual, Lanes>(in, 0, x, d, r, hold, bound, phi, norm, merit);
+#endif
 }
 }  // namespace
 
