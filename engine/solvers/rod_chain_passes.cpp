@@ -707,63 +707,87 @@ void impulses(std::size_t m, const double* u, const double* z, const double* fir
   }
 }
 
-void project_rows(std::size_t m, double* d, double* r, const double* length, const double* v,
-                  const double* low_first, const double* low_sign, const double* high_sign,
-                  const double* w_low, const double* w_high, const double* coupling,
-                  double* largest_deviation, double* lower, double* diagonal, double* upper,
-                  double* rhs) {
+namespace {
+template <class V>
+void project_rows_lanes(std::size_t half, std::size_t m, double* d, double* r, const double* length,
+                        const double* v, const double* low_first, const double* low_sign,
+                        const double* high_sign, const double* w_low, const double* w_high,
+                        const double* coupling, double* largest_deviation, double* lower,
+                        double* diagonal, double* upper, double* rhs) {
+  using M = decltype(V{} < V{});
+  constexpr std::size_t v_lanes = sizeof(V) / sizeof(double);
+  auto load = [half](const double* p) { return load_as<V>(p + half); };
+  auto store = [half](double* p, const V& v) { store_as<V>(p + half, v); };
   const std::size_t n = m + 1;
   const std::size_t all = m * w;
   constexpr double scale = 1.0;
-  Lanes largest = broadcast(0.0);
-  Lanes px = largest, py = largest, pz = largest;  // rod k-1's direction
+  V largest = V{};
+  V px = largest, py = largest, pz = largest;  // rod k-1's direction
   for (std::size_t i = 0; i < all; i += w) {
     // normalize()
-    const Lanes l = square_root(load(r + i));
-    const Lanes inverse = 1.0 / l;
-    const LaneMask positive = l > 0;
+    const V l = square_root(load(r + i));
+    const V inverse = 1.0 / l;
+    const M positive = l > 0;
     store(r + i, l);
-    const Lanes ux = positive ? load(d + i) * inverse : 0.0;
-    const Lanes uy = positive ? load(d + all + i) * inverse : 0.0;
-    const Lanes uz = positive ? load(d + 2 * all + i) * inverse : 0.0;
+    const V ux = positive ? load(d + i) * inverse : 0.0;
+    const V uy = positive ? load(d + all + i) * inverse : 0.0;
+    const V uz = positive ? load(d + 2 * all + i) * inverse : 0.0;
     store(d + i, ux);
     store(d + all + i, uy);
     store(d + 2 * all + i, uz);
     // largest_deviation()
-    const Lanes length_k = load(length + i);
-    const Lanes deviation = absolute(l - length_k) / length_k;
+    const V length_k = load(length + i);
+    const V deviation = absolute(l - length_k) / length_k;
     largest = largest < deviation ? deviation : largest;
     // projections()
-    const LaneMask f = load(low_first + i) > 0;
-    const Lanes ax = load(v + i), ay = load(v + n * w + i), az = load(v + 2 * n * w + i);
-    const Lanes cx = load(v + i + w), cy = load(v + n * w + i + w),
-                cz = load(v + 2 * n * w + i + w);
-    const Lanes to_low = ux * (f ? ax : cx) + uy * (f ? ay : cy) + uz * (f ? az : cz);
-    const Lanes to_high = ux * (f ? cx : ax) + uy * (f ? cy : ay) + uz * (f ? cz : az);
-    Lanes projected = broadcast(0.0);
+    const M f = load(low_first + i) > 0;
+    const V ax = load(v + i), ay = load(v + n * w + i), az = load(v + 2 * n * w + i);
+    const V cx = load(v + i + w), cy = load(v + n * w + i + w), cz = load(v + 2 * n * w + i + w);
+    const V to_low = ux * (f ? ax : cx) + uy * (f ? ay : cy) + uz * (f ? az : cz);
+    const V to_high = ux * (f ? cx : ax) + uy * (f ? cy : ay) + uz * (f ? cz : az);
+    V projected = V{};
     projected += load(low_sign + i) * to_low;
     projected += load(high_sign + i) * to_high;
     // bands() with a = b = u: the diagonal and right-hand side, then the entries between
     // rods k-1 and k.
-    const Lanes dd = ux * ux + uy * uy + uz * uz;
-    Lanes entry = broadcast(0.0);
+    const V dd = ux * ux + uy * uy + uz * uz;
+    V entry = V{};
     entry += 1.0 * load(w_low + i) * dd;
     entry += 1.0 * load(w_high + i) * dd;
     store(diagonal + i, entry * scale);
     store(rhs + i, -projected);
     if (i > 0) {
       const std::size_t before = i - w;
-      const Lanes c = load(coupling + before);
-      const Lanes up = px * ux + py * uy + pz * uz;
+      const V c = load(coupling + before);
+      const V up = px * ux + py * uy + pz * uz;
       store(upper + before, (0.0 + c * up) * scale);
-      const Lanes down = ux * px + uy * py + uz * pz;
+      const V down = ux * px + uy * py + uz * pz;
       store(lower + i, (0.0 + c * down) * scale);
     }
     px = ux;
     py = uy;
     pz = uz;
   }
-  store_lanes(largest_deviation, largest);
+  for (std::size_t l = 0; l < v_lanes; ++l) largest_deviation[half + l] = largest[l];
+}
+
+}  // namespace
+
+// In vectors of four lanes where the CPU has AVX2 and not AVX-512, as measure().
+void project_rows(std::size_t m, double* d, double* r, const double* length, const double* v,
+                  const double* low_first, const double* low_sign, const double* high_sign,
+                  const double* w_low, const double* w_high, const double* coupling,
+                  double* largest_deviation, double* lower, double* diagonal, double* upper,
+                  double* rhs) {
+#if defined(__AVX2__) && !defined(__AVX512F__)
+  for (std::size_t half = 0; half < w; half += 4) {
+    project_rows_lanes<Quarter>(half, m, d, r, length, v, low_first, low_sign, high_sign, w_low,
+                                w_high, coupling, largest_deviation, lower, diagonal, upper, rhs);
+  }
+#else
+  project_rows_lanes<Lanes>(0, m, d, r, length, v, low_first, low_sign, high_sign, w_low, w_high,
+                            coupling, largest_deviation, lower, diagonal, upper, rhs);
+#endif
 }
 
 void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
