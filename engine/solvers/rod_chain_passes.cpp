@@ -417,6 +417,22 @@ inline Quarter square_root(Quarter v) {
   for (std::size_t l = 0; l < 4; ++l) v[l] = __builtin_sqrt(v[l]);
   return v;
 }
+template <class V>
+constexpr std::size_t lanes_in = sizeof(V) / sizeof(double);
+
+// pass(V{}, half) for the lanes half.. of a vector type V: the eight lanes in two halves of
+// four where the CPU has AVX2 and not AVX-512, else at once. As eight (two registers each),
+// a pass's live vectors did not fit AVX2's sixteen registers and up to half its instructions
+// were spills. Each lane's operations are the same either way.
+template <class Pass>
+inline void in_lane_vectors(Pass&& pass) {
+#if defined(__AVX2__) && !defined(__AVX512F__)
+  pass(Quarter{}, 0);
+  pass(Quarter{}, 4);
+#else
+  pass(Lanes{}, 0);
+#endif
+}
 }  // namespace
 
 void differences(std::size_t m, const double* x, const double* forward, const double* image,
@@ -426,26 +442,32 @@ void differences(std::size_t m, const double* x, const double* forward, const do
   const std::size_t all = m * w;
   const double px = period[0], py = period[1], pz = period[2];
   const double lx = limit[0], ly = limit[1], lz = limit[2];
-  LaneMask within = all_lanes;
-  for (std::size_t i = 0; i < all; i += w) {
-    const LaneMask f = load(forward + i) > 0;
-    const Lanes ax = load(x + i), ay = load(x + n * w + i), az = load(x + 2 * n * w + i);
-    const Lanes cx = load(x + i + w), cy = load(x + n * w + i + w),
-                cz = load(x + 2 * n * w + i + w);
-    Lanes ex = (f ? ax : cx) - (f ? cx : ax);
-    Lanes ey = (f ? ay : cy) - (f ? cy : ay);
-    Lanes ez = (f ? az : cz) - (f ? cz : az);
-    ex -= px * load(image + i);
-    ey -= py * load(image + all + i);
-    ez -= pz * load(image + 2 * all + i);
-    // Also false for NaN.
-    within &= (absolute(ex) <= lx) & (absolute(ey) <= ly) & (absolute(ez) <= lz);
-    store(d + i, ex);
-    store(d + all + i, ey);
-    store(d + 2 * all + i, ez);
-    store(d2 + i, ex * ex + ey * ey + ez * ez);
-  }
-  for (std::size_t l = 0; l < w; ++l) hold[l] = static_cast<std::uint8_t>(within[l] != 0);
+  in_lane_vectors([&](auto zero, std::size_t half) {
+    using V = decltype(zero);
+    auto load = [half](const double* p) { return load_as<V>(p + half); };
+    auto store = [half](double* p, const V& v) { store_as<V>(p + half, v); };
+    auto within = zero == zero;
+    for (std::size_t i = 0; i < all; i += w) {
+      const auto f = load(forward + i) > 0;
+      const V ax = load(x + i), ay = load(x + n * w + i), az = load(x + 2 * n * w + i);
+      const V cx = load(x + i + w), cy = load(x + n * w + i + w), cz = load(x + 2 * n * w + i + w);
+      V ex = (f ? ax : cx) - (f ? cx : ax);
+      V ey = (f ? ay : cy) - (f ? cy : ay);
+      V ez = (f ? az : cz) - (f ? cz : az);
+      ex -= px * load(image + i);
+      ey -= py * load(image + all + i);
+      ez -= pz * load(image + 2 * all + i);
+      // Also false for NaN.
+      within &= (absolute(ex) <= lx) & (absolute(ey) <= ly) & (absolute(ez) <= lz);
+      store(d + i, ex);
+      store(d + all + i, ey);
+      store(d + 2 * all + i, ez);
+      store(d2 + i, ex * ex + ey * ey + ez * ez);
+    }
+    for (std::size_t l = 0; l < lanes_in<V>; ++l) {
+      hold[half + l] = static_cast<std::uint8_t>(within[l] != 0);
+    }
+  });
 }
 
 void held_bound(std::size_t m, const double* d2, const double* length, const double* inverse_length,
@@ -669,19 +691,14 @@ void measure_lanes(const Measured& in, std::size_t half, double* x, double* d, d
   }
 }
 
-// Lanes in vectors of four where the CPU has AVX2 and not AVX-512: as eight (two registers
-// each), the pass's live vectors did not fit the sixteen registers and half its instructions
-// were spills. Each lane's operations are the same either way.
+// In vectors of four lanes where the CPU has AVX2 and not AVX-512 (in_lane_vectors).
 template <bool place, bool residual>
 void measure(const Measured& in, double* x, double* d, double* r, std::uint8_t* hold, double* bound,
              double* phi, double* norm, double* merit) {
-#if defined(__AVX2__) && !defined(__AVX512F__)
-  for (std::size_t half = 0; half < w; half += 4) {
-    measure_lanes<place, residual, Quarter>(in, half, x, d, r, hold, bound, phi, norm, merit);
-  }
-#else
-  measure_lanes<place, residual, Lanes>(in, 0, x, d, r, hold, bound, phi, norm, merit);
-#endif
+  in_lane_vectors([&](auto zero, std::size_t half) {
+    measure_lanes<place, residual, decltype(zero)>(in, half, x, d, r, hold, bound, phi, norm,
+                                                   merit);
+  });
 }
 }  // namespace
 
@@ -773,21 +790,17 @@ void project_rows_lanes(std::size_t half, std::size_t m, double* d, double* r, c
 
 }  // namespace
 
-// In vectors of four lanes where the CPU has AVX2 and not AVX-512, as measure().
+// In vectors of four lanes where the CPU has AVX2 and not AVX-512 (in_lane_vectors).
 void project_rows(std::size_t m, double* d, double* r, const double* length, const double* v,
                   const double* low_first, const double* low_sign, const double* high_sign,
                   const double* w_low, const double* w_high, const double* coupling,
                   double* largest_deviation, double* lower, double* diagonal, double* upper,
                   double* rhs) {
-#if defined(__AVX2__) && !defined(__AVX512F__)
-  for (std::size_t half = 0; half < w; half += 4) {
-    project_rows_lanes<Quarter>(half, m, d, r, length, v, low_first, low_sign, high_sign, w_low,
-                                w_high, coupling, largest_deviation, lower, diagonal, upper, rhs);
-  }
-#else
-  project_rows_lanes<Lanes>(0, m, d, r, length, v, low_first, low_sign, high_sign, w_low, w_high,
-                            coupling, largest_deviation, lower, diagonal, upper, rhs);
-#endif
+  in_lane_vectors([&](auto zero, std::size_t half) {
+    project_rows_lanes<decltype(zero)>(half, m, d, r, length, v, low_first, low_sign, high_sign,
+                                       w_low, w_high, coupling, largest_deviation, lower, diagonal,
+                                       upper, rhs);
+  });
 }
 
 void virial(std::size_t m, const double* z, const double* r, double* per_lane) {
