@@ -247,118 +247,163 @@ inline LaneMask bits(const Lanes& v) {
   return b;
 }
 // |v| but for the sign of a zero (only compared here); NaN stays NaN.
-inline Lanes magnitude(const Lanes& v) {
+template <class V>
+inline V magnitude(const V& v) {
   return v < 0 ? -v : v;
 }
 // A pivot lost to cancellation (relative to its diagonal entry) means dependent rows: all
 // ones where it is not.
-inline LaneMask keeps(const Lanes& pivot, const Lanes& diagonal_entry) {
+template <class V>
+inline auto keeps(const V& pivot, const V& diagonal_entry) {
   return magnitude(pivot) > 1e-12 * magnitude(diagonal_entry);
 }
 // All ones where v is finite (v - v is 0 exactly then, NaN otherwise).
-inline LaneMask finite(const Lanes& v) {
+template <class V>
+inline auto finite(const V& v) {
   return (v - v) == 0;
+}
+// Four lanes of the eight, for the passes that run them in halves.
+typedef double Quarter __attribute__((vector_size(4 * sizeof(double))));
+template <class V>
+inline V load_as(const double* p) {
+  V v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class V>
+inline void store_as(double* p, const V& v) {
+  __builtin_memcpy(p, &v, sizeof v);
+}
+template <class V>
+constexpr std::size_t lanes_in = sizeof(V) / sizeof(double);
+
+// pass(V{}, half) for the lanes half.. of a vector type V: the eight lanes in two halves of
+// four where the CPU has AVX2 and not AVX-512, else at once. As eight (two registers each),
+// a pass's live vectors did not fit AVX2's sixteen registers and up to half its instructions
+// were spills. Each lane's operations are the same either way.
+template <class Pass>
+inline void in_lane_vectors(Pass&& pass) {
+#if defined(__AVX2__) && !defined(__AVX512F__)
+  pass(Quarter{}, 0);
+  pass(Quarter{}, 4);
+#else
+  pass(Lanes{}, 0);
+#endif
 }
 }  // namespace
 
 namespace {
 // eliminate_lanes of the rows' entries as `rows` gives them (diagonal(k), rhs(k), lower(k) for
 // k > 0, upper(k) for k < n - 1), each asked for where the elimination first reads it.
-template <class Rows>
-inline void eliminate_rows(std::size_t n, const Rows& rows, double* __restrict x,
+template <class V, class Rows>
+inline void eliminate_rows(std::size_t n, const Rows& rows, std::size_t half, double* __restrict x,
                            double* __restrict c, std::uint8_t* __restrict solved) {
   constexpr std::size_t w = lanes;
+  using M = decltype(V{} < V{});
+  auto load = [half](const double* p) { return load_as<V>(p + half); };
+  auto store = [half](double* p, const V& v) { store_as<V>(p + half, v); };
   if (n == 0) {
-    for (std::size_t l = 0; l < w; ++l) solved[l] = 1;
+    for (std::size_t l = 0; l < lanes_in<V>; ++l) solved[half + l] = 1;
     return;
   }
-  LaneMask regular = {};
+  M regular = {};
   regular = regular == 0;  // all ones
   const std::size_t meet = n / 2;
   const std::size_t below = n - 1 - meet;
   for (std::size_t step = 0; step < meet; ++step) {
     {
       const std::size_t k = step;
-      const Lanes d = rows.diagonal(k);
-      Lanes pivot = d, y = rows.rhs(k);
+      const V d = rows.diagonal(k);
+      V pivot = d, y = rows.rhs(k);
       if (k > 0) {
-        const Lanes lo = rows.lower(k);
+        const V lo = rows.lower(k);
         pivot = d - lo * load(c + (k - 1) * w);
         y -= lo * load(x + (k - 1) * w);
       }
       regular &= keeps(pivot, d);
-      const Lanes reciprocal = 1.0 / pivot;
+      const V reciprocal = 1.0 / pivot;
       store(c + k * w, rows.upper(k) * reciprocal);
       store(x + k * w, y * reciprocal);
     }
     if (step < below) {
       const std::size_t k = n - 1 - step;
-      const Lanes d = rows.diagonal(k);
-      Lanes pivot = d, y = rows.rhs(k);
+      const V d = rows.diagonal(k);
+      V pivot = d, y = rows.rhs(k);
       if (k < n - 1) {
-        const Lanes up = rows.upper(k);
+        const V up = rows.upper(k);
         pivot = d - up * load(c + (k + 1) * w);
         y -= up * load(x + (k + 1) * w);
       }
       regular &= keeps(pivot, d);
-      const Lanes reciprocal = 1.0 / pivot;
+      const V reciprocal = 1.0 / pivot;
       store(c + k * w, rows.lower(k) * reciprocal);
       store(x + k * w, y * reciprocal);
     }
   }
-  LaneMask all_finite;
+  M all_finite;
   {
     const std::size_t k = meet;
-    const Lanes d = rows.diagonal(k);
-    Lanes pivot = d, y = rows.rhs(k);
+    const V d = rows.diagonal(k);
+    V pivot = d, y = rows.rhs(k);
     if (k > 0) {
-      const Lanes lo = rows.lower(k);
+      const V lo = rows.lower(k);
       pivot -= lo * load(c + (k - 1) * w);
       y -= lo * load(x + (k - 1) * w);
     }
     if (k < n - 1) {
-      const Lanes up = rows.upper(k);
+      const V up = rows.upper(k);
       pivot -= up * load(c + (k + 1) * w);
       y -= up * load(x + (k + 1) * w);
     }
     regular &= keeps(pivot, d);
-    const Lanes middle = y / pivot;
+    const V middle = y / pivot;
     store(x + k * w, middle);
     all_finite = finite(middle);
   }
   for (std::size_t step = 1; step <= meet; ++step) {
     const std::size_t up = meet - step;
-    const Lanes above = load(x + up * w) - load(c + up * w) * load(x + (up + 1) * w);
+    const V above = load(x + up * w) - load(c + up * w) * load(x + (up + 1) * w);
     store(x + up * w, above);
     all_finite &= finite(above);
     if (step <= below) {
       const std::size_t down = meet + step;
-      const Lanes under = load(x + down * w) - load(c + down * w) * load(x + (down - 1) * w);
+      const V under = load(x + down * w) - load(c + down * w) * load(x + (down - 1) * w);
       store(x + down * w, under);
       all_finite &= finite(under);
     }
   }
-  const LaneMask ok = regular & all_finite;
-  for (std::size_t l = 0; l < w; ++l) solved[l] = static_cast<std::uint8_t>(ok[l] != 0);
+  const M ok = regular & all_finite;
+  for (std::size_t l = 0; l < lanes_in<V>; ++l) {
+    solved[half + l] = static_cast<std::uint8_t>(ok[l] != 0);
+  }
 }
 
+}  // namespace
+
+namespace {
+// eliminate_lanes's rows, lanes half.. of each in a V.
+template <class V>
+struct StoredRows {
+  const double* __restrict lower_;
+  const double* __restrict diagonal_;
+  const double* __restrict upper_;
+  const double* __restrict rhs_;
+  std::size_t half;
+  V lower(std::size_t k) const { return load_as<V>(lower_ + k * lanes + half); }
+  V diagonal(std::size_t k) const { return load_as<V>(diagonal_ + k * lanes + half); }
+  V upper(std::size_t k) const { return load_as<V>(upper_ + k * lanes + half); }
+  V rhs(std::size_t k) const { return load_as<V>(rhs_ + k * lanes + half); }
+};
 }  // namespace
 
 void eliminate_lanes(std::size_t n, const double* __restrict lower,
                      const double* __restrict diagonal, const double* __restrict upper,
                      const double* __restrict rhs, double* __restrict x, double* __restrict c,
                      std::uint8_t* __restrict solved) {
-  struct Rows {
-    const double* __restrict lower_;
-    const double* __restrict diagonal_;
-    const double* __restrict upper_;
-    const double* __restrict rhs_;
-    Lanes lower(std::size_t k) const { return load(lower_ + k * lanes); }
-    Lanes diagonal(std::size_t k) const { return load(diagonal_ + k * lanes); }
-    Lanes upper(std::size_t k) const { return load(upper_ + k * lanes); }
-    Lanes rhs(std::size_t k) const { return load(rhs_ + k * lanes); }
-  };
-  eliminate_rows(n, Rows{lower, diagonal, upper, rhs}, x, c, solved);
+  in_lane_vectors([&](auto zero, std::size_t half) {
+    eliminate_rows<decltype(zero)>(n, StoredRows<decltype(zero)>{lower, diagonal, upper, rhs, half},
+                                   half, x, c, solved);
+  });
 }
 
 }  // namespace deli::rod_passes
@@ -393,18 +438,6 @@ inline void store_lanes(double* out, const Lanes& v) {
 }
 const LaneMask all_lanes = broadcast(0.0) == 0.0;
 
-// Four lanes of the eight, for the passes that run them in halves.
-typedef double Quarter __attribute__((vector_size(4 * sizeof(double))));
-template <class V>
-inline V load_as(const double* p) {
-  V v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-template <class V>
-inline void store_as(double* p, const V& v) {
-  __builtin_memcpy(p, &v, sizeof v);
-}
 inline Quarter absolute(Quarter v) {
   typedef long QuarterMask __attribute__((vector_size(4 * sizeof(double))));
   QuarterMask bits;
@@ -416,22 +449,6 @@ inline Quarter absolute(Quarter v) {
 inline Quarter square_root(Quarter v) {
   for (std::size_t l = 0; l < 4; ++l) v[l] = __builtin_sqrt(v[l]);
   return v;
-}
-template <class V>
-constexpr std::size_t lanes_in = sizeof(V) / sizeof(double);
-
-// pass(V{}, half) for the lanes half.. of a vector type V: the eight lanes in two halves of
-// four where the CPU has AVX2 and not AVX-512, else at once. As eight (two registers each),
-// a pass's live vectors did not fit AVX2's sixteen registers and up to half its instructions
-// were spills. Each lane's operations are the same either way.
-template <class Pass>
-inline void in_lane_vectors(Pass&& pass) {
-#if defined(__AVX2__) && !defined(__AVX512F__)
-  pass(Quarter{}, 0);
-  pass(Quarter{}, 4);
-#else
-  pass(Lanes{}, 0);
-#endif
 }
 }  // namespace
 
@@ -512,40 +529,48 @@ void normalize_residual(std::size_t m, double* d, double* r, const double* lengt
   }
 }
 
+namespace {
+// bands()' entries, made as the elimination reaches their rows (lanes half.. in a V).
+template <class V>
+struct BandRows {
+  const double* __restrict a;
+  const double* __restrict b;
+  const double* __restrict w_low;
+  const double* __restrict w_high;
+  const double* __restrict coupling;
+  const double* __restrict phi;
+  std::size_t all;
+  double scale;
+  std::size_t half;
+  V at(const double* p) const { return load_as<V>(p + half); }
+  V dot(std::size_t k, std::size_t l) const {
+    const std::size_t i = k * w, j = l * w;
+    return at(a + i) * at(b + j) + at(a + all + i) * at(b + all + j) +
+           at(a + 2 * all + i) * at(b + 2 * all + j);
+  }
+  V diagonal(std::size_t k) const {
+    const V d = dot(k, k);
+    V entry{};
+    entry += 1.0 * at(w_low + k * w) * d;
+    entry += 1.0 * at(w_high + k * w) * d;
+    return entry * scale;
+  }
+  V rhs(std::size_t k) const { return -at(phi + k * w); }
+  V upper(std::size_t k) const { return (0.0 + at(coupling + k * w) * dot(k, k + 1)) * scale; }
+  V lower(std::size_t k) const {
+    return (0.0 + at(coupling + (k - 1) * w) * dot(k, k - 1)) * scale;
+  }
+};
+}  // namespace
+
 void solve_bands(std::size_t m, const double* a, const double* b, const double* w_low,
                  const double* w_high, const double* coupling, double scale, const double* phi,
                  double* x, double* c, std::uint8_t* solved) {
-  // bands()' entries, made as the elimination reaches their rows.
-  struct Rows {
-    const double* __restrict a;
-    const double* __restrict b;
-    const double* __restrict w_low;
-    const double* __restrict w_high;
-    const double* __restrict coupling;
-    const double* __restrict phi;
-    std::size_t all;
-    double scale;
-    Lanes dot(std::size_t k, std::size_t l) const {
-      const std::size_t i = k * w, j = l * w;
-      return load(a + i) * load(b + j) + load(a + all + i) * load(b + all + j) +
-             load(a + 2 * all + i) * load(b + 2 * all + j);
-    }
-    Lanes diagonal(std::size_t k) const {
-      const Lanes d = dot(k, k);
-      Lanes entry = broadcast(0.0);
-      entry += 1.0 * load(w_low + k * w) * d;
-      entry += 1.0 * load(w_high + k * w) * d;
-      return entry * scale;
-    }
-    Lanes rhs(std::size_t k) const { return -load(phi + k * w); }
-    Lanes upper(std::size_t k) const {
-      return (0.0 + load(coupling + k * w) * dot(k, k + 1)) * scale;
-    }
-    Lanes lower(std::size_t k) const {
-      return (0.0 + load(coupling + (k - 1) * w) * dot(k, k - 1)) * scale;
-    }
-  };
-  eliminate_rows(m, Rows{a, b, w_low, w_high, coupling, phi, m * w, scale}, x, c, solved);
+  in_lane_vectors([&](auto zero, std::size_t half) {
+    eliminate_rows<decltype(zero)>(
+        m, BandRows<decltype(zero)>{a, b, w_low, w_high, coupling, phi, m * w, scale, half}, half,
+        x, c, solved);
+  });
 }
 
 namespace {
