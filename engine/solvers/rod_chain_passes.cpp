@@ -415,8 +415,9 @@ namespace deli::rod_passes::across {
 namespace {
 constexpr std::size_t w = lanes;
 
-inline Lanes absolute(Lanes v) {
-  LaneMask bits;
+template <class V>
+inline V absolute(V v) {
+  decltype(v < v) bits;
   __builtin_memcpy(&bits, &v, sizeof bits);
   bits &= 0x7fffffffffffffffL;
   __builtin_memcpy(&v, &bits, sizeof v);
@@ -438,14 +439,6 @@ inline void store_lanes(double* out, const Lanes& v) {
 }
 const LaneMask all_lanes = broadcast(0.0) == 0.0;
 
-inline Quarter absolute(Quarter v) {
-  typedef long QuarterMask __attribute__((vector_size(4 * sizeof(double))));
-  QuarterMask bits;
-  __builtin_memcpy(&bits, &v, sizeof bits);
-  bits &= 0x7fffffffffffffffL;
-  __builtin_memcpy(&v, &bits, sizeof v);
-  return v;
-}
 inline Quarter square_root(Quarter v) {
   for (std::size_t l = 0; l < 4; ++l) v[l] = __builtin_sqrt(v[l]);
   return v;

@@ -382,10 +382,10 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& chunk, SymTens
     // One 256-bit add (the pad adds +0): the partners' subtractions store f[i] whole, and a
     // later one's load of it would not be forwarded from three 8-byte stores.
     double* fi = &c.f[i].x;
-    _mm256_store_pd(fi, _mm256_add_pd(_mm256_load_pd(fi),
-                                      _mm256_setr_pd(lane_sum(fxi[0], fxi[1]),
-                                                     lane_sum(fyi[0], fyi[1]),
-                                                     lane_sum(fzi[0], fzi[1]), 0.0)));
+    _mm256_store_pd(fi,
+                    _mm256_add_pd(_mm256_load_pd(fi),
+                                  _mm256_setr_pd(lane_sum(fxi[0], fxi[1]), lane_sum(fyi[0], fyi[1]),
+                                                 lane_sum(fzi[0], fzi[1]), 0.0)));
   }
   if constexpr (kTally) virial += w;
   return energy;
