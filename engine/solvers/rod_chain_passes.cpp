@@ -241,8 +241,9 @@ static_assert(lane_vectors::width == lanes);
 using namespace lane_vectors;  // Lanes, LaneMask, load, store, broadcast, shuffle
 
 // The lanes' bit patterns (compared as integers: -0 and +0 differ, a NaN equals itself).
-inline LaneMask bits(const Lanes& v) {
-  LaneMask b;
+template <class V>
+inline auto bits(const V& v) {
+  decltype(v < v) b;
   __builtin_memcpy(&b, &v, sizeof b);
   return b;
 }
@@ -849,6 +850,39 @@ inline void transpose(Lanes (&v)[w]) {
   }
 }
 
+// Under AVX2 the 8 x 8 blocks move as four 4 x 4 blocks of Quarters: as Lanes, two blocks'
+// rows and the shuffles' temporaries did not fit the sixteen registers (gather_sum: 1365
+// stack references among 2738 instructions). Rows v[0..4) transposed in place.
+template <long... k>
+inline Quarter shuffle4(const Quarter& a, const Quarter& b) {
+#if defined(__clang__)
+  return __builtin_shufflevector(a, b, k...);
+#else
+  typedef long QuarterMask __attribute__((vector_size(4 * sizeof(double))));
+  return __builtin_shuffle(a, b, QuarterMask{k...});
+#endif
+}
+inline void transpose(Quarter (&v)[4]) {
+  const Quarter s0 = shuffle4<0, 4, 2, 6>(v[0], v[1]), s1 = shuffle4<1, 5, 3, 7>(v[0], v[1]);
+  const Quarter s2 = shuffle4<0, 4, 2, 6>(v[2], v[3]), s3 = shuffle4<1, 5, 3, 7>(v[2], v[3]);
+  v[0] = shuffle4<0, 1, 4, 5>(s0, s2);
+  v[1] = shuffle4<0, 1, 4, 5>(s1, s3);
+  v[2] = shuffle4<2, 3, 6, 7>(s0, s2);
+  v[3] = shuffle4<2, 3, 6, 7>(s1, s3);
+}
+#if defined(__AVX2__) && !defined(__AVX512F__)
+constexpr bool kQuarterBlocks = true;
+#else
+constexpr bool kQuarterBlocks = false;
+#endif
+// Lanes h..h+3 of numbers j..j+3 of consecutive chains (lane l's number j at l numbers + j)
+// as four Quarters, one a number (the 4 x 4 block transposed).
+inline void load_quarter_block(const double* __restrict src, std::size_t numbers, std::size_t j,
+                               std::size_t h, Quarter (&q)[4]) {
+  for (std::size_t l = 0; l < 4; ++l) q[l] = load_as<Quarter>(src + (h + l) * numbers + j);
+  if constexpr (kQuarterBlocks) transpose(q);
+}
+
 // Lane l's chain at particles base + l n .. (consecutive chains of n beads): its numbers
 // are the doubles 3 (base + l n) + j, j < 3n, j = 3 bead + axis. The across layout holds
 // number j of every lane in row row_of(n, j) = axis n + bead, one vector. Blocks of 8 numbers
@@ -895,6 +929,23 @@ void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int
     const double* __restrict a0 = a + 3 * base;
     const double* __restrict b0 = b + 3 * base;
     std::size_t j = 0;
+    for (; kQuarterBlocks && j + w <= numbers; j += w) {
+      for (std::size_t g = 0; g < w; g += 4) {
+        for (std::size_t h = 0; h < w; h += 4) {
+          Quarter u[4], v[4];
+          load_quarter_block(a0, numbers, j + g, h, u);
+          load_quarter_block(b0, numbers, j + g, h, v);
+          for (std::size_t k = 0; k < 4; ++k) {
+            const std::size_t r = row_of(n, j + g + k);
+            store_as(out + r * w + h, u[k] + v[k]);
+            if (memo) {
+              const auto d = bits(v[k]) != bits(load_as<Quarter>(memo + r * w + h));
+              for (std::size_t l = 0; l < 4; ++l) differ[h + l] |= d[l];
+            }
+          }
+        }
+      }
+    }
     for (; j + w <= numbers; j += w) {
       Lanes u[w], v[w];
       for (std::size_t l = 0; l < w; ++l) {
@@ -944,6 +995,21 @@ void gather_velocities(std::size_t n, const std::int32_t* __restrict particle, s
     const double* __restrict x0 = x + 3 * base;
     const double* __restrict p0 = p + 3 * base;
     std::size_t j = 0;
+    for (; kQuarterBlocks && j + w <= numbers; j += w) {
+      for (std::size_t g = 0; g < w; g += 4) {
+        for (std::size_t h = 0; h < w; h += 4) {
+          Quarter u[4], v[4];
+          load_quarter_block(x0, numbers, j + g, h, u);
+          load_quarter_block(p0, numbers, j + g, h, v);
+          for (std::size_t k = 0; k < 4; ++k) {
+            const std::size_t r = row_of(n, j + g + k);
+            store_as(x_out + r * w + h, u[k]);
+            store_as(v_out + r * w + h,
+                     v[k] * load_as<Quarter>(inverse_mass + ((j + g + k) / 3) * w + h));
+          }
+        }
+      }
+    }
     for (; j + w <= numbers; j += w) {
       Lanes u[w], v[w];
       for (std::size_t l = 0; l < w; ++l) {
@@ -989,6 +1055,26 @@ void scatter_rows(std::size_t n, const std::int32_t* __restrict particle, std::i
     const std::size_t numbers = 3 * n;
     double* __restrict o = out + 3 * base;
     std::size_t j = 0;
+    for (; kQuarterBlocks && j + w <= numbers; j += w) {
+      for (std::size_t g = 0; g < w; g += 4) {
+        for (std::size_t h = 0; h < w; h += 4) {
+          // Rows j+g.. of lanes h..h+3, transposed: lane h+l's numbers j+g..j+g+3.
+          Quarter v[4];
+          for (std::size_t k = 0; k < 4; ++k) {
+            v[k] = load_as<Quarter>(in + row_of(n, j + g + k) * w + h);
+          }
+          if constexpr (kQuarterBlocks) transpose(v);
+          for (std::size_t l = 0; l < 4; ++l) {
+            double* __restrict at = o + (h + l) * numbers + j + g;
+            if constexpr (add) {
+              store_as(at, load_as<Quarter>(at) + v[l]);
+            } else {
+              store_as(at, v[l]);
+            }
+          }
+        }
+      }
+    }
     for (; j + w <= numbers; j += w) {
       Lanes v[w];
       for (std::size_t k = 0; k < w; ++k) v[k] = load(in + row_of(n, j + k) * w);
