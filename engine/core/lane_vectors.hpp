@@ -45,5 +45,38 @@ inline Lanes shuffle(const Lanes& a, const Lanes& b) {
 #endif
 }
 
+// Four doubles, half a Lanes: on a CPU with AVX2 and not AVX-512 (kQuarterLanes) an eight-lane
+// vector is two registers, and a pass whose live vectors then outnumber AVX2's sixteen spills
+// them; such passes work in Quarters there. Each lane's operations are the same either way.
+typedef double Quarter __attribute__((vector_size(4 * sizeof(double))));
+#if defined(__AVX2__) && !defined(__AVX512F__)
+constexpr bool kQuarterLanes = true;
+#else
+constexpr bool kQuarterLanes = false;
+#endif
+template <class V>
+constexpr std::size_t lanes_in = sizeof(V) / sizeof(double);
+template <class V>
+inline V load_as(const double* p) {
+  V v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class V>
+inline void store_as(double* p, const V& v) {
+  __builtin_memcpy(p, &v, sizeof v);
+}
+// shuffle()'s form for Quarters.
+template <long... k>
+inline Quarter shuffle4(const Quarter& a, const Quarter& b) {
+  static_assert(sizeof...(k) == 4);
+#if defined(__clang__)
+  return __builtin_shufflevector(a, b, k...);
+#else
+  typedef long QuarterMask __attribute__((vector_size(4 * sizeof(double))));
+  return __builtin_shuffle(a, b, QuarterMask{k...});
+#endif
+}
+
 }  // namespace
 }  // namespace deli::lane_vectors

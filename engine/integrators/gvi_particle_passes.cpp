@@ -1,41 +1,71 @@
 #include "integrators/gvi_particle_passes.hpp"
 
+#include <type_traits>
+
 #include "core/lane_vectors.hpp"
 
 namespace deli::gvi_passes {
 
 namespace {
-using namespace lane_vectors;  // Lanes, LaneMask, load, store, broadcast, shuffle
-// Eight particles a block: their 24 numbers are three vectors of eight, and a value per
-// particle one vector.
-constexpr std::size_t w = lane_vectors::width;
+using namespace lane_vectors;  // Lanes, LaneMask, Quarter, load_as, store_as, shuffles
+// Eight particles a block (four where kQuarterLanes: an AVX2 CPU without AVX-512, where a
+// pass's eight-lane vectors, two registers each, did not fit the sixteen and were spilled):
+// their numbers are three vectors of a block's width, and a value per particle one vector.
+// Each particle's operations are the same either way.
+using Block = std::conditional_t<kQuarterLanes, Quarter, Lanes>;
+using BlockMask = decltype(Block{} < Block{});
+constexpr std::size_t w = lanes_in<Block>;
+inline Block load(const double* p) {
+  return load_as<Block>(p);
+}
+inline void store(double* p, const Block& v) {
+  store_as(p, v);
+}
+inline Block broadcast(double v) {
+  Block out;
+  for (std::size_t l = 0; l < w; ++l) out[l] = v;
+  return out;
+}
 
 // The block's three vectors of numbers: particle j's x, y, z are entries 3j, 3j+1, 3j+2 of
-// the 24 (vector e / 8, entry e % 8).
-struct Triples {
-  Lanes v[3];
+// the 3w (vector e / w, entry e % w).
+template <class V>
+struct TriplesOf {
+  V v[3];
 };
+using Triples = TriplesOf<Block>;
 inline void store_triples(double* p, const Triples& t) {
   for (std::size_t k = 0; k < 3; ++k) store(p + k * w, t.v[k]);
 }
 // A value per particle at each of its three numbers.
-inline Triples spread(const Lanes& v) {
+[[maybe_unused]] inline TriplesOf<Lanes> spread(const Lanes& v) {
   return {{shuffle<0, 0, 0, 1, 1, 1, 2, 2>(v, v), shuffle<2, 3, 3, 3, 4, 4, 4, 5>(v, v),
            shuffle<5, 5, 6, 6, 6, 7, 7, 7>(v, v)}};
 }
+[[maybe_unused]] inline TriplesOf<Quarter> spread(const Quarter& v) {
+  return {{shuffle4<0, 0, 0, 1>(v, v), shuffle4<1, 1, 2, 2>(v, v), shuffle4<2, 3, 3, 3>(v, v)}};
+}
 // Per particle, dot(d, d) = d.x d.x + d.y d.y + d.z d.z in that order (vec3.hpp's norm2).
-inline Lanes norm2s(const Triples& d) {
+[[maybe_unused]] inline Lanes norm2s(const TriplesOf<Lanes>& d) {
   const Lanes a = d.v[0] * d.v[0], b = d.v[1] * d.v[1], c = d.v[2] * d.v[2];
   const Lanes x = shuffle<0, 1, 2, 3, 4, 5, 10, 13>(shuffle<0, 3, 6, 9, 12, 15, 0, 0>(a, b), c);
   const Lanes y = shuffle<0, 1, 2, 3, 4, 8, 11, 14>(shuffle<1, 4, 7, 10, 13, 0, 0, 0>(a, b), c);
   const Lanes z = shuffle<0, 1, 2, 3, 4, 9, 12, 15>(shuffle<2, 5, 8, 11, 14, 0, 0, 0>(a, b), c);
   return (x + y) + z;
 }
+// The four particles' x, y, z: entries 0 3 6 9, 1 4 7 10 and 2 5 8 11 of a, b, c in a row.
+[[maybe_unused]] inline Quarter norm2s(const TriplesOf<Quarter>& d) {
+  const Quarter a = d.v[0] * d.v[0], b = d.v[1] * d.v[1], c = d.v[2] * d.v[2];
+  const Quarter x = shuffle4<0, 1, 2, 5>(shuffle4<0, 3, 6, 0>(a, b), c);
+  const Quarter y = shuffle4<0, 1, 2, 6>(shuffle4<1, 4, 7, 0>(a, b), c);
+  const Quarter z = shuffle4<0, 1, 4, 7>(shuffle4<2, 5, 0, 0>(a, b), c);
+  return (x + y) + z;
+}
 // 1 where !(value <= limit), else 0 (a comparison's true is all ones, -1).
-inline LaneMask missed(const Lanes& value, const Lanes& limit) {
+inline BlockMask missed(const Block& value, const Block& limit) {
   return (value <= limit) + 1;
 }
-inline std::size_t total(const LaneMask& counts) {
+inline std::size_t total(const BlockMask& counts) {
   std::size_t sum = 0;
   for (std::size_t l = 0; l < w; ++l) sum += static_cast<std::size_t>(counts[l]);
   return sum;
@@ -66,17 +96,17 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
   const double* __restrict force = pass.force;
   const double* __restrict at_build = pass.at_build;
   double* __restrict q = pass.q;
-  LaneMask outside = {};
-  const Lanes limit = broadcast(pass.list_limit2);
+  BlockMask outside = {};
+  const Block limit = broadcast(pass.list_limit2);
   std::size_t i = begin;
   for (; i + w <= end; i += w) {
     const std::size_t o = 3 * i;
-    const Lanes m = load(mass + i);
+    const Block m = load(mass + i);
     const Triples ms = spread(m), hms = spread(h / m);
     Triples momentum, half, d, x, moved;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t e = o + k * w;
-      const Lanes start = load(position + e);
+      const Block start = load(position + e);
       store(q + e, start);
       momentum.v[k] = load(velocity + e) * ms.v[k];
       half.v[k] = momentum.v[k] + load(force + e) * kick;
@@ -129,7 +159,7 @@ void half_kick(double h, const double* p, const double* force, const double* mas
     const Triples hms = spread(h / load(m + i));
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t e = 3 * i + k * w;
-      const Lanes a = load(momentum + e) + load(f + e) * kick;
+      const Block a = load(momentum + e) + load(f + e) * kick;
       if (kicked) store(kicked + e, a);
       if (d) store(d + e, a * hms.v[k]);
     }
@@ -153,9 +183,9 @@ EndPositionsTally end_positions(const EndPositions& pass, std::size_t begin, std
   const double* __restrict reach = pass.reach_limit2;
   const double* __restrict at_build = pass.at_build;
   double* __restrict x = pass.x;
-  Lanes largest = broadcast(0.0);
-  LaneMask outside_reach = {}, outside_list = {};
-  const Lanes list_limit = broadcast(pass.list_limit2);
+  Block largest = broadcast(0.0);
+  BlockMask outside_reach = {}, outside_list = {};
+  const Block list_limit = broadcast(pass.list_limit2);
   std::size_t i = begin;
   for (; i + w <= end; i += w) {
     const std::size_t o = 3 * i;
@@ -163,15 +193,15 @@ EndPositionsTally end_positions(const EndPositions& pass, std::size_t begin, std
     Triples moved, listed;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t e = o + k * w;
-      const Lanes start = load(q + e);
+      const Block start = load(q + e);
       // A missing impulse is a zero vector, added as it is (+0 turns a -0 sum into +0).
-      const Lanes total_impulse = load(half + e) + (impulse ? load(impulse + e) : broadcast(0.0));
-      const Lanes end_position = start + total_impulse * hms.v[k];
+      const Block total_impulse = load(half + e) + (impulse ? load(impulse + e) : broadcast(0.0));
+      const Block end_position = start + total_impulse * hms.v[k];
       store(x + e, end_position);
       moved.v[k] = end_position - start;
       if (at_build) listed.v[k] = end_position - load(at_build + e);
     }
-    const Lanes moved2 = norm2s(moved);
+    const Block moved2 = norm2s(moved);
     largest = largest < moved2 ? moved2 : largest;
     if (reach) outside_reach += missed(moved2, load(reach + i));
     if (at_build) outside_list += missed(norm2s(listed), list_limit);

@@ -263,33 +263,18 @@ template <class V>
 inline auto finite(const V& v) {
   return (v - v) == 0;
 }
-// Four lanes of the eight, for the passes that run them in halves.
-typedef double Quarter __attribute__((vector_size(4 * sizeof(double))));
-template <class V>
-inline V load_as(const double* p) {
-  V v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-template <class V>
-inline void store_as(double* p, const V& v) {
-  __builtin_memcpy(p, &v, sizeof v);
-}
-template <class V>
-constexpr std::size_t lanes_in = sizeof(V) / sizeof(double);
-
 // pass(V{}, half) for the lanes half.. of a vector type V: the eight lanes in two halves of
 // four where the CPU has AVX2 and not AVX-512, else at once. As eight (two registers each),
 // a pass's live vectors did not fit AVX2's sixteen registers and up to half its instructions
 // were spills. Each lane's operations are the same either way.
 template <class Pass>
 inline void in_lane_vectors(Pass&& pass) {
-#if defined(__AVX2__) && !defined(__AVX512F__)
-  pass(Quarter{}, 0);
-  pass(Quarter{}, 4);
-#else
-  pass(Lanes{}, 0);
-#endif
+  if constexpr (kQuarterLanes) {
+    pass(Quarter{}, 0);
+    pass(Quarter{}, 4);
+  } else {
+    pass(Lanes{}, 0);
+  }
 }
 }  // namespace
 
@@ -850,18 +835,9 @@ inline void transpose(Lanes (&v)[w]) {
   }
 }
 
-// Under AVX2 the 8 x 8 blocks move as four 4 x 4 blocks of Quarters: as Lanes, two blocks'
-// rows and the shuffles' temporaries did not fit the sixteen registers (gather_sum: 1365
-// stack references among 2738 instructions). Rows v[0..4) transposed in place.
-template <long... k>
-inline Quarter shuffle4(const Quarter& a, const Quarter& b) {
-#if defined(__clang__)
-  return __builtin_shufflevector(a, b, k...);
-#else
-  typedef long QuarterMask __attribute__((vector_size(4 * sizeof(double))));
-  return __builtin_shuffle(a, b, QuarterMask{k...});
-#endif
-}
+// Under kQuarterLanes the 8 x 8 blocks move as four 4 x 4 blocks of Quarters: as Lanes, two
+// blocks' rows and the shuffles' temporaries did not fit the sixteen registers (gather_sum:
+// 1365 stack references among 2738 instructions). Rows v[0..4) transposed in place.
 inline void transpose(Quarter (&v)[4]) {
   const Quarter s0 = shuffle4<0, 4, 2, 6>(v[0], v[1]), s1 = shuffle4<1, 5, 3, 7>(v[0], v[1]);
   const Quarter s2 = shuffle4<0, 4, 2, 6>(v[2], v[3]), s3 = shuffle4<1, 5, 3, 7>(v[2], v[3]);
@@ -870,17 +846,12 @@ inline void transpose(Quarter (&v)[4]) {
   v[2] = shuffle4<2, 3, 6, 7>(s0, s2);
   v[3] = shuffle4<2, 3, 6, 7>(s1, s3);
 }
-#if defined(__AVX2__) && !defined(__AVX512F__)
-constexpr bool kQuarterBlocks = true;
-#else
-constexpr bool kQuarterBlocks = false;
-#endif
 // Lanes h..h+3 of numbers j..j+3 of consecutive chains (lane l's number j at l numbers + j)
 // as four Quarters, one a number (the 4 x 4 block transposed).
 inline void load_quarter_block(const double* __restrict src, std::size_t numbers, std::size_t j,
                                std::size_t h, Quarter (&q)[4]) {
   for (std::size_t l = 0; l < 4; ++l) q[l] = load_as<Quarter>(src + (h + l) * numbers + j);
-  if constexpr (kQuarterBlocks) transpose(q);
+  if constexpr (kQuarterLanes) transpose(q);
 }
 
 // Lane l's chain at particles base + l n .. (consecutive chains of n beads): its numbers
@@ -929,7 +900,7 @@ void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int
     const double* __restrict a0 = a + 3 * base;
     const double* __restrict b0 = b + 3 * base;
     std::size_t j = 0;
-    for (; kQuarterBlocks && j + w <= numbers; j += w) {
+    for (; kQuarterLanes && j + w <= numbers; j += w) {
       for (std::size_t g = 0; g < w; g += 4) {
         for (std::size_t h = 0; h < w; h += 4) {
           Quarter u[4], v[4];
@@ -995,7 +966,7 @@ void gather_velocities(std::size_t n, const std::int32_t* __restrict particle, s
     const double* __restrict x0 = x + 3 * base;
     const double* __restrict p0 = p + 3 * base;
     std::size_t j = 0;
-    for (; kQuarterBlocks && j + w <= numbers; j += w) {
+    for (; kQuarterLanes && j + w <= numbers; j += w) {
       for (std::size_t g = 0; g < w; g += 4) {
         for (std::size_t h = 0; h < w; h += 4) {
           Quarter u[4], v[4];
@@ -1055,7 +1026,7 @@ void scatter_rows(std::size_t n, const std::int32_t* __restrict particle, std::i
     const std::size_t numbers = 3 * n;
     double* __restrict o = out + 3 * base;
     std::size_t j = 0;
-    for (; kQuarterBlocks && j + w <= numbers; j += w) {
+    for (; kQuarterLanes && j + w <= numbers; j += w) {
       for (std::size_t g = 0; g < w; g += 4) {
         for (std::size_t h = 0; h < w; h += 4) {
           // Rows j+g.. of lanes h..h+3, transposed: lane h+l's numbers j+g..j+g+3.
@@ -1063,7 +1034,7 @@ void scatter_rows(std::size_t n, const std::int32_t* __restrict particle, std::i
           for (std::size_t k = 0; k < 4; ++k) {
             v[k] = load_as<Quarter>(in + row_of(n, j + g + k) * w + h);
           }
-          if constexpr (kQuarterBlocks) transpose(v);
+          if constexpr (kQuarterLanes) transpose(v);
           for (std::size_t l = 0; l < 4; ++l) {
             double* __restrict at = o + (h + l) * numbers + j + g;
             if constexpr (add) {
