@@ -18,6 +18,16 @@
 
 namespace deli {
 
+namespace {
+// A run's code in every byte of a word, stored with the hits a vector at a time.
+template <class Word>
+[[maybe_unused]] Word repeated(std::uint8_t code) {
+  Word codes;
+  std::memset(&codes, code, sizeof codes);
+  return codes;
+}
+}  // namespace
+
 #ifdef DELI_SCAN_AVX512
 namespace {
 // The eight candidates from m on, lanes past `last` masked (they read nothing and never
@@ -49,11 +59,6 @@ namespace {
   return hits + static_cast<std::size_t>(__builtin_popcount(within));
 }
 
-std::uint64_t repeated(std::uint8_t code) {
-  std::uint64_t codes;
-  std::memset(&codes, code, sizeof codes);
-  return codes;
-}
 }  // namespace
 
 // Eight candidates a vector (scan_block), the last one partial.
@@ -63,7 +68,7 @@ std::size_t scan_candidates(const double* x, const double* y, const double* z, s
                             std::size_t hits) {
   const __m512d px = _mm512_set1_pd(ox), py = _mm512_set1_pd(oy), pz = _mm512_set1_pd(oz);
   const __m512d reach = _mm512_set1_pd(within2);
-  const std::uint64_t codes = repeated(code);
+  const auto codes = repeated<std::uint64_t>(code);
   for (std::size_t m = first; m < last; m += 8) {
     hits = scan_block(x, y, z, m, last, px, py, pz, reach, codes, slot_out, code_out, hits);
   }
@@ -120,11 +125,6 @@ constexpr CompressTable kCompress;
   return hits + static_cast<std::size_t>(__builtin_popcount(within));
 }
 
-std::uint32_t repeated(std::uint8_t code) {
-  std::uint32_t codes;
-  std::memset(&codes, code, sizeof codes);
-  return codes;
-}
 }  // namespace
 
 // Four candidates a vector (scan_block), the last one partial.
@@ -134,7 +134,7 @@ std::size_t scan_candidates(const double* x, const double* y, const double* z, s
                             std::size_t hits) {
   const __m256d px = _mm256_set1_pd(ox), py = _mm256_set1_pd(oy), pz = _mm256_set1_pd(oz);
   const __m256d reach = _mm256_set1_pd(within2);
-  const std::uint32_t codes = repeated(code);
+  const auto codes = repeated<std::uint32_t>(code);
   for (std::size_t m = first; m < last; m += 4) {
     hits = scan_block(x, y, z, m, last, px, py, pz, reach, codes, slot_out, code_out, hits);
   }
@@ -170,7 +170,7 @@ namespace {
                                                    std::int32_t* slot_out, std::uint8_t* code_out,
                                                    std::size_t hits) {
   const __m512d px = _mm512_set1_pd(ox), py = _mm512_set1_pd(oy), pz = _mm512_set1_pd(oz);
-  const std::uint64_t codes = repeated(code);
+  const auto codes = repeated<std::uint64_t>(code);
   auto block = [&](std::size_t m) {
     hits = scan_block(x, y, z, m, last, px, py, pz, reach, codes, slot_out, code_out, hits);
   };
@@ -191,7 +191,7 @@ namespace {
                                                    std::int32_t* slot_out, std::uint8_t* code_out,
                                                    std::size_t hits) {
   const __m256d px = _mm256_set1_pd(ox), py = _mm256_set1_pd(oy), pz = _mm256_set1_pd(oz);
-  const std::uint32_t codes = repeated(code);
+  const auto codes = repeated<std::uint32_t>(code);
   auto block = [&](std::size_t m) {
     hits = scan_block(x, y, z, m, last, px, py, pz, reach, codes, slot_out, code_out, hits);
   };
