@@ -5,7 +5,8 @@
 namespace deli::gvi_passes {
 
 // GVI's passes over the particles [begin, end) of arrays of xyz triples (3 doubles a particle,
-// the layout of std::vector<Vec3>), eight particles at a time in vectors. Each number is made
+// the layout of std::vector<Vec3>), eight particles at a time in vectors (four on a CPU with
+// AVX2 and not AVX-512: lane_vectors::kQuarterLanes). Each number is made
 // by the operations, in the order, of the scalar expressions written beside each function
 // (no fused multiply-add: -ffp-contract=off), so the results are bit for bit those of a loop
 // over Vec3. Their file alone is built for the build machine's CPU (DELI_NATIVE), so it
