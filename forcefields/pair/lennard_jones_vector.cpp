@@ -291,8 +291,6 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& chunk, SymTens
   const int zero_shift = zero_shift_code(c.shifts);
   std::uint64_t unshifted;
   std::memset(&unshifted, zero_shift, sizeof unshifted);
-  // A partial vector's lanes past the list's end take a code that reads the table.
-  const auto fill_code = static_cast<std::uint8_t>(zero_shift < 27 ? zero_shift : 0);
   const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
   double energy = 0.0;
   SymTensor w;
@@ -320,7 +318,9 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& chunk, SymTens
             reinterpret_cast<__m256i*>(tail),
             _mm256_blendv_epi8(_mm256_set1_epi32(i), _mm256_maskload_epi32(j, listed), listed));
         j = tail;
-        std::memset(&codes, fill_code, sizeof codes);
+        // The lanes past the end take the last listed code: a vector whose listed lanes
+        // share one code still counts as one shift.
+        std::memset(&codes, c.codes[k + left - 1], sizeof codes);
         std::memcpy(&codes, c.codes + k, left);
         lanes[0] = lanes_below(left, 0);
         lanes[1] = lanes_below(left, 4);
@@ -329,9 +329,23 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& chunk, SymTens
       }
       // Most vectors cross no periodic boundary: every lane's code the unshifted image's.
       const bool shifted = codes != unshifted;
+      // The list gives a particle's partners through each shift together (the stencil's
+      // order): a shifted vector's lanes nearly always share one, whose components are then
+      // broadcast rather than loaded lane by lane (LJ 32000's pair loop 0.95x).
+      bool mixed = false;
+      __m256d one_sx = _mm256_setzero_pd(), one_sy = one_sx, one_sz = one_sx;
       if (shifted) {
-        _mm256_store_si256(reinterpret_cast<__m256i*>(code_slots),
-                           _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(codes))));
+        const std::uint64_t first_code = codes & 0xffu;
+        mixed = codes != first_code * 0x0101010101010101ULL;
+        if (mixed) {
+          _mm256_store_si256(
+              reinterpret_cast<__m256i*>(code_slots),
+              _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(codes))));
+        } else {
+          one_sx = _mm256_broadcast_sd(&shift_table[first_code].x);
+          one_sy = _mm256_broadcast_sd(&shift_table[first_code].y);
+          one_sz = _mm256_broadcast_sd(&shift_table[first_code].z);
+        }
       }
       [[maybe_unused]] alignas(32) double pair[7][8];
       [[maybe_unused]] unsigned in_lanes = 0;
@@ -344,8 +358,8 @@ double loop(const LennardJones::Params& p, const VectorPairChunk& chunk, SymTens
         load_transposed(c.x, j + 4 * h, xj, yj, zj);
         __m256d dx = _mm256_sub_pd(xi, xj), dy = _mm256_sub_pd(yi, yj), dz = _mm256_sub_pd(zi, zj);
         if (shifted) {
-          __m256d sx, sy, sz;
-          load_transposed(shift_table, code_slots + 4 * h, sx, sy, sz);
+          __m256d sx = one_sx, sy = one_sy, sz = one_sz;
+          if (mixed) load_transposed(shift_table, code_slots + 4 * h, sx, sy, sz);
           dx = _mm256_sub_pd(dx, sx);
           dy = _mm256_sub_pd(dy, sy);
           dz = _mm256_sub_pd(dz, sz);
