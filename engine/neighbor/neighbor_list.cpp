@@ -114,7 +114,8 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
           around.emplace_back(cell,
                               grid.shifted ? code_of(wraps[0], wraps[1], wraps[2]) : kNoShift);
         }
-    if (grid.shifted) {
+    if (grid.shifted && std::any_of(around.begin(), around.end(),
+                                    [](const auto& a) { return a.second != kNoShift; })) {
       // The unshifted cells first, then those through each periodic shift together (by
       // code): a particle's partners through one shift are consecutive in its list, and a
       // vector pair loop's vectors of partners mostly have one shift or none (LJ 32000:

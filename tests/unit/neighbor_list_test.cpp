@@ -171,6 +171,33 @@ TEST(NeighborList, ImageCodesGiveTheMinimumImage) {
   EXPECT_EQ(listed(list), brute_force(x, box, 2.8));
 }
 
+// The order the vector pair loop counts on (LennardJones::vector_loop broadcasts a vector's
+// one shift): each particle's unshifted partners first, then those through each periodic
+// shift as one block (particles inside the box: no pair needs a code of its own).
+TEST(NeighborList, PartnersThroughOneShiftAreConsecutive) {
+  const Box box({0, 0, 0}, {11.0, 12.0, 13.0}, {true, true, true});
+  const auto x = random_positions(1200, box, 5);
+  NeighborList list(2.5, 0.3);
+  list.build(x, box);
+  ASSERT_FALSE(list.image_codes().empty());
+  constexpr std::uint8_t kUnshifted = 13;
+  std::size_t particles_with_two_shifts = 0;
+  for (std::size_t i = 0; i + 1 < list.offsets().size(); ++i) {
+    std::set<std::uint8_t> done;
+    std::uint8_t current = kUnshifted;
+    for (std::size_t k = list.offsets()[i]; k < list.offsets()[i + 1]; ++k) {
+      const std::uint8_t code = list.image_codes()[k];
+      if (code == current) continue;
+      EXPECT_NE(code, kUnshifted) << "particle " << i << ": an unshifted partner after a shifted";
+      EXPECT_TRUE(done.insert(current).second && !done.count(code))
+          << "particle " << i << ": partners through shift " << int{code} << " split";
+      current = code;
+    }
+    particles_with_two_shifts += done.size() >= 2;  // unshifted, then at least two shifts
+  }
+  EXPECT_GT(particles_with_two_shifts, 10u);
+}
+
 TEST(NeighborList, SameInputSameOrder) {
   const Box box({0, 0, 0}, {10, 10, 10}, {true, true, true});
   const auto x = random_positions(800, box, 8);
