@@ -32,9 +32,18 @@ inline int chunks_for(std::size_t n) {
 // items, the hard-sphere fluid (4000 spheres, GVI, about twenty such loops a step) ran on 2
 // threads at 0.35x of one thread's speed (OMP_WAIT_POLICY=passive), 0.66x (active), on an
 // idle 2-core machine. The split, like every split here, depends on n alone.
+// These splits are set for machines where a parallel region costs microseconds. Where it
+// costs a fraction of one (an idle AMD EPYC, Zen 3, 2 cores: an empty region 0.27 us, a kick
+// over 4000 particles 3.2 us on one thread and 1.8 us in two chunks; bench/parallel_overhead)
+// the smaller splits below win: [run] split_small_loops sets them (on 2 threads the
+// 4000-sphere fluid 0.66x the loop time, the rigid melt 0.83x, the default input 0.88x).
+// Splits change the sums' grouping on several threads: a run's split is its input's.
 std::size_t cheap_loop_minimum();
-// For tests, which run the split paths of these loops on small systems.
+// For tests, which run the split paths of these loops on small systems, and for
+// [run] split_small_loops.
 void set_cheap_loop_minimum(std::size_t n);
+inline constexpr std::size_t kSmallLoopSplit = 1024;
+inline constexpr std::size_t kSmallClusterSplit = 512;
 
 // Chunks for a loop over n cheap items: the thread count, or 1 below cheap_loop_minimum().
 inline int chunks_for_cheap(std::size_t n) {
@@ -60,7 +69,8 @@ inline int chunks_for_rows_of(std::size_t particles, std::size_t rows) {
 // than the region and the other core's lines cost. The rigid melt's 3900 rods still gain
 // (position update 1.19x).
 std::size_t cluster_work_minimum();
-// For tests, which run the split paths of these loops on small systems.
+// For tests, which run the split paths of these loops on small systems, and for
+// [run] split_small_loops.
 void set_cluster_work_minimum(std::size_t n);
 
 // Chunks for a loop over `items` items of uneven size holding `work` units in all (a

@@ -655,6 +655,11 @@ void output_path_cases(std::vector<Case>& cases) {
 
 // Messages that used to mislead (issue 14, item 8): each now names what is wrong.
 void message_cases(std::vector<Case>& cases) {
+  cases.push_back({"split_small_loops_not_a_boolean",
+                   with(kLj, "steps = 20", "steps = 20\nsplit_small_loops = \"yes\""),
+                   "",
+                   1,
+                   {"in.toml:", "'run.split_small_loops'", "expected true or false"}});
   cases.push_back({"input_is_a_directory",
                    kLj,
                    "",

@@ -1,6 +1,7 @@
 // `deli run --threads 2`: the same input on two threads twice, and stopped at a checkpoint
 // and restarted, gives the same thermo rows bit for bit; on one thread it gives the same
 // rows to round-off (the sums are regrouped). The one-thread rows are the expected values.
+// The same with [run] split_small_loops (the 4000 atoms' passes split over the threads).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -20,7 +21,7 @@ namespace {
 
 // The harmonic chain melt (pairs, bonds, exclusions: 4000 atoms) under a Langevin
 // thermostat, with thermo rows every 10 steps and a checkpoint every 60.
-std::string melt_input(const std::string& dir, int steps) {
+std::string melt_input(const std::string& dir, int steps, const std::string& run_extra) {
   std::string text =
       testing::file_contents(DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000_harmonic.toml");
   text = text.substr(0, text.find("[run]"));
@@ -28,7 +29,8 @@ std::string melt_input(const std::string& dir, int steps) {
                "\"" DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000.data\"");
   const std::string path = dir + "/run" + std::to_string(steps) + ".toml";
   std::ofstream(path) << text << "[thermostat]\ntype = \"langevin\"\ntemperature = 1.2\n"
-                      << "damping = 1.0\nseed = 5\n[run]\nsteps = " << steps << "\n[output]\n"
+                      << "damping = 1.0\nseed = 5\n[run]\nsteps = " << steps << "\n"
+                      << run_extra << "[output]\n"
                       << "thermo = { every = 10, file = \"" << dir << "/out.csv\" }\n"
                       << "checkpoint = { file = \"" << dir << "/out.chk\", every = 60 }\n";
   return path;
@@ -37,11 +39,16 @@ std::string melt_input(const std::string& dir, int steps) {
 // Waiting threads sleep (OMP_WAIT_POLICY=passive): ctest runs another test beside this one
 // on two cores, and a thread spinning at a barrier takes the core its partner needs (81 s
 // against 3.5 s, measured under load).
-std::string run_melt(const std::string& dir, int steps, const std::string& extra) {
+std::string run_melt(const std::string& dir, int steps, const std::string& extra,
+                     const std::string& run_extra = "") {
   testing::run_shell("mkdir -p " + dir);
-  const testing::ShellResult r = testing::run_shell("OMP_WAIT_POLICY=passive " DELI_BINARY " run " +
-                                                    melt_input(dir, steps) + " " + extra);
+  const testing::ShellResult r =
+      testing::run_shell("OMP_WAIT_POLICY=passive " DELI_BINARY " run " +
+                         melt_input(dir, steps, run_extra) + " " + extra);
   EXPECT_EQ(r.status, 0) << r.output;
+  if (!run_extra.empty() && extra.find("--threads 2") != std::string::npos) {
+    EXPECT_NE(r.output.find("2 threads (small loops split)"), std::string::npos) << r.output;
+  }
   return testing::file_contents(dir + "/out.csv");
 }
 
@@ -60,22 +67,23 @@ std::vector<std::vector<double>> numbers(const std::string& csv) {
   return rows;
 }
 
-TEST(ThreadsRun, TwoThreadsRepeatAndRestartBitForBit) {
+void expect_repeat_and_restart_bit_for_bit(const std::string& name, const std::string& run_extra) {
   const std::string root =
-      deli::testing::process_temp_dir() + "/threads_restart_" + std::to_string(getpid());
+      deli::testing::process_temp_dir() + "/" + name + "_" + std::to_string(getpid());
   // Under the sanitizers (support/short_runs.hpp) 40 steps, stopped at 30: the same code
   // (threaded loops, checkpoint, restart) on a third of the steps.
   const int steps = testing::steps_or_prefix(120, 40), stop = testing::steps_or_prefix(90, 30);
-  const std::string straight = run_melt(root + "/straight", steps, "--threads 2");
-  EXPECT_EQ(straight, run_melt(root + "/again", steps, "--threads 2"));
-  run_melt(root + "/stopped", stop, "--threads 2");
-  const std::string restarted =
-      run_melt(root + "/stopped", steps, "--threads 2 --restart " + root + "/stopped/out.chk");
+  const std::string straight = run_melt(root + "/straight", steps, "--threads 2", run_extra);
+  EXPECT_EQ(straight, run_melt(root + "/again", steps, "--threads 2", run_extra));
+  run_melt(root + "/stopped", stop, "--threads 2", run_extra);
+  const std::string restarted = run_melt(
+      root + "/stopped", steps, "--threads 2 --restart " + root + "/stopped/out.chk", run_extra);
   EXPECT_EQ(straight, restarted);
 
   // One thread: every column within 1e-8 relative of its scale after 120 steps (round-off
   // of the regrouped sums, grown by the dynamics' chaos).
-  const auto a = numbers(straight), b = numbers(run_melt(root + "/one", steps, "--threads 1"));
+  const auto a = numbers(straight),
+             b = numbers(run_melt(root + "/one", steps, "--threads 1", run_extra));
   ASSERT_EQ(a.size(), b.size());
   ASSERT_EQ(a.size(), static_cast<std::size_t>(steps / 10 + 1));
   for (std::size_t r = 0; r < a.size(); ++r) {
@@ -86,6 +94,14 @@ TEST(ThreadsRun, TwoThreadsRepeatAndRestartBitForBit) {
     }
   }
   testing::run_shell("rm -rf " + root);
+}
+
+TEST(ThreadsRun, TwoThreadsRepeatAndRestartBitForBit) {
+  expect_repeat_and_restart_bit_for_bit("threads_restart", "");
+}
+
+TEST(ThreadsRun, SmallLoopsSplitRepeatAndRestartBitForBit) {
+  expect_repeat_and_restart_bit_for_bit("threads_split_restart", "split_small_loops = true\n");
 }
 
 }  // namespace
