@@ -35,8 +35,9 @@ inline int chunks_for(std::size_t n) {
 // These splits are set for machines where a parallel region costs microseconds. Where it
 // costs a fraction of one (an idle AMD EPYC, Zen 3, 2 cores: an empty region 0.27 us, a kick
 // over 4000 particles 3.2 us on one thread and 1.8 us in two chunks; bench/parallel_overhead)
-// the smaller splits below win: [run] split_small_loops sets them (on 2 threads the
-// 4000-sphere fluid 0.66x the loop time, the rigid melt 0.83x, the default input 0.88x).
+// the smaller splits below win: [run] split_small_loops sets them (loop time on 2 threads:
+// the 4000-sphere fluid 0.64x, the default input 0.84x, LJ 4000 0.95x, the rigid melt
+// 0.83-0.99x).
 // Splits change the sums' grouping on several threads: a run's split is its input's.
 std::size_t cheap_loop_minimum();
 // For tests, which run the split paths of these loops on small systems, and for
