@@ -854,6 +854,21 @@ inline void load_quarter_block(const double* __restrict src, std::size_t numbers
   if constexpr (kQuarterLanes) transpose(q);
 }
 
+// Numbers j..j+w-1 of two arrays (as load_quarter_block reads them) in 4 x 4 blocks of
+// Quarters: visit(i, h, u, v) for number i and lanes h..h+3, u from a and v from b.
+template <class Visit>
+inline void for_each_quarter_pair(const double* __restrict a, const double* __restrict b,
+                                  std::size_t numbers, std::size_t j, Visit&& visit) {
+  for (std::size_t g = 0; g < w; g += 4) {
+    for (std::size_t h = 0; h < w; h += 4) {
+      Quarter u[4], v[4];
+      load_quarter_block(a, numbers, j + g, h, u);
+      load_quarter_block(b, numbers, j + g, h, v);
+      for (std::size_t k = 0; k < 4; ++k) visit(j + g + k, h, u[k], v[k]);
+    }
+  }
+}
+
 // Lane l's chain at particles base + l n .. (consecutive chains of n beads): its numbers
 // are the doubles 3 (base + l n) + j, j < 3n, j = 3 bead + axis. The across layout holds
 // number j of every lane in row row_of(n, j) = axis n + bead, one vector. Blocks of 8 numbers
@@ -901,21 +916,15 @@ void gather_sum(std::size_t n, const std::int32_t* __restrict particle, std::int
     const double* __restrict b0 = b + 3 * base;
     std::size_t j = 0;
     for (; kQuarterLanes && j + w <= numbers; j += w) {
-      for (std::size_t g = 0; g < w; g += 4) {
-        for (std::size_t h = 0; h < w; h += 4) {
-          Quarter u[4], v[4];
-          load_quarter_block(a0, numbers, j + g, h, u);
-          load_quarter_block(b0, numbers, j + g, h, v);
-          for (std::size_t k = 0; k < 4; ++k) {
-            const std::size_t r = row_of(n, j + g + k);
-            store_as(out + r * w + h, u[k] + v[k]);
-            if (memo) {
-              const auto d = bits(v[k]) != bits(load_as<Quarter>(memo + r * w + h));
-              for (std::size_t l = 0; l < 4; ++l) differ[h + l] |= d[l];
-            }
-          }
-        }
-      }
+      for_each_quarter_pair(a0, b0, numbers, j,
+                            [&](std::size_t i, std::size_t h, const Quarter& u, const Quarter& v) {
+                              const std::size_t r = row_of(n, i);
+                              store_as(out + r * w + h, u + v);
+                              if (memo) {
+                                const auto d = bits(v) != bits(load_as<Quarter>(memo + r * w + h));
+                                for (std::size_t l = 0; l < 4; ++l) differ[h + l] |= d[l];
+                              }
+                            });
     }
     for (; j + w <= numbers; j += w) {
       Lanes u[w], v[w];
@@ -967,19 +976,13 @@ void gather_velocities(std::size_t n, const std::int32_t* __restrict particle, s
     const double* __restrict p0 = p + 3 * base;
     std::size_t j = 0;
     for (; kQuarterLanes && j + w <= numbers; j += w) {
-      for (std::size_t g = 0; g < w; g += 4) {
-        for (std::size_t h = 0; h < w; h += 4) {
-          Quarter u[4], v[4];
-          load_quarter_block(x0, numbers, j + g, h, u);
-          load_quarter_block(p0, numbers, j + g, h, v);
-          for (std::size_t k = 0; k < 4; ++k) {
-            const std::size_t r = row_of(n, j + g + k);
-            store_as(x_out + r * w + h, u[k]);
-            store_as(v_out + r * w + h,
-                     v[k] * load_as<Quarter>(inverse_mass + ((j + g + k) / 3) * w + h));
-          }
-        }
-      }
+      for_each_quarter_pair(x0, p0, numbers, j,
+                            [&](std::size_t i, std::size_t h, const Quarter& u, const Quarter& v) {
+                              const std::size_t r = row_of(n, i);
+                              store_as(x_out + r * w + h, u);
+                              store_as(v_out + r * w + h,
+                                       v * load_as<Quarter>(inverse_mass + (i / 3) * w + h));
+                            });
     }
     for (; j + w <= numbers; j += w) {
       Lanes u[w], v[w];
