@@ -39,8 +39,9 @@ class ForceField {
 
   // LAMMPS special_bonds lj factors for 1-2, 1-3, 1-4 neighbours.
   std::array<double, 3> special_lj{0.0, 0.0, 0.0};
-  // Pair loops in the neighbour list's cell order ([neighbor] cell_order): faster on a
-  // liquid whose particle order is scrambled; sums in another order (round-off).
+  // Pair loops in the neighbour list's cell order ([neighbor] cell_order; an input has it
+  // on where there is a pair loop): faster on a liquid whose particle order is scrambled;
+  // sums in another order (round-off).
   bool cell_order = false;
 
  private:

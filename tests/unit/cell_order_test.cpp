@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 
 #include "forces/special_bonds.hpp"
 #include "input/run_input.hpp"
@@ -194,6 +195,51 @@ steps = 0
   for (std::size_t i = 0; i < f_plain.size(); ++i) {
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(engine.force()[i][a], f_plain[i][a], 1e-12);
   }
+}
+
+// On by default where the force field has a pair loop, as LAMMPS sorts its atoms unless told
+// not to; off for hard spheres alone (nothing to gain, the list's copy by particle to pay);
+// the key overrides either way.
+TEST(CellOrder, OnByDefaultWhereAPairLoopRuns) {
+  const std::string lj = R"(
+[system]
+[system.lattice]
+type = "fcc"
+density = 0.8442
+cells = [4, 4, 4]
+[forcefield.pair]
+style = "lj/cut"
+cutoff = 2.5
+coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
+[integrator]
+timestep = 0.005
+[run]
+steps = 0
+)";
+  EXPECT_TRUE(testing::input_from(lj).force_field->cell_order);
+  EXPECT_TRUE(testing::input_from(lj + "[neighbor]\nskin = 0.3\n").force_field->cell_order);
+  EXPECT_FALSE(
+      testing::input_from(lj + "[neighbor]\ncell_order = false\n").force_field->cell_order);
+  const std::string spheres = R"(
+[system]
+[system.lattice]
+type = "fcc"
+density = 0.5
+cells = [4, 4, 4]
+[forcefield.pair]
+style = "none"
+[constraints]
+hard_spheres = { diameter = 1.0 }
+[integrator]
+type = "gvi"
+lagrangian = "verlet"
+timestep = 0.005
+[run]
+steps = 0
+)";
+  EXPECT_FALSE(testing::input_from(spheres).force_field->cell_order);
+  EXPECT_TRUE(
+      testing::input_from(spheres + "[neighbor]\ncell_order = true\n").force_field->cell_order);
 }
 
 }  // namespace
