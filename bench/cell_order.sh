@@ -8,7 +8,7 @@
 #   ROUNDS=5 DELI=path/to/deli bench/cell_order.sh
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
-deli=${DELI:-$top/build/deli}
+deli=$(realpath "${DELI:-$top/build/deli}")
 rounds=${ROUNDS:-3}
 # Reads "ORDER OFF_TIMES | ON_TIMES": medians and their ratio.
 summarise=$(cat <<'PY'
