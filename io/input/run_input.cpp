@@ -88,10 +88,10 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
 
   // Cache order wherever a pair loop runs, as LAMMPS sorts its atoms unless told not to: on
   // the AVX2 machine of stop 45 it took LJ 32000 (fcc order) to 0.85x the loop time on one
-  // thread, 0.90x on two, the default input and the rigid melt to 0.95-0.97x; a liquid's
-  // indices scramble within thousands of steps, and then it pays more (0.85x on the AVX-512
-  // machine of stop 37). Without a pair loop it only costs the list's copy by particle
-  // (hard spheres: 1.02-1.04x).
+  // thread and 0.89x on two, LJ 4000 to 0.92-0.96x, the rigid melt to 0.97x, the default input
+  // to 0.95-1.02x (noise); a liquid's indices scramble within thousands of steps, and then it
+  // pays more (LJ 32000 shuffled: 0.47x). Without a pair loop it only costs the list's copy
+  // by particle for the hard-sphere searches (1.02-1.04x).
   input.force_field->cell_order = input.force_field->neighbor_cutoff() > 0;
   if (auto n = root.table("neighbor")) {
     input.skin = n->number("skin", 0.3);
