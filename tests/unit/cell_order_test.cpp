@@ -162,8 +162,8 @@ TEST(CellOrder, ForcesAgreeWithTheListByParticleToRoundOffAndRepeatBitForBit) {
   EXPECT_EQ(e_sorted.potential, e_again.potential);
 }
 
-TEST(CellOrder, TheInputOptionReachesTheForceEngine) {
-  RunInput input = testing::input_from(R"(
+// An LJ liquid's input without [neighbor] (the tests below add it).
+const std::string kLjInput = R"(
 [system]
 [system.lattice]
 type = "fcc"
@@ -173,14 +173,14 @@ cells = [4, 4, 4]
 style = "lj/cut"
 cutoff = 2.5
 coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
-[neighbor]
-skin = 0.3
-cell_order = true
 [integrator]
 timestep = 0.005
 [run]
 steps = 0
-)");
+)";
+
+TEST(CellOrder, TheInputOptionReachesTheForceEngine) {
+  RunInput input = testing::input_from(kLjInput + "[neighbor]\nskin = 0.3\ncell_order = true\n");
   ASSERT_TRUE(input.force_field->cell_order);
   testing::jiggle(input.system.particles, 0.05, 14);
   ForceEngine engine(*input.force_field, input.skin);
@@ -201,21 +201,7 @@ steps = 0
 // not to; off for hard spheres alone (nothing to gain, the list's copy by particle to pay);
 // the key overrides either way.
 TEST(CellOrder, OnByDefaultWhereAPairLoopRuns) {
-  const std::string lj = R"(
-[system]
-[system.lattice]
-type = "fcc"
-density = 0.8442
-cells = [4, 4, 4]
-[forcefield.pair]
-style = "lj/cut"
-cutoff = 2.5
-coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
-[integrator]
-timestep = 0.005
-[run]
-steps = 0
-)";
+  const std::string& lj = kLjInput;
   EXPECT_TRUE(testing::input_from(lj).force_field->cell_order);
   EXPECT_TRUE(testing::input_from(lj + "[neighbor]\nskin = 0.3\n").force_field->cell_order);
   EXPECT_FALSE(
