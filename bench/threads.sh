@@ -112,7 +112,9 @@ for spec in "${cases[@]}"; do
     section == "[output]" { next }
     section == "[run]" && /^steps *=/ { $0 = "steps = " cap }
     { print }' "$top/$input" > "$dir/input.toml"
-  sed 's/^\[run\]$/[run]\nsplit_small_loops = true/' "$dir/input.toml" > "$dir/input_split.toml"
+  if [[ $split == 1 ]]; then
+    sed 's/^\[run\]$/[run]\nsplit_small_loops = true/' "$dir/input.toml" > "$dir/input_split.toml"
+  fi
   declare -A rate=()
   variants=()
   [[ -n $old ]] && variants+=("old-deli ${counts[0]}")
