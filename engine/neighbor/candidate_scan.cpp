@@ -234,7 +234,7 @@ std::size_t keep_hits_one_by_one(const std::int32_t* member, const std::int32_t*
                                  const std::int32_t* excluded, std::size_t excluded_count,
                                  std::int32_t* j_out, std::uint8_t* code_out,
                                  std::uint32_t* recode_kept, std::uint32_t* recode_hit,
-                                 std::size_t* recode_count) {
+                                 std::size_t* recode_count, bool as_slots) {
   std::size_t kept = 0, recode = 0;
   const std::int32_t* const excluded_end = excluded + excluded_count;
   for (std::size_t h = 0; h < hits; ++h) {
@@ -246,7 +246,7 @@ std::size_t keep_hits_one_by_one(const std::int32_t* member, const std::int32_t*
       recode_hit[recode++] = static_cast<std::uint32_t>(h);
     }
     code_out[kept] = hit_code[h];
-    j_out[kept++] = j;
+    j_out[kept++] = as_slots ? hit_slot[h] : j;
   }
   *recode_count = recode;
   return kept;
@@ -264,7 +264,7 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
                                 const std::int32_t* excluded, std::size_t excluded_count,
                                 std::int32_t* j_out, std::uint8_t* code_out,
                                 std::uint32_t* recode_kept, std::uint32_t* recode_hit,
-                                std::size_t* recode_count) {
+                                std::size_t* recode_count, bool as_slots) {
   __m512i partner[kVectorExcluded];
   for (std::size_t e = 0; e < kVectorExcluded; ++e) {
     // Unused places repeat a partner: the same test again.
@@ -277,7 +277,11 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
     const std::size_t count = hits - h < 16 ? hits - h : 16;
     const auto lanes = static_cast<__mmask16>((1u << count) - 1u);
     const __m512i slot = _mm512_maskz_loadu_epi32(lanes, hit_slot + h);
-    const __m512i j = _mm512_mask_i32gather_epi32(_mm512_set1_epi32(-1), lanes, slot, member, 4);
+    // The members are read only where they are kept or compared.
+    const __m512i j =
+        as_slots && !excluded_count
+            ? slot
+            : _mm512_mask_i32gather_epi32(_mm512_set1_epi32(-1), lanes, slot, member, 4);
     const __m512i moved = _mm512_mask_i32gather_epi32(key_v, lanes, slot, moved_key, 4);
     __mmask16 keep = lanes;
     if (excluded_count) {
@@ -289,7 +293,7 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
     // past them are not kept).
     const __m512i code =
         _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(hit_code + h)));
-    _mm512_storeu_si512(j_out + kept, _mm512_maskz_compress_epi32(keep, j));
+    _mm512_storeu_si512(j_out + kept, _mm512_maskz_compress_epi32(keep, as_slots ? slot : j));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(code_out + kept),
                      _mm512_cvtepi32_epi8(_mm512_maskz_compress_epi32(keep, code)));
     const auto kept_here = static_cast<unsigned>(__builtin_popcount(keep));
@@ -340,7 +344,7 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
                                 const std::int32_t* excluded, std::size_t excluded_count,
                                 std::int32_t* j_out, std::uint8_t* code_out,
                                 std::uint32_t* recode_kept, std::uint32_t* recode_hit,
-                                std::size_t* recode_count) {
+                                std::size_t* recode_count, bool as_slots) {
   __m256i partner[kVectorExcluded];
   for (std::size_t e = 0; e < kVectorExcluded; ++e) {
     // Unused places repeat a partner: the same test again.
@@ -353,7 +357,11 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
     const std::size_t count = hits - h < 8 ? hits - h : 8;
     const __m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(count)), iota);
     const __m256i slot = _mm256_maskload_epi32(hit_slot + h, lanes);
-    const __m256i j = _mm256_mask_i32gather_epi32(_mm256_set1_epi32(-1), member, slot, lanes, 4);
+    // The members are read only where they are kept or compared.
+    const __m256i j =
+        as_slots && !excluded_count
+            ? slot
+            : _mm256_mask_i32gather_epi32(_mm256_set1_epi32(-1), member, slot, lanes, 4);
     const __m256i moved = _mm256_mask_i32gather_epi32(key_v, moved_key, slot, lanes, 4);
     __m256i keep_v = lanes;
     if (excluded_count) {
@@ -365,8 +373,9 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
     std::uint64_t order;
     std::memcpy(&order, kCompress8.lanes[keep], sizeof order);
     const __m128i order_bytes = _mm_cvtsi64_si128(static_cast<long long>(order));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(j_out + kept),
-                        _mm256_permutevar8x32_epi32(j, _mm256_cvtepu8_epi32(order_bytes)));
+    _mm256_storeu_si256(
+        reinterpret_cast<__m256i*>(j_out + kept),
+        _mm256_permutevar8x32_epi32(as_slots ? slot : j, _mm256_cvtepu8_epi32(order_bytes)));
     // Eight codes read whole: hit_code has room for kScanSlack past the hits (the lanes past
     // them are not kept).
     std::uint64_t codes;
@@ -399,17 +408,17 @@ std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key,
                       const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
                       const std::int32_t* excluded, std::size_t excluded_count, std::int32_t* j_out,
                       std::uint8_t* code_out, std::uint32_t* recode_kept, std::uint32_t* recode_hit,
-                      std::size_t* recode_count) {
+                      std::size_t* recode_count, bool as_slots) {
 #if defined(DELI_SCAN_AVX512) || defined(DELI_SCAN_AVX2)
   if (excluded_count <= kVectorExcluded) {
     return keep_hits_by_vector(member, moved_key, key, hit_slot, hit_code, hits, excluded,
                                excluded_count, j_out, code_out, recode_kept, recode_hit,
-                               recode_count);
+                               recode_count, as_slots);
   }
 #endif
   return keep_hits_one_by_one(member, moved_key, key, hit_slot, hit_code, hits, excluded,
                               excluded_count, j_out, code_out, recode_kept, recode_hit,
-                              recode_count);
+                              recode_count, as_slots);
 }
 
 }  // namespace deli

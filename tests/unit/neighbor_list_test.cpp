@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <random>
 #include <set>
@@ -196,6 +197,55 @@ TEST(NeighborList, PartnersThroughOneShiftAreConsecutive) {
     particles_with_two_shifts += done.size() >= 2;  // unshifted, then at least two shifts
   }
   EXPECT_GT(particles_with_two_shifts, 10u);
+}
+
+// Particles on the cells' faces and corners, and a hair either side of them, are where a
+// build that bins particles, or one that leaves out cells it judges beyond reach (tried at stop
+// 46: bench/README.md), could drop a pair: a lattice of spacing one cell width (1.5, reach 3:
+// ten cells a side), each point moved by 0 or +-1e-7 along each axis, so that many pairs lie
+// 1e-7 to 3e-7 within reach or beyond it, in a periodic box and in one open along x and y. The
+// reference is the brute-force distance; pairs within 1e-10 of reach (the lattice's own ties,
+// which the two searches' roundings may split either way) are not judged.
+TEST(NeighborList, ParticlesOnCellFacesKeepEveryPairWithinReach) {
+  const double cutoff = 2.5, skin = 0.5, reach = cutoff + skin, width = 1.5;
+  std::mt19937_64 rng(5);
+  std::uniform_int_distribution<int> nudge(-1, 1);
+  for (const std::array<bool, 3>& periodic :
+       {std::array<bool, 3>{true, true, true}, std::array<bool, 3>{false, false, true}}) {
+    const Box box({0, 0, 0}, {15, 15, 15}, periodic);
+    std::vector<Vec3> x;
+    for (int k = 0; k < 10; ++k)
+      for (int j = 0; j < 10; ++j)
+        for (int i = 0; i < 10; ++i) {
+          const Vec3 site{i * width, j * width, k * width};
+          x.push_back(site + 1e-7 * Vec3{static_cast<double>(nudge(rng)),
+                                         static_cast<double>(nudge(rng)),
+                                         static_cast<double>(nudge(rng))});
+        }
+    NeighborList list(cutoff, skin);
+    list.build(x, box);
+    const PairSet got = listed(list);
+    std::size_t within = 0, near_inside = 0, near_outside = 0;
+    for (std::int32_t i = 0; i < static_cast<std::int32_t>(x.size()); ++i) {
+      for (std::int32_t j = i + 1; j < static_cast<std::int32_t>(x.size()); ++j) {
+        const double r = std::sqrt(norm2(box.minimum_image(x[j] - x[i])));
+        if (std::abs(r - reach) < 1e-10) continue;
+        const bool listed_pair = got.count({i, j}) > 0;
+        if (r < reach) {
+          ++within;
+          near_inside += r > reach - 1e-6;
+          EXPECT_TRUE(listed_pair) << "pair " << i << " " << j << " at reach - " << reach - r;
+        } else {
+          near_outside += r < reach + 1e-6;
+          EXPECT_FALSE(listed_pair) << "pair " << i << " " << j << " at reach + " << r - reach;
+        }
+      }
+    }
+    // The case holds pairs on both sides of reach, close to it.
+    EXPECT_GT(within, 10000u);
+    EXPECT_GT(near_inside, 500u);
+    EXPECT_GT(near_outside, 500u);
+  }
 }
 
 TEST(NeighborList, SameInputSameOrder) {
