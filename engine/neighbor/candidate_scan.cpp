@@ -1,8 +1,10 @@
 #include "neighbor/candidate_scan.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <limits>
 
 #if defined(__AVX512F__) && defined(__AVX512VL__)
 #include <immintrin.h>
@@ -125,6 +127,65 @@ constexpr CompressTable kCompress;
   return hits + static_cast<std::size_t>(__builtin_popcount(within));
 }
 
+// For each mask of eight lanes, its set lanes' numbers in order, then 0x80 (a byte shuffle's
+// zero): widened, a permutation of 32-bit lanes that moves the set lanes to the front; as
+// bytes, the same for eight bytes.
+struct CompressTable8 {
+  alignas(8) std::uint8_t lanes[256][8] = {};
+  constexpr CompressTable8() {
+    for (int mask = 0; mask < 256; ++mask) {
+      int place = 0;
+      for (int lane = 0; lane < 8; ++lane) {
+        if (mask >> lane & 1) lanes[mask][place++] = static_cast<std::uint8_t>(lane);
+      }
+      for (; place < 8; ++place) lanes[mask][place] = 0x80;
+    }
+  }
+};
+constexpr CompressTable8 kCompress8;
+
+// scan_block's first test in single precision, eight candidates a vector (floats: `xf`, `yf`,
+// `zf`, origin px, py, pz). Below `below` a candidate is within reach, at or above `above`
+// beyond it (FloatPositions), and in between, rarely, it is tested as scan_block tests it, in
+// doubles (x, y, z against ox, oy, oz), lane by lane. The same hits in the same order.
+[[gnu::always_inline]] inline std::size_t scan_block_float(
+    const FloatPositions& f, const double* x, const double* y, const double* z, std::size_t m,
+    std::size_t last, __m256 px, __m256 py, __m256 pz, __m256 below, __m256 above, double ox,
+    double oy, double oz, double within2, std::uint64_t codes, std::int32_t* slot_out,
+    std::uint8_t* code_out, std::size_t hits) {
+  const __m256i iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const auto left = static_cast<int>(
+      std::clamp<long long>(static_cast<long long>(last) - static_cast<long long>(m), 0, 8));
+  const __m256i lanes = _mm256_cmpgt_epi32(_mm256_set1_epi32(left), iota);
+  const __m256 dx = _mm256_sub_ps(_mm256_maskload_ps(f.x + m, lanes), px);
+  const __m256 dy = _mm256_sub_ps(_mm256_maskload_ps(f.y + m, lanes), py);
+  const __m256 dz = _mm256_sub_ps(_mm256_maskload_ps(f.z + m, lanes), pz);
+  const __m256 r2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                  _mm256_mul_ps(dz, dz));
+  const __m256 listed = _mm256_castsi256_ps(lanes);
+  auto within = static_cast<unsigned>(
+      _mm256_movemask_ps(_mm256_and_ps(listed, _mm256_cmp_ps(r2, below, _CMP_LT_OQ))));
+  const unsigned unsure = static_cast<unsigned>(_mm256_movemask_ps(
+                              _mm256_and_ps(listed, _mm256_cmp_ps(r2, above, _CMP_LT_OQ)))) &
+                          ~within;
+  if (unsure != 0) [[unlikely]] {
+    for (unsigned u = unsure; u != 0; u &= u - 1) {
+      const std::size_t k = m + static_cast<std::size_t>(__builtin_ctz(u));
+      const double ex = x[k] - ox, ey = y[k] - oy, ez = z[k] - oz;
+      within |= static_cast<unsigned>(ex * ex + ey * ey + ez * ez < within2) << __builtin_ctz(u);
+    }
+  }
+  std::uint64_t order;
+  std::memcpy(&order, kCompress8.lanes[within], sizeof order);
+  const __m256i slots = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(m)), iota);
+  _mm256_storeu_si256(
+      reinterpret_cast<__m256i*>(slot_out + hits),
+      _mm256_permutevar8x32_epi32(
+          slots, _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(order)))));
+  std::memcpy(code_out + hits, &codes, sizeof codes);
+  return hits + static_cast<std::size_t>(__builtin_popcount(within));
+}
+
 }  // namespace
 
 // Four candidates a vector (scan_block), the last one partial; a particle's runs each so
@@ -206,11 +267,29 @@ std::size_t walk_stencil(const StencilRuns& runs, std::size_t home_first, std::s
 }
 }  // namespace
 
+// Each coordinate and origin rounded to a float moves by at most `largest` 2^-24, and a
+// difference d of two floats rounds by |d| 2^-24: a component's error e is at most
+// 2 largest 2^-24 + r 2^-24 for candidates within r, and its square's |d_f^2 - d^2| at most
+// e (2 |d| + e). Summed over the axes (|dx| + |dy| + |dz| <= sqrt(3) r), with the floats'
+// three products and two sums (4 r^2 2^-24), for r up to twice the reach; four times that
+// either side of within2. Beyond twice the reach r^2 in floats is far above the bound.
+bool float_bounds(double largest, double within2, float& below, float& above) {
+  if (!(largest >= 0.0 && largest < 1e30 && within2 > 0.0 && within2 < 1e30)) return false;
+  const double u = 0x1p-24, r = 2.0 * std::sqrt(within2);
+  const double e = 2.0 * largest * u + r * u;
+  const double error = e * (2.0 * std::sqrt(3.0) * r + 3.0 * e) + 4.0 * u * r * r;
+  const double low = within2 - 4.0 * error, high = within2 + 4.0 * error;
+  if (!(low > 0.0)) return false;
+  below = std::nextafter(static_cast<float>(low), 0.0f);
+  above = std::nextafter(static_cast<float>(high), std::numeric_limits<float>::infinity());
+  return true;
+}
+
 std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
                          std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
                          std::size_t run_begin, std::size_t run_end, double xi, double yi,
-                         double zi, double within2, std::int32_t* slot_out,
-                         std::uint8_t* code_out) {
+                         double zi, double within2, std::int32_t* slot_out, std::uint8_t* code_out,
+                         [[maybe_unused]] const FloatPositions* in_float) {
 #ifdef DELI_SCAN_AVX512
   const __m512d reach = _mm512_set1_pd(within2);
   auto scan = [&](std::size_t first, std::size_t last, double ox, double oy, double oz,
@@ -218,6 +297,26 @@ std::size_t scan_stencil(const double* x, const double* y, const double* z, cons
     return scan_run(x, y, z, first, last, ox, oy, oz, reach, code, slot_out, code_out, hits);
   };
 #else
+#ifdef DELI_SCAN_AVX2
+  if (in_float) {
+    const FloatPositions f = *in_float;
+    const __m256 below = _mm256_set1_ps(f.within2_below), above = _mm256_set1_ps(f.within2_above);
+    auto scan_float = [&](std::size_t first, std::size_t last, double ox, double oy, double oz,
+                          std::uint8_t code, std::size_t hits) {
+      const __m256 px = _mm256_set1_ps(static_cast<float>(ox));
+      const __m256 py = _mm256_set1_ps(static_cast<float>(oy));
+      const __m256 pz = _mm256_set1_ps(static_cast<float>(oz));
+      const auto codes = repeated<std::uint64_t>(code);
+      for (std::size_t m = first; m < last; m += 8) {
+        hits = scan_block_float(f, x, y, z, m, last, px, py, pz, below, above, ox, oy, oz, within2,
+                                codes, slot_out, code_out, hits);
+      }
+      return hits;
+    };
+    return walk_stencil(runs, home_first, home_last, home_code, run_begin, run_end, xi, yi, zi,
+                        scan_float);
+  }
+#endif
   auto scan = [&](std::size_t first, std::size_t last, double ox, double oy, double oz,
                   std::uint8_t code, std::size_t hits) {
     return scan_candidates(x, y, z, first, last, ox, oy, oz, within2, code, slot_out, code_out,
@@ -317,22 +416,6 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
 }  // namespace
 #elif defined(DELI_SCAN_AVX2)
 namespace {
-// For each mask of eight lanes, its set lanes' numbers in order, then 0x80 (a byte shuffle's
-// zero): widened, a permutation of 32-bit lanes that moves the set lanes to the front; as
-// bytes, the same for eight bytes.
-struct CompressTable8 {
-  alignas(8) std::uint8_t lanes[256][8] = {};
-  constexpr CompressTable8() {
-    for (int mask = 0; mask < 256; ++mask) {
-      int place = 0;
-      for (int lane = 0; lane < 8; ++lane) {
-        if (mask >> lane & 1) lanes[mask][place++] = static_cast<std::uint8_t>(lane);
-      }
-      for (; place < 8; ++place) lanes[mask][place] = 0x80;
-    }
-  }
-};
-constexpr CompressTable8 kCompress8;
 
 // The AVX-512 keep_hits_by_vector's form in eight-lane AVX2 vectors: the members and moved
 // keys gathered, the excluded partners compared, the kept lanes moved to the front by a

@@ -36,10 +36,26 @@ struct StencilRuns {
   const std::uint8_t* codes;
   const double (*shifts)[3];
 };
+// Single-precision copies of the positions by slot, for a first test of each candidate in
+// vectors of eight (AVX2 builds; the others test in doubles and ignore them): a candidate whose
+// r^2 in floats is below within2_below is within reach, one at or above within2_above beyond
+// it, and one in between is tested in doubles. The bounds must lie either side of within2 by
+// more than the floats' rounding can move r^2 (float_bounds below); the hits are then the
+// doubles' own.
+struct FloatPositions {
+  const float* x;
+  const float* y;
+  const float* z;
+  float within2_below, within2_above;
+};
+// FloatPositions' bounds for candidates and origins whose coordinates are at most `largest` in
+// magnitude and reach^2 = within2; false (test in doubles) where floats cannot hold them.
+bool float_bounds(double largest, double within2, float& below, float& above);
 std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
                          std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
                          std::size_t run_begin, std::size_t run_end, double xi, double yi,
-                         double zi, double within2, std::int32_t* slot_out, std::uint8_t* code_out);
+                         double zi, double within2, std::int32_t* slot_out, std::uint8_t* code_out,
+                         const FloatPositions* in_float = nullptr);
 
 // A particle's hits made list entries (the build's step after scan_stencil, for image-coded
 // lists): hit h in order is particle j = member[hit_slot[h]], dropped when j is one of the

@@ -156,7 +156,8 @@ class NeighborList {
   // afresh, their pages were faulted in again on every build, on the calling thread alone
   // (LJ 32000, 2 threads: 3 % of the run's samples in page faults under the build).
   std::vector<Vec3> inside_, member_position_;
-  std::vector<double> member_x_, member_y_, member_z_;  // member_position_ by component
+  std::vector<double> member_x_, member_y_, member_z_;    // member_position_ by component
+  std::vector<float> member_xf_, member_yf_, member_zf_;  // the same in single precision
   std::vector<std::array<int, 3>> moved_, member_moved_;
   std::vector<std::int32_t> cell_of_, member_, member_cell_;
   // Per slot: the periods moved as a code 0..26 where each is -1..1, else 27 + slot (unique):

@@ -109,35 +109,111 @@ TEST(CandidateScan, StencilScanFindsEveryRunsHitsInRunOrder) {
   EXPECT_GT(longest, 16u);
   const double xi[3] = {0.125, -0.25, 0.0625};
   const double within2 = 1.21;
-  for (std::size_t home_first = 0; home_first <= cell_start[2]; ++home_first) {
-    for (std::size_t begin = 0; begin <= run_cells.size(); begin += 3) {
-      const std::size_t home_last = cell_start[2];
-      Hits expected;
-      auto reference_run = [&](std::size_t first, std::size_t last, std::uint8_t code) {
-        const double o[3] = {xi[0] - shifts[code][0], xi[1] - shifts[code][1],
-                             xi[2] - shifts[code][2]};
-        reference_scan(x, y, z, first, last, o, within2, code, expected);
-      };
-      reference_run(home_first, home_last, 13);
-      for (std::size_t s = begin; s < run_cells.size(); ++s) {
-        reference_run(cell_start[run_cells[s]], cell_start[run_ends[s]], run_codes[s]);
-      }
-      std::vector<std::int32_t> slot(n + kScanSlack, -7);
-      std::vector<std::uint8_t> code(n + kScanSlack, 99);
-      const std::size_t hits =
-          scan_stencil(x.data(), y.data(), z.data(), runs, home_first, home_last, 13, begin,
-                       run_cells.size(), xi[0], xi[1], xi[2], within2, slot.data(), code.data());
-      ASSERT_EQ(hits, expected.slot.size())
-          << "home from " << home_first << ", runs from " << begin;
-      for (std::size_t h = 0; h < hits; ++h) {
-        ASSERT_EQ(slot[h], expected.slot[h]) << "hit " << h;
-        ASSERT_EQ(code[h], expected.code[h]) << "hit " << h;
-      }
-      if (home_first == 0 && begin == 0) {
-        EXPECT_GE(hits, 10u);  // the case has hits
+  // Candidates of the home run on the reach and a few units in the last place either side
+  // of it: the first test in floats leaves them unsure, and the doubles decide.
+  for (std::size_t m = 0; m < 6 && m < cell_start[2]; ++m) {
+    const double r = std::sqrt(within2) + (static_cast<double>(m) - 2.5) * 1e-16;
+    x[m] = xi[0] + r * 0.6, y[m] = xi[1] - r * 0.8, z[m] = xi[2];
+  }
+  // The same positions in floats, and the bounds of their first test.
+  std::vector<float> xf(n), yf(n), zf(n);
+  double largest = 0.0;
+  for (std::size_t m = 0; m < n; ++m) {
+    xf[m] = static_cast<float>(x[m]), yf[m] = static_cast<float>(y[m]);
+    zf[m] = static_cast<float>(z[m]);
+    largest = std::max({largest, std::abs(x[m]), std::abs(y[m]), std::abs(z[m])});
+  }
+  FloatPositions in_float{xf.data(), yf.data(), zf.data(), 0.0f, 0.0f};
+  ASSERT_TRUE(float_bounds(largest + 1.0, within2, in_float.within2_below, in_float.within2_above));
+  std::size_t unsure = 0;
+  for (std::size_t m = 0; m < cell_start[2]; ++m) {
+    const float dx = xf[m] - static_cast<float>(xi[0]), dy = yf[m] - static_cast<float>(xi[1]),
+                dz = zf[m] - static_cast<float>(xi[2]);
+    const float r2 = dx * dx + dy * dy + dz * dz;
+    unsure += r2 >= in_float.within2_below && r2 < in_float.within2_above;
+  }
+  EXPECT_GE(unsure, 4u);
+  for (const FloatPositions* floats :
+       {static_cast<const FloatPositions*>(nullptr), static_cast<const FloatPositions*>(&in_float)})
+    for (std::size_t home_first = 0; home_first <= cell_start[2]; ++home_first) {
+      for (std::size_t begin = 0; begin <= run_cells.size(); begin += 3) {
+        const std::size_t home_last = cell_start[2];
+        Hits expected;
+        auto reference_run = [&](std::size_t first, std::size_t last, std::uint8_t code) {
+          const double o[3] = {xi[0] - shifts[code][0], xi[1] - shifts[code][1],
+                               xi[2] - shifts[code][2]};
+          reference_scan(x, y, z, first, last, o, within2, code, expected);
+        };
+        reference_run(home_first, home_last, 13);
+        for (std::size_t s = begin; s < run_cells.size(); ++s) {
+          reference_run(cell_start[run_cells[s]], cell_start[run_ends[s]], run_codes[s]);
+        }
+        std::vector<std::int32_t> slot(n + kScanSlack, -7);
+        std::vector<std::uint8_t> code(n + kScanSlack, 99);
+        const std::size_t hits = scan_stencil(x.data(), y.data(), z.data(), runs, home_first,
+                                              home_last, 13, begin, run_cells.size(), xi[0], xi[1],
+                                              xi[2], within2, slot.data(), code.data(), floats);
+        ASSERT_EQ(hits, expected.slot.size())
+            << "home from " << home_first << ", runs from " << begin << ", floats " << !!floats;
+        for (std::size_t h = 0; h < hits; ++h) {
+          ASSERT_EQ(slot[h], expected.slot[h]) << "hit " << h;
+          ASSERT_EQ(code[h], expected.code[h]) << "hit " << h;
+        }
+        if (home_first == 0 && begin == 0) {
+          EXPECT_GE(hits, 10u);  // the case has hits
+        }
       }
     }
+}
+
+// float_bounds against a second computation: candidates near the reach (over the unsure band
+// and as far again either side), their coordinates and origins up to `largest` in magnitude (1, the
+// LJ 32000 box's 67, 1e4), each r^2 computed as the scan computes it in floats and in doubles.
+// Below the lower bound in floats must mean within in doubles, at or above the upper one beyond;
+// both decisions, and the unsure band between, occur.
+TEST(CandidateScan, FloatBoundsHoldTheDoublesDecision) {
+  std::mt19937_64 rng(17);
+  const double within2 = 7.84;
+  for (const double largest : {1.0, 67.0, 1e4}) {
+    float below = 0.0f, above = 0.0f;
+    ASSERT_TRUE(float_bounds(largest, within2, below, above));
+    EXPECT_LT(below, within2);
+    EXPECT_GT(above, within2);
+    // Separations spread over the unsure band and as far again either side of it.
+    const double spread = (above - below) / within2;
+    std::uniform_real_distribution<double> place(-largest + 3.0, largest - 3.0), unit(-1.0, 1.0),
+        nudge(-spread, spread);
+    std::size_t inside = 0, outside = 0, unsure = 0;
+    for (int sample = 0; sample < 200000; ++sample) {
+      const double o[3] = {place(rng), place(rng), place(rng)};
+      double d[3] = {unit(rng), unit(rng), unit(rng)};
+      const double scale = std::sqrt(within2) * (1.0 + nudge(rng)) /
+                           std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      const double c[3] = {o[0] + d[0] * scale, o[1] + d[1] * scale, o[2] + d[2] * scale};
+      const double ex = c[0] - o[0], ey = c[1] - o[1], ez = c[2] - o[2];
+      const double r2 = ex * ex + ey * ey + ez * ez;
+      const float fx = static_cast<float>(c[0]) - static_cast<float>(o[0]);
+      const float fy = static_cast<float>(c[1]) - static_cast<float>(o[1]);
+      const float fz = static_cast<float>(c[2]) - static_cast<float>(o[2]);
+      const float r2f = fx * fx + fy * fy + fz * fz;
+      if (r2f < below) {
+        ++inside;
+        ASSERT_LT(r2, within2) << "largest " << largest << ", r2 in floats " << r2f;
+      } else if (r2f >= above) {
+        ++outside;
+        ASSERT_GE(r2, within2) << "largest " << largest << ", r2 in floats " << r2f;
+      } else {
+        ++unsure;
+      }
+    }
+    EXPECT_GT(inside, 1000u) << largest;
+    EXPECT_GT(outside, 1000u) << largest;
+    EXPECT_GT(unsure, 0u) << largest;
   }
+  // Coordinates floats cannot hold: no bounds (the scan tests in doubles).
+  float below = 0.0f, above = 0.0f;
+  EXPECT_FALSE(float_bounds(1e31, within2, below, above));
+  EXPECT_FALSE(float_bounds(std::numeric_limits<double>::infinity(), within2, below, above));
 }
 
 // keep_hits against its definition (candidate_scan.hpp), one hit at a time: hit counts of
