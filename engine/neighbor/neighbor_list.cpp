@@ -11,6 +11,8 @@
 namespace deli {
 
 namespace {
+// Cells along x per reach in the grid of rows (make_grid).
+constexpr int kRowCells = 8;
 // Image code of a shift of (kx, ky, kz) periods, each in -1..1.
 constexpr int code_of(int kx, int ky, int kz) {
   return (kx + 1) + 3 * (ky + 1) + 9 * (kz + 1);
@@ -31,10 +33,18 @@ void NeighborList::set_exclusions(std::vector<std::array<std::int32_t, 2>> exclu
   position_at_build_.clear();  // force a rebuild
 }
 
-// Cells half a reach wide (a 5^3 stencil, of which half is scanned) cover about half the
-// volume of cells a full reach wide; small periodic boxes fall back to the latter and,
-// below three cells along a periodic axis, to minimum-image separations over the distinct
-// neighbouring cells. Open axes span the particles' extent.
+// Cells a reach wide along y and z and an eighth of one along x: a particle scans four rows
+// of cells along x (half the 3 x 3 rows around its own, each row 2 + 1/8 reaches long) and
+// the later part of its own row. A row is one run of slots (the cells along x are consecutive),
+// and a run costs about as much as a dozen candidates (below): cells half a reach wide along
+// every axis scan half the volume of cells a reach wide over twelve rows rather than four,
+// and took as long (LJ 32000, list phase 0.153 and 0.150-0.162 s per 100 steps); these rows
+// took 0.129 s (0.127 with a twelfth of a reach along x, 0.131 with a sixth; 6 rounds each,
+// one thread, bench/README.md, "Stop 46"). Boxes under three reaches along y or z fall back to
+// cells half a reach wide, small periodic boxes to cells a reach wide and, below three cells
+// along a periodic axis, to minimum-image separations over the distinct neighbouring cells;
+// dilute systems, whose fine cells would outnumber the particles, to cells a reach wide.
+// Open axes span the particles' extent.
 NeighborList::Grid NeighborList::make_grid(const std::vector<Vec3>& inside, const Box& box) const {
   const double reach = cutoff_ + skin_;
   Vec3 lo, extent;
@@ -48,11 +58,11 @@ NeighborList::Grid NeighborList::make_grid(const std::vector<Vec3>& inside, cons
     }
   }
   bool coarsened = false;
-  auto grid_with = [&](double width, int span) {
+  auto grid_with = [&](std::array<double, 3> width, std::array<int, 3> span) {
     Grid g;
     g.span = span;
     for (int a = 0; a < 3; ++a) {
-      g.count[a] = std::max(1, static_cast<int>(std::min(extent[a] / width, 1024.0)));
+      g.count[a] = std::max(1, static_cast<int>(std::min(extent[a] / width[a], 1024.0)));
     }
     // A sparse or spread-out system would get more cells than particles: coarser cells
     // (never narrower than `width`) keep memory proportional to the particle count.
@@ -65,16 +75,18 @@ NeighborList::Grid NeighborList::make_grid(const std::vector<Vec3>& inside, cons
     for (int a = 0; a < 3; ++a) {
       g.origin[a] = lo[a];
       g.inverse_width[a] = g.count[a] / std::max(extent[a], 1e-300);
-      if (box.periodic(a) && g.count[a] < 2 * span + 1) g.shifted = false;
+      if (box.periodic(a) && g.count[a] < 2 * span[a] + 1) g.shifted = false;
     }
     return g;
   };
-  Grid fine = grid_with(reach / 2, 2);
+  const Grid rows = grid_with({reach / kRowCells, reach, reach}, {kRowCells, 1, 1});
+  if (rows.shifted && !coarsened) return rows;
+  const Grid fine = grid_with({reach / 2, reach / 2, reach / 2}, {2, 2, 2});
   if (fine.shifted && !coarsened) return fine;
   // Coarsened half-reach cells are about a reach wide, yet scanned over the 5^3 stencil:
   // cells a reach wide over a 3^3 stencil scan a fifth of the volume (a dilute hard-sphere
   // fluid, whose reach is about one diameter).
-  const Grid full = grid_with(reach, 1);
+  const Grid full = grid_with({reach, reach, reach}, {1, 1, 1});
   if (fine.shifted && !full.shifted) return fine;
   return full;
 }
@@ -90,10 +102,10 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
     const int home[3] = {c % grid.count[0], (c / grid.count[0]) % grid.count[1],
                          c / (grid.count[0] * grid.count[1])};
     around.clear();
-    const int s = grid.span;
-    for (int dz = -s; dz <= s; ++dz)
-      for (int dy = -s; dy <= s; ++dy)
-        for (int dx = -s; dx <= s; ++dx) {
+    const std::array<int, 3> s = grid.span;
+    for (int dz = -s[2]; dz <= s[2]; ++dz)
+      for (int dy = -s[1]; dy <= s[1]; ++dy)
+        for (int dx = -s[0]; dx <= s[0]; ++dx) {
           // Half stencil: of the offsets +o and -o only the lexicographically positive
           // one, so each pair of distinct cells is met once; the home cell is scanned apart.
           if (grid.shifted && (dz < 0 || (dz == 0 && (dy < 0 || (dy == 0 && dx <= 0))))) continue;

@@ -116,8 +116,8 @@ class NeighborList {
   struct Grid {
     std::array<int, 3> count{};
     Vec3 origin, inverse_width;
-    int span = 1;         // stencil half-width in cells
-    bool shifted = true;  // each neighbouring cell reached through one periodic shift
+    std::array<int, 3> span{1, 1, 1};  // stencil half-width in cells, per axis
+    bool shifted = true;               // each neighbouring cell reached through one periodic shift
     bool operator==(const Grid& o) const {
       return count == o.count && span == o.span && shifted == o.shifted;
     }
