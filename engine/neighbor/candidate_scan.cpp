@@ -340,7 +340,7 @@ std::size_t keep_hits_one_by_one(const std::int32_t* member, const std::int32_t*
     const auto m = static_cast<std::size_t>(hit_slot[h]);
     const std::int32_t j = member[m];
     if (std::find(excluded, excluded_end, j) != excluded_end) continue;
-    if (moved_key[m] != key) {
+    if (moved_key && moved_key[m] != key) {
       recode_kept[recode] = static_cast<std::uint32_t>(kept);
       recode_hit[recode++] = static_cast<std::uint32_t>(h);
     }
@@ -381,7 +381,9 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
         as_slots && !excluded_count
             ? slot
             : _mm512_mask_i32gather_epi32(_mm512_set1_epi32(-1), lanes, slot, member, 4);
-    const __m512i moved = _mm512_mask_i32gather_epi32(key_v, lanes, slot, moved_key, 4);
+    // Without moved keys (all the particle's), nothing to recode and nothing to gather.
+    const __m512i moved =
+        moved_key ? _mm512_mask_i32gather_epi32(key_v, lanes, slot, moved_key, 4) : key_v;
     __mmask16 keep = lanes;
     if (excluded_count) {
       for (std::size_t e = 0; e < kVectorExcluded; ++e) {
@@ -445,7 +447,9 @@ std::size_t keep_hits_by_vector(const std::int32_t* member, const std::int32_t* 
         as_slots && !excluded_count
             ? slot
             : _mm256_mask_i32gather_epi32(_mm256_set1_epi32(-1), member, slot, lanes, 4);
-    const __m256i moved = _mm256_mask_i32gather_epi32(key_v, moved_key, slot, lanes, 4);
+    // Without moved keys (all the particle's), nothing to recode and nothing to gather.
+    const __m256i moved =
+        moved_key ? _mm256_mask_i32gather_epi32(key_v, moved_key, slot, lanes, 4) : key_v;
     __m256i keep_v = lanes;
     if (excluded_count) {
       for (std::size_t e = 0; e < kVectorExcluded; ++e) {

@@ -62,7 +62,8 @@ std::size_t scan_stencil(const double* x, const double* y, const double* z, cons
 // particle's `excluded_count` excluded partners, else appended to j_out (as j, or with
 // `as_slots` as its slot hit_slot[h]) with hit_code[h] in code_out. A kept hit whose moved key
 // (moved_key[hit_slot[h]]) differs from the particle's `key` needs its own image code: its place in
-// j_out goes to recode_kept and h to recode_hit (the caller makes the code). Returns the number
+// j_out goes to recode_kept and h to recode_hit (the caller makes the code). A null moved_key
+// says every key is the particle's: none to recode. Returns the number
 // kept; *recode_count gets the number to recode. The outputs need room for hits + kScanSlack
 // entries. Under DELI_NATIVE with AVX-512, sixteen hits a vector, with AVX2 eight (the partners
 // compared by vector, at most kVectorExcluded of them; more are looked up one hit at a time): the

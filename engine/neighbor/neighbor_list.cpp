@@ -327,6 +327,10 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   FloatPositions in_float{member_xf_.data(), member_yf_.data(), member_zf_.data(), 0.0f, 0.0f};
   const bool floats =
       float_bounds(largest + largest_shift, reach2, in_float.within2_below, in_float.within2_above);
+  // Whether no particle was moved by a period into the box (the integrators keep positions
+  // wrapped): then no pair needs its own image code, and keep_hits reads no moved keys.
+  const bool moved_unshifted = std::all_of(member_moved_key_.begin(), member_moved_key_.end(),
+                                           [](std::int32_t key) { return key == kNoShift; });
   const int chunks = chunks_for(static_cast<std::size_t>(n));
   chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
   chunk_codes_.resize(static_cast<std::size_t>(chunks));
@@ -425,9 +429,10 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
         make_room(listed + hits + kScanSlack, true);
         std::size_t recode = 0;
         const std::size_t kept = keep_hits(
-            member.data(), moved_key, moved_key[slot], hit_slot.data(), hit_code.data(), hits,
-            partners, static_cast<std::size_t>(partners_end - partners), out.data() + listed,
-            out_codes.data() + listed, recode_kept.data(), recode_hit.data(), &recode, as_slots);
+            member.data(), moved_unshifted ? nullptr : moved_key, moved_key[slot], hit_slot.data(),
+            hit_code.data(), hits, partners, static_cast<std::size_t>(partners_end - partners),
+            out.data() + listed, out_codes.data() + listed, recode_kept.data(), recode_hit.data(),
+            &recode, as_slots);
         // Both particles moved by the same periods into the box (nearly always: none), so
         // the stencil's shift stands; else the pair's own code.
         for (std::size_t r = 0; r < recode; ++r) {

@@ -220,7 +220,8 @@ TEST(CandidateScan, FloatBoundsHoldTheDoublesDecision) {
 // every remainder modulo 16 up to 50, particles' excluded partners from none to past
 // kVectorExcluded (those take the one-by-one path), some listed among the hits, and moved
 // keys that differ from the particle's for some hits (those listed to recode, in order); the
-// kept hits listed as particles and as slots.
+// kept hits listed as particles and as slots; without moved keys (all the particle's), none
+// recoded.
 TEST(CandidateScan, KeptHitsAreTheDefinitionsInOrder) {
   constexpr std::size_t slots = 300;
   std::mt19937_64 rng(31);
@@ -229,54 +230,55 @@ TEST(CandidateScan, KeptHitsAreTheDefinitionsInOrder) {
   std::shuffle(member.begin(), member.end(), rng);
   for (std::size_t m = 0; m < slots; ++m) moved_key[m] = rng() % 5 == 0 ? 3 : 0;
   std::size_t recoded_total = 0, dropped_total = 0;
-  for (const bool as_slots : {false, true})
-    for (std::size_t hits = 0; hits <= 50; ++hits) {
-      for (std::size_t excluded_count = 0; excluded_count <= kVectorExcluded + 2;
-           ++excluded_count) {
-        std::vector<std::int32_t> hit_slot(hits + kScanSlack), excluded(excluded_count);
-        std::vector<std::uint8_t> hit_code(hits + kScanSlack);
-        for (std::size_t h = 0; h < hits; ++h) {
-          hit_slot[h] = static_cast<std::int32_t>(rng() % slots);
-          hit_code[h] = static_cast<std::uint8_t>(rng() % 27);
-        }
-        // Half the excluded partners among the hits, half elsewhere.
-        for (std::size_t e = 0; e < excluded_count; ++e) {
-          excluded[e] = e % 2 == 0 && hits > 0 ? member[hit_slot[rng() % hits]]
-                                               : static_cast<std::int32_t>(rng() % slots);
-        }
-        const std::int32_t key = 0;
-        std::vector<std::int32_t> j(hits + kScanSlack);
-        std::vector<std::uint8_t> code(hits + kScanSlack);
-        std::vector<std::uint32_t> recode_kept(hits + 1), recode_hit(hits + 1);
-        std::size_t recode = 0;
-        const std::size_t kept =
-            keep_hits(member.data(), moved_key.data(), key, hit_slot.data(), hit_code.data(), hits,
-                      excluded.data(), excluded_count, j.data(), code.data(), recode_kept.data(),
-                      recode_hit.data(), &recode, as_slots);
-        std::vector<std::int32_t> want_j;
-        std::vector<std::uint8_t> want_code;
-        std::vector<std::uint32_t> want_kept, want_hit;
-        for (std::size_t h = 0; h < hits; ++h) {
-          const std::int32_t p = member[hit_slot[h]];
-          if (std::find(excluded.begin(), excluded.end(), p) != excluded.end()) continue;
-          if (moved_key[hit_slot[h]] != key) {
-            want_kept.push_back(static_cast<std::uint32_t>(want_j.size()));
-            want_hit.push_back(static_cast<std::uint32_t>(h));
+  for (const bool keyed : {true, false})
+    for (const bool as_slots : {false, true})
+      for (std::size_t hits = 0; hits <= 50; ++hits) {
+        for (std::size_t excluded_count = 0; excluded_count <= kVectorExcluded + 2;
+             ++excluded_count) {
+          std::vector<std::int32_t> hit_slot(hits + kScanSlack), excluded(excluded_count);
+          std::vector<std::uint8_t> hit_code(hits + kScanSlack);
+          for (std::size_t h = 0; h < hits; ++h) {
+            hit_slot[h] = static_cast<std::int32_t>(rng() % slots);
+            hit_code[h] = static_cast<std::uint8_t>(rng() % 27);
           }
-          want_j.push_back(as_slots ? hit_slot[h] : p);
-          want_code.push_back(hit_code[h]);
+          // Half the excluded partners among the hits, half elsewhere.
+          for (std::size_t e = 0; e < excluded_count; ++e) {
+            excluded[e] = e % 2 == 0 && hits > 0 ? member[hit_slot[rng() % hits]]
+                                                 : static_cast<std::int32_t>(rng() % slots);
+          }
+          const std::int32_t key = 0;
+          std::vector<std::int32_t> j(hits + kScanSlack);
+          std::vector<std::uint8_t> code(hits + kScanSlack);
+          std::vector<std::uint32_t> recode_kept(hits + 1), recode_hit(hits + 1);
+          std::size_t recode = 0;
+          const std::size_t kept =
+              keep_hits(member.data(), keyed ? moved_key.data() : nullptr, key, hit_slot.data(),
+                        hit_code.data(), hits, excluded.data(), excluded_count, j.data(),
+                        code.data(), recode_kept.data(), recode_hit.data(), &recode, as_slots);
+          std::vector<std::int32_t> want_j;
+          std::vector<std::uint8_t> want_code;
+          std::vector<std::uint32_t> want_kept, want_hit;
+          for (std::size_t h = 0; h < hits; ++h) {
+            const std::int32_t p = member[hit_slot[h]];
+            if (std::find(excluded.begin(), excluded.end(), p) != excluded.end()) continue;
+            if (keyed && moved_key[hit_slot[h]] != key) {
+              want_kept.push_back(static_cast<std::uint32_t>(want_j.size()));
+              want_hit.push_back(static_cast<std::uint32_t>(h));
+            }
+            want_j.push_back(as_slots ? hit_slot[h] : p);
+            want_code.push_back(hit_code[h]);
+          }
+          ASSERT_EQ(kept, want_j.size())
+              << hits << " hits, " << excluded_count << " excluded, as slots " << as_slots;
+          EXPECT_TRUE(std::equal(want_j.begin(), want_j.end(), j.begin()));
+          EXPECT_TRUE(std::equal(want_code.begin(), want_code.end(), code.begin()));
+          ASSERT_EQ(recode, want_kept.size());
+          EXPECT_TRUE(std::equal(want_kept.begin(), want_kept.end(), recode_kept.begin()));
+          EXPECT_TRUE(std::equal(want_hit.begin(), want_hit.end(), recode_hit.begin()));
+          recoded_total += recode;
+          dropped_total += hits - kept;
         }
-        ASSERT_EQ(kept, want_j.size())
-            << hits << " hits, " << excluded_count << " excluded, as slots " << as_slots;
-        EXPECT_TRUE(std::equal(want_j.begin(), want_j.end(), j.begin()));
-        EXPECT_TRUE(std::equal(want_code.begin(), want_code.end(), code.begin()));
-        ASSERT_EQ(recode, want_kept.size());
-        EXPECT_TRUE(std::equal(want_kept.begin(), want_kept.end(), recode_kept.begin()));
-        EXPECT_TRUE(std::equal(want_hit.begin(), want_hit.end(), recode_hit.begin()));
-        recoded_total += recode;
-        dropped_total += hits - kept;
       }
-    }
   EXPECT_GT(recoded_total, 100u);
   EXPECT_GT(dropped_total, 100u);
 }
