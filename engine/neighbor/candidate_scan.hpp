@@ -61,13 +61,13 @@ std::size_t scan_stencil(const double* x, const double* y, const double* z, cons
 // lists): hit h in order is particle j = member[hit_slot[h]], dropped when j is one of the
 // particle's `excluded_count` excluded partners, else appended to j_out (as j, or with
 // `as_slots` as its slot hit_slot[h]) with hit_code[h] in code_out. A kept hit whose moved key
-// (moved_key[hit_slot[h]]) differs from the particle's `key` needs its own image code: its place in
-// j_out goes to recode_kept and h to recode_hit (the caller makes the code). A null moved_key
-// says every key is the particle's: none to recode. Returns the number
-// kept; *recode_count gets the number to recode. The outputs need room for hits + kScanSlack
-// entries. Under DELI_NATIVE with AVX-512, sixteen hits a vector, with AVX2 eight (the partners
-// compared by vector, at most kVectorExcluded of them; more are looked up one hit at a time): the
-// same entries either way.
+// (moved_key[hit_slot[h]]) differs from the particle's `key` needs its own image code: its
+// place in j_out goes to recode_kept and h to recode_hit (the caller makes the code). A null
+// moved_key says every key is the particle's: none to recode. Returns the number kept;
+// *recode_count gets the number to recode. The outputs need room for hits + kScanSlack entries.
+// Under DELI_NATIVE with AVX-512, sixteen hits a vector, with AVX2 eight (the partners compared
+// by vector, at most kVectorExcluded of them; more are looked up one hit at a time): the same
+// entries either way.
 inline constexpr std::size_t kVectorExcluded = 4;
 std::size_t keep_hits(const std::int32_t* member, const std::int32_t* moved_key, std::int32_t key,
                       const std::int32_t* hit_slot, const std::uint8_t* hit_code, std::size_t hits,
