@@ -51,6 +51,8 @@ struct FloatPositions {
 // FloatPositions' bounds for candidates and origins whose coordinates are at most `largest` in
 // magnitude and reach^2 = within2; false (test in doubles) where floats cannot hold them.
 bool float_bounds(double largest, double within2, float& below, float& above);
+// Whether scan_stencil reads FloatPositions in this build (AVX2 without AVX-512).
+bool scan_reads_floats();
 std::size_t scan_stencil(const double* x, const double* y, const double* z, const StencilRuns& runs,
                          std::size_t home_first, std::size_t home_last, std::uint8_t home_code,
                          std::size_t run_begin, std::size_t run_end, double xi, double yi,

@@ -232,9 +232,12 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   member_x_.resize(static_cast<std::size_t>(n));
   member_y_.resize(static_cast<std::size_t>(n));
   member_z_.resize(static_cast<std::size_t>(n));
-  member_xf_.resize(static_cast<std::size_t>(n));
-  member_yf_.resize(static_cast<std::size_t>(n));
-  member_zf_.resize(static_cast<std::size_t>(n));
+  // Single-precision copies only where the scan reads them (AVX2, image-coded grids).
+  const bool float_copies = grid.shifted && scan_reads_floats();
+  const std::size_t float_count = float_copies ? static_cast<std::size_t>(n) : 0;
+  member_xf_.resize(float_count);
+  member_yf_.resize(float_count);
+  member_zf_.resize(float_count);
   member_moved.resize(static_cast<std::size_t>(n));
   member_cell.resize(static_cast<std::size_t>(n));
   member_moved_key_.resize(static_cast<std::size_t>(n));
@@ -245,9 +248,11 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     member_x_[s] = inside[i].x;
     member_y_[s] = inside[i].y;
     member_z_[s] = inside[i].z;
-    member_xf_[s] = static_cast<float>(inside[i].x);
-    member_yf_[s] = static_cast<float>(inside[i].y);
-    member_zf_[s] = static_cast<float>(inside[i].z);
+    if (float_copies) {
+      member_xf_[s] = static_cast<float>(inside[i].x);
+      member_yf_[s] = static_cast<float>(inside[i].y);
+      member_zf_[s] = static_cast<float>(inside[i].z);
+    }
     member_moved[s] = moved[i];
     const std::array<int, 3>& k = moved[i];
     const bool small = std::abs(k[0]) <= 1 && std::abs(k[1]) <= 1 && std::abs(k[2]) <= 1;
@@ -311,26 +316,29 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   // particles renamed afterwards: a random read per pair fewer, and the member read only for
   // exclusions.
   const bool slots_listed = cell_order_ && grid.shifted;
-  // Chunks of consecutive slots, each listing its particles' partners in order; the lists
-  // are then joined in chunk order: the same list on any number of threads.
   // The scan's first test in floats (FloatPositions): its bounds from the largest coordinate
   // of a candidate or an origin (a position less an image shift).
-  double largest = 0.0;
-  for (const Vec3& p : inside) {
-    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-  }
-  double largest_shift = 0.0;
-  for (const Vec3& shift : image_shifts_) {
-    largest_shift =
-        std::max({largest_shift, std::abs(shift.x), std::abs(shift.y), std::abs(shift.z)});
-  }
   FloatPositions in_float{member_xf_.data(), member_yf_.data(), member_zf_.data(), 0.0f, 0.0f};
-  const bool floats =
-      float_bounds(largest + largest_shift, reach2, in_float.within2_below, in_float.within2_above);
+  bool floats = false;
+  if (float_copies) {
+    double largest = 0.0;
+    for (const Vec3& p : inside) {
+      largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    }
+    double largest_shift = 0.0;
+    for (const Vec3& shift : image_shifts_) {
+      largest_shift =
+          std::max({largest_shift, std::abs(shift.x), std::abs(shift.y), std::abs(shift.z)});
+    }
+    floats = float_bounds(largest + largest_shift, reach2, in_float.within2_below,
+                          in_float.within2_above);
+  }
   // Whether no particle was moved by a period into the box (the integrators keep positions
   // wrapped): then no pair needs its own image code, and keep_hits reads no moved keys.
   const bool moved_unshifted = std::all_of(member_moved_key_.begin(), member_moved_key_.end(),
                                            [](std::int32_t key) { return key == kNoShift; });
+  // Chunks of consecutive slots, each listing its particles' partners in order; the lists
+  // are then joined in chunk order: the same list on any number of threads.
   const int chunks = chunks_for(static_cast<std::size_t>(n));
   chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
   chunk_codes_.resize(static_cast<std::size_t>(chunks));
