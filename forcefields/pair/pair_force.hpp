@@ -235,47 +235,36 @@ class PairForce final : public ForceTerm {
   }
 
   // The vector loop over the list by slot: positions gathered into slot order (slot s holds
-  // particle[s], or particle s without `particle`) padded to four doubles, chunked as
-  // loops(), the forces found there added back by particle. Slot s's partners are its range
-  // in `partners`. Each chunk gathers every position into a copy of its own: its partners'
-  // positions, read in no order, are then in its own core's cache, copied there in one
-  // stream. Read from a copy another core wrote, each line missed cost a round trip between
-  // the cores (about 500 ns on the 2-core machine of bench/README.md), and LJ 4000's pair
-  // loop took as long on two threads as on one.
+  // particle[s], or particle s without `particle`) padded to four doubles, the forces found
+  // there added back by particle. Slot s's partners are its range in `partners`. On several
+  // threads, touched_vector_loops().
   double vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                       const NeighborList::PartnerRanges& partners, const NeighborList& neighbors,
                       std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
       const std::size_t n = x.size();
-      auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
-      // Where the passes over the particles are split too (chunks_for_cheap), each thread's
-      // positions and forces stay its own but for the blocks the chunks share.
       const int chunks = chunks_for(n);
-      if (chunks > 1 && chunks_for_cheap(n) > 1) {
+      if (chunks > 1) {
         return touched_vector_loops(x, particle, partners, neighbors, force, virial, tally, chunks);
       }
-      padded_positions_.resize(static_cast<std::size_t>(chunks));
-      padded_force_.resize(n);
-      const Vec3* shifts = neighbors.image_shifts().data();
-      const double energy = padded_chunked_.run(
-          n, padded_force_, virial,
-          [&](int c, std::size_t begin, std::size_t end, PaddedVec3* f, SymTensor& w) {
-            std::vector<PaddedVec3>& position = padded_positions_[static_cast<std::size_t>(c)];
-            position.resize(n);
-            for (std::size_t s = 0; s < n; ++s) {
-              const Vec3& p = x[at(s)];
-              position[s] = {p.x, p.y, p.z, 0.0};
-            }
-            // Chunk 0 adds to padded_force_ (the others to buffers of their own).
-            if (c == 0) std::fill(padded_force_.begin(), padded_force_.end(), PaddedVec3{});
-            return Evaluator::vector_loop(
-                table_[0], vector_chunk(position.data(), f, partners, shifts, begin, end), tally,
-                w);
-          },
-          [&](std::size_t s) {
-            const PaddedVec3& f = padded_force_[s];
-            force[at(s)] += Vec3{f.x, f.y, f.z};
-          });
+      auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
+      padded_positions_.resize(1);
+      std::vector<PaddedVec3>& position = padded_positions_[0];
+      position.resize(n);
+      for (std::size_t s = 0; s < n; ++s) {
+        const Vec3& p = x[at(s)];
+        position[s] = {p.x, p.y, p.z, 0.0};
+      }
+      padded_force_.assign(n, PaddedVec3{});
+      const double energy =
+          Evaluator::vector_loop(table_[0],
+                                 vector_chunk(position.data(), padded_force_.data(), partners,
+                                              neighbors.image_shifts().data(), 0, n),
+                                 tally, virial);
+      for (std::size_t s = 0; s < n; ++s) {
+        const PaddedVec3& f = padded_force_[s];
+        force[at(s)] += Vec3{f.x, f.y, f.z};
+      }
       return energy;
     }
     return 0.0;
@@ -301,6 +290,14 @@ class PairForce final : public ForceTerm {
   // the same job of the team, each chunk's slots' forces added up over the chunks in chunk
   // order (a chunk that touches no slot of a block adds nothing there) and added to `force`.
   // Energies and virials are summed in chunk order, as ChunkedForceLoopOf sums them.
+  // A chunk's partners' positions, read in no order, are then in its own core's cache, copied
+  // there in one stream: read from a copy another core wrote, each line missed cost a round
+  // trip between the cores (about 500 ns on the 2-core machine of bench/README.md), and LJ
+  // 4000's pair loop took as long on two threads as on one. Each chunk once copied every
+  // position and made a whole force buffer, added up by the calling thread alone after the
+  // job where the particle passes are not split (below cheap_loop_minimum()); copying and
+  // adding only the touched blocks, in the job, took LJ 4000's pair phase on two threads to
+  // 0.97x, the default input's to 0.90x, the rigid melt's to 0.99x (bench/README.md, "Stop 47").
   double touched_vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                               const NeighborList::PartnerRanges& partners,
                               const NeighborList& neighbors, std::vector<Vec3>& force,
@@ -482,9 +479,8 @@ class PairForce final : public ForceTerm {
   mutable ChunkedForceLoop chunked_;
   mutable std::vector<Vec3> ordered_position_, ordered_force_;  // cache order, by slot
   mutable std::vector<int> ordered_type_;
-  mutable ChunkedForceLoopOf<PaddedVec3> padded_chunked_;          // the vector loop's
   mutable std::vector<std::vector<PaddedVec3>> padded_positions_;  // one per chunk
-  mutable std::vector<PaddedVec3> padded_force_;
+  mutable std::vector<PaddedVec3> padded_force_;                   // one chunk's
   // touched_vector_loops()'s, one per chunk:
   mutable std::vector<std::vector<PaddedVec3>> padded_forces_;
   mutable std::vector<std::vector<const PaddedVec3*>> chunk_sources_;  // a block's summed chunks
