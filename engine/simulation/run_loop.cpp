@@ -1,5 +1,6 @@
 #include "simulation/run_loop.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -68,6 +69,9 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     }
   }
   for (Observer* o : observers) o->on_start(system, steps);
+  const bool shadow_wanted = std::any_of(observers.begin(), observers.end(), [](const Observer* o) {
+    return o->wants_shadow_energy();
+  });
   auto wants_frame = [&] {
     for (Observer* o : observers) {
       if (o->wants_frame(system.step)) return true;
@@ -80,7 +84,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
   auto sample = [&](bool thermo, bool frame, bool regular) {
     ThermoSample s = measure_thermo(system, integrator.forces().last(), dof);
     check_sample_is_finite(system, s, integrator.forces().force());
-    s.shadow_energy = integrator.shadow_energy(system);
+    if (shadow_wanted) s.shadow_energy = integrator.shadow_energy(system);
     s.bath_energy = integrator.bath_energy();
     if (s.bath_energy) s.conserved = s.total - *s.bath_energy;
     const double volume = system.box.volume();

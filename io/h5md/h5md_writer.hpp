@@ -40,6 +40,7 @@ class H5mdWriter final : public Observer {
   H5mdWriter& operator=(const H5mdWriter&) = delete;
 
   bool wants_frame(std::int64_t step) const override { return step % spec_.every == 0; }
+  bool wants_shadow_energy() const override { return true; }
   void on_frame(const System& system, const ThermoSample& sample,
                 const std::vector<Vec3>& forces) override;
   void on_finish(const System&) override;

@@ -31,6 +31,7 @@ class ThermoCsv final : public Observer {
   explicit ThermoCsv(const std::string& path, std::int64_t continue_from = -1,
                      std::int64_t every = 0);
   void on_thermo(const ThermoSample& s) override;
+  bool wants_shadow_energy() const override { return true; }
   // Closes the file, throwing when it could not be written.
   void on_finish(const System&) override;
 

@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "cli/integrator_factory.hpp"
@@ -57,14 +58,24 @@ class Record final : public Observer {
   std::vector<std::string> lines;
 };
 
-std::vector<std::string> run_default_input() {
+// The samples' shadow energies, for an observer that asks for them (the CSV writer's part).
+class ShadowEnergies final : public Observer {
+ public:
+  void on_thermo(const ThermoSample& s) override { values.push_back(s.shadow_energy); }
+  bool wants_shadow_energy() const override { return true; }
+  std::vector<std::optional<double>> values;
+};
+
+std::vector<std::string> run_default_input(ShadowEnergies* shadow = nullptr) {
   RunInput input = load_run_input(DELI_DEFAULT_INPUT);
   const std::unique_ptr<Integrator> integrator = make_integrator(input);
   Record record;
   RunOptions options;
   options.degrees_of_freedom = input.degrees_of_freedom;
   options.start_temperature = input.start_temperature;
-  run(input.system, *integrator, 100, 1, {&record}, options);
+  std::vector<Observer*> observers = {&record};
+  if (shadow) observers.push_back(shadow);
+  run(input.system, *integrator, 100, 1, observers, options);
   return record.lines;
 }
 
@@ -106,6 +117,22 @@ TEST(Golden, DefaultInputFirst100StepsBitForBit) {
                                    << ": if the change is intended, regenerate the file (see "
                                       "the test's header) and say why in the commit";
   }
+}
+
+// The shadow energy is found only where an observer asks (the terminal's table does not
+// show it), and finding it must not change the run: it reads the state and the neighbour
+// list. Expected value: the same lines bit for bit, by definition of an observation; the
+// default input's integrator (GVI on rods) has a shadow energy at every sample.
+TEST(Golden, AskingForTheShadowEnergyLeavesTheRunAsItWas) {
+  ShadowEnergies shadow;
+  const std::vector<std::string> asked = run_default_input(&shadow);
+  const std::vector<std::string> unasked = run_default_input();
+  ASSERT_EQ(shadow.values.size(), 101u);
+  for (const std::optional<double>& value : shadow.values) {
+    ASSERT_TRUE(value.has_value());
+    EXPECT_TRUE(std::isfinite(*value));
+  }
+  EXPECT_EQ(asked, unasked);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@ namespace {
 class Collect final : public Observer {
  public:
   void on_thermo(const ThermoSample& s) override { samples.push_back(s); }
+  bool wants_shadow_energy() const override { return true; }
   std::vector<ThermoSample> samples;
 };
 
