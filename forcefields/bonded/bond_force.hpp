@@ -34,7 +34,9 @@ class BondForce final : public ForceTerm {
       const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
       const double r2 = norm2(d);
       double f_over_r = 0.0, e = 0.0;
-      if (!Evaluator::evaluate(by_type_[b.type], r2, f_over_r, e)) stretched(system, b, d);
+      if (!Evaluator::template evaluate<false>(by_type_[b.type], r2, f_over_r, e)) {
+        stretched(system, b, d);
+      }
       out.push_back({b.i, b.j,
                      pair_hessian_block(d, r2, f_over_r,
                                         Evaluator::second_derivative(by_type_[b.type], r2))});
@@ -55,27 +57,28 @@ class BondForce final : public ForceTerm {
   double compute(const System& system, std::vector<Vec3>& force, SymTensor& virial) const {
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<Bond>& bonds = system.topology.bonds;
-    return chunked_.run(bonds.size(), force, virial,
-                        [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
-                          double energy = 0.0;
-                          for (std::size_t k = begin; k < end; ++k) {
-                            const Bond& b = bonds[k];
-                            if (!own_types_.empty() && !own_types_[b.type]) continue;
-                            const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
-                            double f_over_r = 0.0, e = 0.0;
-                            if (!Evaluator::evaluate(by_type_[b.type], norm2(d), f_over_r, e)) {
-                              stretched(system, b, d);
-                            }
-                            const Vec3 fb = d * f_over_r;
-                            f[b.i] += fb;
-                            f[b.j] -= fb;
-                            if constexpr (Tally) {
-                              energy += e;
-                              w.add_outer(d, fb);
-                            }
-                          }
-                          return energy;
-                        });
+    return chunked_.run(
+        bonds.size(), force, virial,
+        [&](std::size_t begin, std::size_t end, Vec3* f, SymTensor& w) {
+          double energy = 0.0;
+          for (std::size_t k = begin; k < end; ++k) {
+            const Bond& b = bonds[k];
+            if (!own_types_.empty() && !own_types_[b.type]) continue;
+            const Vec3 d = system.box.minimum_image(x[b.i] - x[b.j]);
+            double f_over_r = 0.0, e = 0.0;
+            if (!Evaluator::template evaluate<Tally>(by_type_[b.type], norm2(d), f_over_r, e)) {
+              stretched(system, b, d);
+            }
+            const Vec3 fb = d * f_over_r;
+            f[b.i] += fb;
+            f[b.j] -= fb;
+            if constexpr (Tally) {
+              energy += e;
+              w.add_outer(d, fb);
+            }
+          }
+          return energy;
+        });
   }
 
   // A bond beyond where its potential is defined (FENE past r0) stops the run.

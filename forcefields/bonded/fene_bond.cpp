@@ -14,18 +14,19 @@ struct FeneBond {
   struct Params {
     double k = 0, r0 = 0, epsilon = 0, sigma = 0;
   };
+  template <bool kEnergy = true>
   static bool evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
     const double r0sq = p.r0 * p.r0;
     const double log_arg = 1.0 - r2 / r0sq;
     if (log_arg <= 0.0) return false;
     f_over_r = -p.k / log_arg;
-    energy = -0.5 * p.k * r0sq * std::log(log_arg);
+    if constexpr (kEnergy) energy = -0.5 * p.k * r0sq * std::log(log_arg);
     const double sigma2 = p.sigma * p.sigma;
     if (r2 < 1.2599210498948732 * sigma2) {  // 2^(1/3) sigma^2
       const double sr2 = sigma2 / r2;
       const double sr6 = sr2 * sr2 * sr2;
       f_over_r += 48.0 * p.epsilon * sr6 * (sr6 - 0.5) / r2;
-      energy += 4.0 * p.epsilon * sr6 * (sr6 - 1.0) + p.epsilon;
+      if constexpr (kEnergy) energy += 4.0 * p.epsilon * sr6 * (sr6 - 1.0) + p.epsilon;
     }
     return true;
   }

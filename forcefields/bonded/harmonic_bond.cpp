@@ -12,10 +12,11 @@ struct HarmonicBond {
   struct Params {
     double k = 0, r0 = 0;
   };
+  template <bool kEnergy = true>
   static bool evaluate(const Params& p, double r2, double& f_over_r, double& energy) {
     const double r = std::sqrt(r2);
     const double dr = r - p.r0;
-    energy = p.k * dr * dr;
+    if constexpr (kEnergy) energy = p.k * dr * dr;
     f_over_r = r > 0.0 ? -2.0 * p.k * dr / r : 0.0;
     return true;
   }
