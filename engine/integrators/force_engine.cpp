@@ -40,7 +40,12 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
     const SpecialPairs special = find_special_pairs(system.topology, p.size());
     neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
   }
-  parallel_for(p.size(), [&](std::size_t i) { system.box.wrap(p.position[i], p.image[i]); });
+  // Split as substantial items (a wrap is a few divisions' worth), also below
+  // cheap_loop_minimum(): one thread wrapped the rigid melt's 4000 beads twice a build
+  // (here and in the build), while the other waited.
+  for_each_chunk(p.size(), chunks_for(p.size()), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) system.box.wrap(p.position[i], p.image[i]);
+  });
   neighbors_.build(p.position, system.box);
   return true;
 }

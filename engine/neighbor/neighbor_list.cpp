@@ -196,11 +196,15 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   std::vector<std::array<int, 3>>& moved = moved_;
   inside.resize(static_cast<std::size_t>(n));
   moved.resize(static_cast<std::size_t>(n));
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
-    inside[i] = position[i];
-    moved[i] = {0, 0, 0};
-    box.wrap(inside[i], moved[i]);
-  });
+  // Split as substantial items, as ForceEngine::ensure_neighbors' wrap.
+  for_each_chunk(static_cast<std::size_t>(n), chunks_for(static_cast<std::size_t>(n)),
+                 [&](int, std::size_t begin, std::size_t end) {
+                   for (std::size_t i = begin; i < end; ++i) {
+                     inside[i] = position[i];
+                     moved[i] = {0, 0, 0};
+                     box.wrap(inside[i], moved[i]);
+                   }
+                 });
 
   const Grid grid = make_grid(inside, box);
   if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
