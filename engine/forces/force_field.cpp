@@ -34,6 +34,14 @@ bool ForceField::pair_curvature(const System& system, const NeighborList& neighb
   return true;
 }
 
+double ForceTerm::compute_overwriting(const System& system, const NeighborList& neighbors,
+                                      std::vector<Vec3>& force, SymTensor& virial,
+                                      bool tally) const {
+  // Zeroed by chunks (32000 atoms' forces are 768 kB: a serial memset held up the threads).
+  parallel_for(force.size(), [&](std::size_t i) { force[i] = Vec3{}; });
+  return compute(system, neighbors, force, virial, tally);
+}
+
 bool ForceTerm::pair_curvature(const System& system, const NeighborList& neighbors,
                                const std::vector<Vec3>& velocity, double& sum) const {
   std::vector<PairHessian> blocks;
@@ -44,15 +52,16 @@ bool ForceTerm::pair_curvature(const System& system, const NeighborList& neighbo
 
 ForceEvaluation ForceField::compute(const System& system, const NeighborList& neighbors,
                                     std::vector<Vec3>& force, bool tally) const {
-  // Zeroed by chunks (32000 atoms' forces are 768 kB: a serial memset held up the threads).
   force.resize(system.particles.size());
-  parallel_for(force.size(), [&](std::size_t i) { force[i] = Vec3{}; });
+  if (terms_.empty()) parallel_for(force.size(), [&](std::size_t i) { force[i] = Vec3{}; });
   ForceEvaluation result;
   result.tallied = tally;
   for (const auto& term : terms_) {
     // Terms that read the neighbour list are the pair forces; the rest are bonded terms.
     const TimedPhase timed(term->neighbor_cutoff() > 0 ? Phase::pair : Phase::bonded);
-    const double e = term->compute(system, neighbors, force, result.virial, tally);
+    const double e = &term == &terms_.front()
+                         ? term->compute_overwriting(system, neighbors, force, result.virial, tally)
+                         : term->compute(system, neighbors, force, result.virial, tally);
     // Terms of one name (gravity and the radial fields are all "external") are one term:
     // the thermo CSV and the H5MD observables have one column or series per name.
     const std::string name = term->name();

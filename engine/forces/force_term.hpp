@@ -39,6 +39,12 @@ class ForceTerm {
   virtual double neighbor_cutoff() const { return 0.0; }
   virtual double compute(const System& system, const NeighborList& neighbors,
                          std::vector<Vec3>& force, SymTensor& virial, bool tally) const = 0;
+  // compute() onto a force array whose contents it replaces (the force field's first term):
+  // this default zeroes the array, then adds. A term whose loop writes every particle's force
+  // once (the pair styles' vector loop) writes it in place of the zeroing pass, in which one
+  // thread zeroed lines the other thread had just written.
+  virtual double compute_overwriting(const System& system, const NeighborList& neighbors,
+                                     std::vector<Vec3>& force, SymTensor& virial, bool tally) const;
 
   // The Hessian of a pairwise term is a sum of blocks: for a pair (a, b) with block B,
   // (H v)_a += B (v_a - v_b) and (H v)_b += B (v_b - v_a). Appends the blocks of the pairs

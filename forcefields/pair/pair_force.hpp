@@ -85,6 +85,23 @@ class PairForce final : public ForceTerm {
 
   double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
                  SymTensor& virial, bool tally) const override {
+    return compute(system, neighbors, force, virial, tally, false);
+  }
+  // The vector loop writes each particle's force once: in place of the zeroing pass. Its sums
+  // start from +0 and so are never -0: the same bits as zeroing, then adding.
+  double compute_overwriting(const System& system, const NeighborList& neighbors,
+                             std::vector<Vec3>& force, SymTensor& virial,
+                             bool tally) const override {
+    if (!vector_loop_applies(neighbors.coded()) || system.particles.size() == 0) {
+      return ForceTerm::compute_overwriting(system, neighbors, force, virial, tally);
+    }
+    return compute(system, neighbors, force, virial, tally, true);
+  }
+
+ private:
+  // `overwrite` (the vector loop only): its forces replace force's contents.
+  double compute(const System& system, const NeighborList& neighbors, std::vector<Vec3>& force,
+                 SymTensor& virial, bool tally, bool overwrite) const {
     const std::size_t n = system.particles.size();
     const NeighborList::CellOrdered& ordered = neighbors.cell_ordered();
     const bool by_slot = ordered.particle.size() == n && n > 0;
@@ -95,7 +112,7 @@ class PairForce final : public ForceTerm {
     double energy = 0.0;
     if (vector_loop_applies(neighbors.coded()) && n > 0) {
       energy = vector_loops(system.particles.position, by_slot ? ordered.particle.data() : nullptr,
-                            ranges, neighbors, force, virial, tally);
+                            ranges, neighbors, force, virial, tally, overwrite);
     } else if (!by_slot) {
       const Listed listed{system.particles.position.data(), system.particles.type.data(), ranges,
                           neighbors.coded()};
@@ -123,7 +140,6 @@ class PairForce final : public ForceTerm {
                            : scaled_pairs<false>(system, force, virial));
   }
 
- private:
   // Visits the Hessian block of every pair in reach touching a masked particle (all with an
   // empty mask): the list's pairs in order, then the scaled pairs.
   template <class Visit>
@@ -236,16 +252,18 @@ class PairForce final : public ForceTerm {
 
   // The vector loop over the list by slot: positions gathered into slot order (slot s holds
   // particle[s], or particle s without `particle`) padded to four doubles, the forces found
-  // there added back by particle. Slot s's partners are its range in `partners`. On several
-  // threads, touched_vector_loops().
+  // there added back by particle (written, with `overwrite`). Slot s's partners are its range
+  // in `partners`. On several threads, touched_vector_loops().
   double vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                       const NeighborList::PartnerRanges& partners, const NeighborList& neighbors,
-                      std::vector<Vec3>& force, SymTensor& virial, bool tally) const {
+                      std::vector<Vec3>& force, SymTensor& virial, bool tally,
+                      bool overwrite) const {
     if constexpr (VectorPairEvaluator<Evaluator>) {
       const std::size_t n = x.size();
       const int chunks = chunks_for(n);
       if (chunks > 1) {
-        return touched_vector_loops(x, particle, partners, neighbors, force, virial, tally, chunks);
+        return touched_vector_loops(x, particle, partners, neighbors, force, virial, tally, chunks,
+                                    overwrite);
       }
       auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
       padded_positions_.resize(1);
@@ -263,7 +281,8 @@ class PairForce final : public ForceTerm {
                                  tally, virial);
       for (std::size_t s = 0; s < n; ++s) {
         const PaddedVec3& f = padded_force_[s];
-        force[at(s)] += Vec3{f.x, f.y, f.z};
+        Vec3& to = force[at(s)];
+        to = overwrite ? Vec3{f.x, f.y, f.z} : to + Vec3{f.x, f.y, f.z};
       }
       return energy;
     }
@@ -301,7 +320,7 @@ class PairForce final : public ForceTerm {
   double touched_vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                               const NeighborList::PartnerRanges& partners,
                               const NeighborList& neighbors, std::vector<Vec3>& force,
-                              SymTensor& virial, bool tally, int chunks) const {
+                              SymTensor& virial, bool tally, int chunks, bool overwrite) const {
     const std::size_t n = x.size();
     auto at = [particle](std::size_t s) { return particle ? particle[s] : s; };
     const auto slots = static_cast<std::size_t>(chunks);
@@ -346,8 +365,11 @@ class PairForce final : public ForceTerm {
         for (std::size_t s = first; count > 0 && s < last; ++s) {
           PaddedVec3 sum = from[0][s];
           for (std::size_t t = 1; t < count; ++t) sum += from[t][s];
-          force[at(s)] += Vec3{sum.x, sum.y, sum.z};
+          Vec3& to = force[at(s)];
+          to = overwrite ? Vec3{sum.x, sum.y, sum.z} : to + Vec3{sum.x, sum.y, sum.z};
         }
+        // A block no chunk touches (none: a chunk touches its own) has no forces.
+        for (std::size_t s = first; count == 0 && overwrite && s < last; ++s) force[at(s)] = Vec3{};
         first = last;
       }
     };
