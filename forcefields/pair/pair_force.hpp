@@ -316,7 +316,8 @@ class PairForce final : public ForceTerm {
   // position and made a whole force buffer, added up by the calling thread alone after the
   // job where the particle passes are not split (below cheap_loop_minimum()); copying and
   // adding only the touched blocks, in the job, took LJ 4000's pair phase on two threads to
-  // 0.97x, the default input's to 0.90x, the rigid melt's to 0.99x (bench/README.md, "Stop 47").
+  // 0.97x, the Kremer-Grest melt's (inputs/lj_chains/melt.toml) to 0.89x, the rigid melt's to
+  // 0.99x, the default input's to 1.00x (bench/README.md, "Stop 47").
   double touched_vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                               const NeighborList::PartnerRanges& partners,
                               const NeighborList& neighbors, std::vector<Vec3>& force,
