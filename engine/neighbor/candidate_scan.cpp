@@ -267,12 +267,6 @@ std::size_t walk_stencil(const StencilRuns& runs, std::size_t home_first, std::s
 }
 }  // namespace
 
-// Each coordinate and origin rounded to a float moves by at most `largest` 2^-24, and a
-// difference d of two floats rounds by |d| 2^-24: a component's error e is at most
-// 2 largest 2^-24 + r 2^-24 for candidates within r, and its square's |d_f^2 - d^2| at most
-// e (2 |d| + e). Summed over the axes (|dx| + |dy| + |dz| <= sqrt(3) r), with the floats'
-// three products and two sums (4 r^2 2^-24), for r up to twice the reach; four times that
-// either side of within2. Beyond twice the reach r^2 in floats is far above the bound.
 bool scan_reads_floats() {
 #if defined(DELI_SCAN_AVX2)
   return true;
@@ -281,6 +275,12 @@ bool scan_reads_floats() {
 #endif
 }
 
+// Each coordinate and origin rounded to a float moves by at most `largest` 2^-24, and a
+// difference d of two floats rounds by |d| 2^-24: a component's error e is at most
+// 2 largest 2^-24 + r 2^-24 for candidates within r, and its square's |d_f^2 - d^2| at most
+// e (2 |d| + e). Summed over the axes (|dx| + |dy| + |dz| <= sqrt(3) r), with the floats'
+// three products and two sums (4 r^2 2^-24), for r up to twice the reach; four times that
+// either side of within2. Beyond twice the reach r^2 in floats is far above the bound.
 bool float_bounds(double largest, double within2, float& below, float& above) {
   if (!(largest >= 0.0 && largest < 1e30 && within2 > 0.0 && within2 < 1e30)) return false;
   const double u = 0x1p-24, r = 2.0 * std::sqrt(within2);

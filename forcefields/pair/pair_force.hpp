@@ -280,13 +280,17 @@ class PairForce final : public ForceTerm {
                                               neighbors.image_shifts().data(), 0, n),
                                  tally, virial);
       for (std::size_t s = 0; s < n; ++s) {
-        const PaddedVec3& f = padded_force_[s];
-        Vec3& to = force[at(s)];
-        to = overwrite ? Vec3{f.x, f.y, f.z} : to + Vec3{f.x, f.y, f.z};
+        store_force(force[at(s)], padded_force_[s], overwrite);
       }
       return energy;
     }
     return 0.0;
+  }
+
+  // A slot's padded force sum into its particle's force: written with `overwrite`, else added.
+  static void store_force(Vec3& to, const PaddedVec3& f, bool overwrite) {
+    const Vec3 sum{f.x, f.y, f.z};
+    to = overwrite ? sum : to + sum;
   }
 
   // Slots [begin, end) of the list `partners` for the vector loop, on positions x by slot.
@@ -366,8 +370,7 @@ class PairForce final : public ForceTerm {
         for (std::size_t s = first; count > 0 && s < last; ++s) {
           PaddedVec3 sum = from[0][s];
           for (std::size_t t = 1; t < count; ++t) sum += from[t][s];
-          Vec3& to = force[at(s)];
-          to = overwrite ? Vec3{sum.x, sum.y, sum.z} : to + Vec3{sum.x, sum.y, sum.z};
+          store_force(force[at(s)], sum, overwrite);
         }
         // A block no chunk touches (none: a chunk touches its own) has no forces.
         for (std::size_t s = first; count == 0 && overwrite && s < last; ++s) force[at(s)] = Vec3{};
