@@ -1,6 +1,8 @@
 #include "integrators/force_engine.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -21,31 +23,40 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   Particles& p = system.particles;
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
   // Rebuilds are rare, and every non-finite position triggers one (needs_rebuild): the
-  // one place a blown-up run is caught on the step it happens.
-  if (auto bad = first_non_finite_atom(p)) {
-    throw SimulationError("step " + std::to_string(system.step) + ": " + *bad +
-                          " is not finite: the run blew up (a timestep too large, overlapping "
-                          "atoms or extreme force-field numbers); outputs up to the last sample "
-                          "are kept");
+  // one place a blown-up run is caught on the step it happens. Each chunk checks its atoms
+  // and wraps them (a wrap is a few divisions' worth: substantial items, also below
+  // cheap_loop_minimum()) in one pass; the scans that name a bad atom run only if a chunk
+  // found one. Checked first on one thread and then wrapped, the rigid melt's 4000 beads were
+  // read three times a build while the other thread waited.
+  // Nothing reads a list of zero reach: keep the first one, unwrapped.
+  const bool keep_list = neighbors_.cutoff() <= 0 && neighbors_.builds() > 0;
+  const int chunks = chunks_for(p.size());
+  std::vector<char> usable(static_cast<std::size_t>(chunks), 1);
+  for_each_chunk(p.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+    usable[static_cast<std::size_t>(c)] = atoms_usable(p, system.box, begin, end);
+    if (keep_list || !usable[static_cast<std::size_t>(c)]) return;
+    for (std::size_t i = begin; i < end; ++i) system.box.wrap(p.position[i], p.image[i]);
+  });
+  if (std::find(usable.begin(), usable.end(), 0) != usable.end()) {
+    if (auto bad = first_non_finite_atom(p)) {
+      throw SimulationError("step " + std::to_string(system.step) + ": " + *bad +
+                            " is not finite: the run blew up (a timestep too large, overlapping "
+                            "atoms or extreme force-field numbers); outputs up to the last "
+                            "sample are kept");
+    }
+    if (auto away = first_runaway_atom(p, system.box)) {
+      throw SimulationError("step " + std::to_string(system.step) + ": " + *away +
+                            " ran away (far beyond the box): the run blew up (a timestep too "
+                            "large, overlapping atoms or extreme force-field numbers); outputs "
+                            "up to the last sample are kept");
+    }
+    throw std::logic_error("atoms_usable found an atom that neither scan names");
   }
-  if (auto away = first_runaway_atom(p, system.box)) {
-    throw SimulationError("step " + std::to_string(system.step) + ": " + *away +
-                          " ran away (far beyond the box): the run blew up (a timestep too "
-                          "large, overlapping atoms or extreme force-field numbers); outputs up "
-                          "to the last sample are kept");
-  }
-  // Nothing reads a list of zero reach: keep the first one.
-  if (neighbors_.cutoff() <= 0 && neighbors_.builds() > 0) return false;
+  if (keep_list) return false;
   if (neighbors_.builds() == 0) {
     const SpecialPairs special = find_special_pairs(system.topology, p.size());
     neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
   }
-  // Split as substantial items (a wrap is a few divisions' worth), also below
-  // cheap_loop_minimum(): one thread wrapped the rigid melt's 4000 beads twice a build
-  // (here and in the build), while the other waited.
-  for_each_chunk(p.size(), chunks_for(p.size()), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) system.box.wrap(p.position[i], p.image[i]);
-  });
   neighbors_.build(p.position, system.box);
   return true;
 }

@@ -196,14 +196,30 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   std::vector<std::array<int, 3>>& moved = moved_;
   inside.resize(static_cast<std::size_t>(n));
   moved.resize(static_cast<std::size_t>(n));
-  // Split as substantial items, as ForceEngine::ensure_neighbors' wrap.
-  for_each_chunk(static_cast<std::size_t>(n), chunks_for(static_cast<std::size_t>(n)),
-                 [&](int, std::size_t begin, std::size_t end) {
+  // Split as substantial items, as ForceEngine::ensure_neighbors' wrap. The same pass keeps
+  // the positions for needs_rebuild and finds, per chunk, the largest coordinate (the float
+  // scan's bounds) and whether any particle was moved: made after it on one thread, those
+  // three passes over the particles left the other thread waiting at every build.
+  const int wrap_chunks = chunks_for(static_cast<std::size_t>(n));
+  std::vector<double> chunk_largest(static_cast<std::size_t>(wrap_chunks), 0.0);
+  std::vector<char> chunk_moved(static_cast<std::size_t>(wrap_chunks), 0);
+  const bool keep_positions = &position != &position_at_build_;
+  if (keep_positions) position_at_build_.resize(static_cast<std::size_t>(n));
+  for_each_chunk(static_cast<std::size_t>(n), wrap_chunks,
+                 [&](int c, std::size_t begin, std::size_t end) {
+                   double largest = 0.0;
+                   bool any_moved = false;
                    for (std::size_t i = begin; i < end; ++i) {
+                     if (keep_positions) position_at_build_[i] = position[i];
                      inside[i] = position[i];
                      moved[i] = {0, 0, 0};
                      box.wrap(inside[i], moved[i]);
+                     const Vec3& x = inside[i];
+                     largest = std::max({largest, std::abs(x.x), std::abs(x.y), std::abs(x.z)});
+                     any_moved |= (moved[i][0] | moved[i][1] | moved[i][2]) != 0;
                    }
+                   chunk_largest[static_cast<std::size_t>(c)] = largest;
+                   chunk_moved[static_cast<std::size_t>(c)] = any_moved;
                  });
 
   const Grid grid = make_grid(inside, box);
@@ -325,10 +341,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   FloatPositions in_float{member_xf_.data(), member_yf_.data(), member_zf_.data(), 0.0f, 0.0f};
   bool floats = false;
   if (float_copies) {
-    double largest = 0.0;
-    for (const Vec3& p : inside) {
-      largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-    }
+    const double largest = *std::max_element(chunk_largest.begin(), chunk_largest.end());
     double largest_shift = 0.0;
     for (const Vec3& shift : image_shifts_) {
       largest_shift =
@@ -339,8 +352,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   }
   // Whether no particle was moved by a period into the box (the integrators keep positions
   // wrapped): then no pair needs its own image code, and keep_hits reads no moved keys.
-  const bool moved_unshifted = std::all_of(member_moved_key_.begin(), member_moved_key_.end(),
-                                           [](std::int32_t key) { return key == kNoShift; });
+  const bool moved_unshifted =
+      std::find(chunk_moved.begin(), chunk_moved.end(), 1) == chunk_moved.end();
   // Chunks of consecutive slots, each listing its particles' partners in order; the lists
   // are then joined in chunk order: the same list on any number of threads.
   const int chunks = chunks_for(static_cast<std::size_t>(n));
@@ -541,7 +554,6 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     built_end_.clear();
     by_particle_.stale.store(true, std::memory_order_release);
   }
-  position_at_build_ = position;
   ++builds_;
 }
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace deli {
 
@@ -30,8 +31,11 @@ std::optional<std::string> first_non_finite_atom(const Particles& p,
   return std::nullopt;
 }
 
+namespace {
+constexpr double kFarthest = 1e15, kMostPeriods = 1e9;
+}  // namespace
+
 std::optional<std::string> first_runaway_atom(const Particles& p, const Box& box) {
-  constexpr double kFarthest = 1e15, kMostPeriods = 1e9;
   for (std::size_t i = 0; i < p.size(); ++i) {
     for (int a = 0; a < 3; ++a) {
       const double from_box = p.position[i][a] - box.lo()[a];
@@ -42,6 +46,24 @@ std::optional<std::string> first_runaway_atom(const Particles& p, const Box& box
     }
   }
   return std::nullopt;
+}
+
+bool atoms_usable(const Particles& p, const Box& box, std::size_t begin, std::size_t end) {
+  // A NaN fails every comparison, an infinity every bound: `<=` tests catch both.
+  constexpr double kLargest = std::numeric_limits<double>::max();
+  double most_periods[3];
+  for (int a = 0; a < 3; ++a) most_periods[a] = box.periodic(a) ? kMostPeriods : kLargest;
+  bool usable = true;
+  for (std::size_t i = begin; i < end; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const double from_box = p.position[i][a] - box.lo()[a];
+      usable &= std::abs(from_box) <= kFarthest;
+      // Open axes have an inverse period of 0: no bound on periods there.
+      usable &= std::abs(from_box * box.inverse_period()[a]) <= most_periods[a];
+      usable &= std::abs(p.velocity[i][a]) <= kLargest;
+    }
+  }
+  return usable;
 }
 
 }  // namespace deli

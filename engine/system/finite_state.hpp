@@ -20,4 +20,10 @@ std::optional<std::string> first_non_finite_atom(const Particles& particles,
 // image count would overflow). No run that means anything gets there; a blown-up one does.
 std::optional<std::string> first_runaway_atom(const Particles& particles, const Box& box);
 
+// Whether atoms [begin, end) hold neither a non-finite position or velocity nor a runaway
+// position: where this is true, the two scans above name none of them. Without a branch per
+// atom, for a pass that checks a range on the way (ForceEngine::ensure_neighbors' wrap); the
+// scans above then name the atom, in their order, only where some range failed.
+bool atoms_usable(const Particles& particles, const Box& box, std::size_t begin, std::size_t end);
+
 }  // namespace deli
