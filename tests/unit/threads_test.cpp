@@ -253,6 +253,52 @@ TEST(Threads, PairCurvatureOnTwoThreadsRepeatsAndAgreesWithOneToRoundOff) {
   EXPECT_NEAR(two, one, 1e-13 * magnitude);
 }
 
+// The pair Hessian blocks of the pairs touching masked particles (shadow-H reflections' blocks),
+// made in chunks of particles on two threads: the one-thread blocks, bit for bit and in the
+// same order. Every block's pair touches a masked particle, and every listed pair within the
+// cutoff that touches one has its block (counted pair by pair from the list by particle; the
+// special bonds 0 1 1 leave no scaled pair outside the list).
+TEST(Threads, MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks) {
+  const RunInput input = chain_melt();
+  NeighborList list(input.force_field->neighbor_cutoff(), 0.3);
+  list.build(input.system.particles.position, input.system.box);
+  const std::size_t n = input.system.particles.size();
+  std::vector<char> mask(n, 0);
+  for (std::size_t i = 0; i < n; i += 37) mask[i] = 1;
+  for (std::size_t i = 1000; i < 1040; ++i) mask[i] = 1;  // a whole chain, as a cluster
+  // The pair style's blocks alone (the bonds add theirs in the force field's).
+  const ForceTerm& pair = *input.force_field->terms().front();
+  ASSERT_EQ(pair.name(), "pair");
+  auto blocks_on = [&](int threads) {
+    const ThreadCount count(threads);
+    std::vector<PairHessian> blocks;
+    EXPECT_TRUE(pair.pair_hessians(input.system, list, mask, blocks));
+    return blocks;
+  };
+  const std::vector<PairHessian> one = blocks_on(1);
+  std::size_t expected = 0;
+  const double cutoff = input.force_field->neighbor_cutoff();
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = list.offsets()[i]; k < list.offsets()[i + 1]; ++k) {
+      const auto j = static_cast<std::size_t>(list.neighbors()[k]);
+      const Vec3 d = input.system.box.minimum_image(input.system.particles.position[i] -
+                                                    input.system.particles.position[j]);
+      expected += (mask[i] || mask[j]) && norm2(d) < cutoff * cutoff;
+    }
+  }
+  EXPECT_GT(expected, 1000u);
+  EXPECT_EQ(one.size(), expected);
+  for (const PairHessian& b : one) ASSERT_TRUE(mask[b.a] || mask[b.b]);
+  if (!kThreaded) return;
+  const std::vector<PairHessian> two = blocks_on(2);
+  ASSERT_EQ(two.size(), one.size());
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    ASSERT_EQ(two[k].a, one[k].a) << k;
+    ASSERT_EQ(two[k].b, one[k].b) << k;
+    for (int e = 0; e < 9; ++e) ASSERT_EQ(two[k].block(e), one[k].block(e)) << k;
+  }
+}
+
 TEST(Threads, OrderedSumOnOneChunkIsTheSerialSum) {
   std::vector<double> terms(5000);
   for (std::size_t i = 0; i < terms.size(); ++i) terms[i] = 1.0 / static_cast<double>(i + 1);
