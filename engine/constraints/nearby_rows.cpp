@@ -18,10 +18,14 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   const NeighborList::PartnerRanges ranges = list.partner_ranges();
   // By chunks of the list's particles, each into its own pairs: joined in chunk order, the
   // serial scan's pairs in its order on any number of threads.
-  // Split as cheap items: from 1024 particles, hs_4000's 600 us scan took about 100 us more
-  // on two threads of an idle 2-core machine than on one (bench/README.md, fuse).
+  // Split as cheap items, counted in listed pairs (a pair's test is a few operations): from
+  // 1024 particles, hs_4000's 600 us scan (12700 pairs) took about 100 us more on two threads
+  // of an idle 2-core machine than on one (bench/README.md, fuse); counted in particles, the
+  // default input's 1200 beads with about 25 pairs each (LJ's reach) were scanned on one
+  // thread at every build, and their rows screened on one thread at every call (two threads
+  // split by pairs: its loop 0.93x, bench/README.md, "Stop 48").
   const std::size_t listed = ranges.particles;
-  const int chunks = chunks_for_cheap(listed);
+  const int chunks = chunks_for_cheap(list.pair_count());
   scanned_.resize(static_cast<std::size_t>(chunks));
   // The anchor positions and the displacements since (none yet: each particle's reach, or
   // zero) are set by the chunk that scans the particle, on the thread whose lines they are.
@@ -153,7 +157,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
     // Each scanned chunk screened on its own thread into its own rows, joined in chunk order:
     // the serial screen's rows in its order on any number of threads (chunk 0 appends in
-    // place). One scanned chunk (fewer particles than split as cheap items) has its pairs
+    // place). One scanned chunk (fewer listed pairs than split as cheap items) has its pairs
     // split as cheap items: a pair's screen is a few operations (the 4000-sphere fluid's
     // 12700 pairs took 80 us a call on one thread), and on 2 threads of the loaded 2-core
     // machine a split call took 460 us (the sleeping partner's wake-up), bench/README.md.
