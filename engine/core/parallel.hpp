@@ -105,6 +105,18 @@ void chunks_of_thread(std::size_t n, int chunks, int thread, int threads, Body& 
     }
   }
 }
+// The same with chunk c the items [starts[c], starts[c + 1]).
+template <class Body>
+void ranges_of_thread(const std::size_t* starts, int chunks, int thread, int threads, Body& body,
+                      std::exception_ptr* failed) {
+  for (int c = thread; c < chunks; c += threads) {
+    try {
+      body(c, starts[c], starts[c + 1]);
+    } catch (...) {
+      failed[c] = std::current_exception();
+    }
+  }
+}
 }  // namespace detail
 
 // Runs body(c, begin, end) for the chunks c = 0..chunks-1 of [0, n), in parallel. The
@@ -149,6 +161,35 @@ void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first
     bool any = false;
     for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
     if (!any) detail::chunks_of_thread(m, chunks, thread, threads, second, failed.data() + slots);
+  };
+  run_on_team(std::min(chunks, thread_count()), job);
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+// for_each_chunk_then with chunks of the caller's choosing: chunk c of both passes is the
+// items [starts[c], starts[c + 1]) (starts ascending, starts.size() - 1 chunks), chunk c of
+// both on one thread.
+template <class First, class Second>
+void for_each_range_then(const std::vector<std::size_t>& starts, First&& first, Second&& second) {
+  const int chunks = static_cast<int>(starts.size()) - 1;
+  if (chunks <= 1) {
+    first(0, starts.front(), starts.back());
+    second(0, starts.front(), starts.back());
+    return;
+  }
+  const auto slots = static_cast<std::size_t>(chunks);
+  std::vector<std::exception_ptr> failed(2 * slots);
+  auto job = [&](int thread, int threads) {
+    detail::ranges_of_thread(starts.data(), chunks, thread, threads, first, failed.data());
+    team_barrier();
+    bool any = false;
+    for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
+    if (!any) {
+      detail::ranges_of_thread(starts.data(), chunks, thread, threads, second,
+                               failed.data() + slots);
+    }
   };
   run_on_team(std::min(chunks, thread_count()), job);
   for (const std::exception_ptr& e : failed) {

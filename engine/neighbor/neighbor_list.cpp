@@ -611,6 +611,28 @@ NeighborList::PartnerRanges NeighborList::built_order() const {
           built_begin_.data(), built_end_.data()};
 }
 
+const std::vector<std::size_t>& NeighborList::pair_chunk_starts(int chunks) const {
+  const std::size_t n = position_at_build_.size();
+  const auto k = static_cast<std::size_t>(chunks);
+  if (chunk_starts_build_ == builds_ && chunk_starts_.size() == k + 1) return chunk_starts_;
+  chunk_starts_build_ = builds_;
+  chunk_starts_.assign(k + 1, n);
+  chunk_starts_[0] = 0;
+  const std::vector<std::size_t>& offsets = cell_ordered_.offsets;
+  const bool by_pairs = cell_order_ && offsets.size() == n + 1 && offsets[n] > 0;
+  for (std::size_t c = 1; c < k; ++c) {
+    if (!by_pairs) {
+      chunk_starts_[c] = chunk_range(n, static_cast<int>(c), chunks).begin;
+      continue;
+    }
+    // The first slot whose pairs begin at or past c k-ths of them all (the offsets ascend).
+    const std::size_t share = offsets[n] * c / k;
+    chunk_starts_[c] = static_cast<std::size_t>(
+        std::lower_bound(offsets.begin(), offsets.end() - 1, share) - offsets.begin());
+  }
+  return chunk_starts_;
+}
+
 const TouchedBlocks& NeighborList::touched_blocks(int chunks) const {
   const std::size_t n = position_at_build_.size();
   if (touched_build_ == builds_ && touched_.chunks() == chunks && touched_.items() == n) {
@@ -626,10 +648,7 @@ const TouchedBlocks& NeighborList::touched_blocks(int chunks) const {
   const std::size_t blocks = touched_.marks(0).size();
   // The slots in chunks of their own, each marking for every chunk of items; then the chunks'
   // marks joined.
-  std::vector<std::size_t> first(k);
-  for (int c = 0; c < chunks; ++c) {
-    first[static_cast<std::size_t>(c)] = chunk_range(n, c, chunks).begin;
-  }
+  const std::vector<std::size_t>& first = pair_chunk_starts(chunks);
   const int scans = chunks_for(n);
   scan_marks_.resize(static_cast<std::size_t>(scans));
   const std::int32_t* member = member_.data();

@@ -105,8 +105,14 @@ class NeighborList {
   };
   // Empty (no particles) unless set_cell_order(true) preceded the last build.
   const CellOrdered& cell_ordered() const { return cell_ordered_; }
-  // For a pair loop over the list in `chunks` chunks (chunk_range) of its items (particles,
-  // or slots with cell order on): the blocks each chunk's items and their partners lie in.
+  // A pair loop's `chunks` chunks of the list's items: chunk c is items [starts[c],
+  // starts[c + 1]). With cell order on, consecutive slots holding equal numbers of listed
+  // pairs (as near as whole slots allow); else chunk_range's equal counts of particles. Made
+  // when first asked for after a build; one caller at a time.
+  const std::vector<std::size_t>& pair_chunk_starts(int chunks) const;
+  // For a pair loop over the list in `chunks` chunks (pair_chunk_starts) of its items
+  // (particles, or slots with cell order on): the blocks each chunk's items and their
+  // partners lie in.
   // Made when first asked for after a build, the list scanned in the order the build left
   // it (by particle, its ranges lie in no order: read so, a scan missed the cache on most
   // particles, 2.6 % of LJ 32000's samples); one caller at a time.
@@ -200,6 +206,8 @@ class NeighborList {
   mutable TouchedBlocks touched_;
   mutable std::int64_t touched_build_ = -1;
   mutable std::vector<std::vector<char>> scan_marks_;  // touched_blocks()'s, per chunk of slots
+  mutable std::vector<std::size_t> chunk_starts_;      // pair_chunk_starts()'
+  mutable std::int64_t chunk_starts_build_ = -1;
 };
 
 }  // namespace deli

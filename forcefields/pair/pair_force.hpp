@@ -334,7 +334,10 @@ class PairForce final : public ForceTerm {
   // job where the particle passes are not split (below cheap_loop_minimum()); copying and
   // adding only the touched blocks, in the job, took LJ 4000's pair phase on two threads to
   // 0.97x, the Kremer-Grest melt's (inputs/lj_chains/melt.toml) to 0.89x, the rigid melt's to
-  // 0.99x, the default input's to 1.00x (bench/README.md, "Stop 47").
+  // 0.99x, the default input's to 1.00x (bench/README.md, "Stop 47"). The chunks hold equal
+  // numbers of listed pairs (NeighborList::pair_chunk_starts): in equal numbers of slots, the
+  // default input's lower half (its z axis open, the pairs across the middle listed from
+  // below) held a quarter more pairs than the upper; its pair phase on two threads 0.94x.
   double touched_vector_loops(const std::vector<Vec3>& x, const std::int32_t* particle,
                               const NeighborList::PartnerRanges& partners,
                               const NeighborList& neighbors, std::vector<Vec3>& force,
@@ -390,7 +393,7 @@ class PairForce final : public ForceTerm {
         first = last;
       }
     };
-    for_each_chunk_then(n, n, chunks, chunk_loop, add);
+    for_each_range_then(neighbors.pair_chunk_starts(chunks), chunk_loop, add);
     // Chunk 0's virial was the caller's own in ChunkedForceLoopOf: added first, then the
     // others in order.
     virial += chunk_virials_[0];

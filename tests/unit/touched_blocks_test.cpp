@@ -38,7 +38,8 @@ NeighborList list_for(const RunInput& input, bool cell_order) {
 }
 
 // Chunk c's blocks, pair by pair from the list by particle (items renamed to slots with cell
-// order on): its items' own blocks and their partners'.
+// order on): its items' own blocks (the items of pair_chunk_starts' chunk c) and their
+// partners'.
 std::set<std::size_t> blocks_by_pairs(const NeighborList& list, int c, int chunks) {
   const std::vector<std::int32_t>& slot_particle = list.cell_ordered().particle;
   const std::size_t n = list.offsets().size() - 1;
@@ -48,7 +49,9 @@ std::set<std::size_t> blocks_by_pairs(const NeighborList& list, int c, int chunk
     slot_of[static_cast<std::size_t>(slot_particle[s])] = s;
   }
   std::set<std::size_t> blocks;
-  const IndexRange own = chunk_range(n, c, chunks);
+  const std::vector<std::size_t>& starts = list.pair_chunk_starts(chunks);
+  const IndexRange own{starts[static_cast<std::size_t>(c)],
+                       starts[static_cast<std::size_t>(c) + 1]};
   for (std::size_t i = 0; i < n; ++i) {
     if (slot_of[i] < own.begin || slot_of[i] >= own.end) continue;
     blocks.insert(TouchedBlocks::block_of(slot_of[i]));
@@ -88,6 +91,44 @@ void expect_blocks_of_the_pairs(bool cell_order) {
       }
       // The case the blocks are for: chunks that do not touch every block.
       EXPECT_GT(left_out, 0u);
+    }
+  }
+}
+
+// The pair loop's chunks with cell order on hold equal numbers of listed pairs, to within one
+// slot's pairs (the slots are whole), counted from the list by particle; without cell order,
+// chunk_range's equal counts of particles.
+TEST(TouchedBlocks, PairChunksHoldEqualPairCounts) {
+  const RunInput input = lattice_liquid();
+  for (const bool cell_order : {true, false}) {
+    const NeighborList list = list_for(input, cell_order);
+    const std::size_t n = input.system.particles.size();
+    for (const int chunks : {2, 3}) {
+      const std::vector<std::size_t>& starts = list.pair_chunk_starts(chunks);
+      ASSERT_EQ(starts.size(), static_cast<std::size_t>(chunks) + 1);
+      EXPECT_EQ(starts.front(), 0u);
+      EXPECT_EQ(starts.back(), n);
+      if (!cell_order) {
+        for (int c = 0; c < chunks; ++c) EXPECT_EQ(starts[c], chunk_range(n, c, chunks).begin);
+        continue;
+      }
+      // Pairs by slot from the list by particle.
+      std::vector<std::size_t> pairs_of_slot(n, 0);
+      const std::vector<std::int32_t>& slot_particle = list.cell_ordered().particle;
+      std::size_t most = 0;
+      for (std::size_t s = 0; s < n; ++s) {
+        const auto i = static_cast<std::size_t>(slot_particle[s]);
+        pairs_of_slot[s] = list.offsets()[i + 1] - list.offsets()[i];
+        most = std::max(most, pairs_of_slot[s]);
+      }
+      const std::size_t total = list.pair_count();
+      for (int c = 0; c < chunks; ++c) {
+        std::size_t in_chunk = 0;
+        for (std::size_t s = starts[c]; s < starts[c + 1]; ++s) in_chunk += pairs_of_slot[s];
+        EXPECT_NEAR(static_cast<double>(in_chunk), static_cast<double>(total) / chunks,
+                    static_cast<double>(most))
+            << "chunk " << c << " of " << chunks;
+      }
     }
   }
 }
