@@ -76,14 +76,7 @@ export DELI_SANITIZER_SHORT_RUNS=1
 # (The two cross-checks of chains_4000_harmonic, which run here, once saw LeakSanitizer's
 # tracer take a SIGSEGV at their exit leak check after both had passed, and not in 8 runs
 # since: a known intermittent failure of the sanitizer runtime, google/sanitizers#1353.
-# At stop 48 it became reproducible, every run, in OpenMMCpuPlatform.AgreesToSinglePrecision
-# under ctest (OMP_NUM_THREADS=1; it passed run by hand without it), after an engine change
-# that touched neither threads nor TLS: LSAN_OPTIONS=verbosity=1:log_threads=1 showed the
-# tracer reading the main thread's dynamic TLS entry 13 "at 0x16c4-0x4000027c6", not a
-# pointer, once OpenMM's plugins are loaded (glibc 2.36, GCC 12's LSan). use_tls=0 skips the
-# TLS roots, static and dynamic: the check can then only report more, never hide a leak
-# (deli's thread_local buffers are freed when their threads end, before the exit check), and
-# the test passes.)
+# Should it recur, LSAN_OPTIONS=verbosity=1:log_threads=1 shows the thread.)
 
 # allocator_may_return_null: an impossible size gets NULL, as from glibc. A damaged
 # checkpoint (Checkpoint.EverySingleByteFlipIsRefusedOrHarmless) makes HDF5's metadata
@@ -91,6 +84,6 @@ export DELI_SANITIZER_SHORT_RUNS=1
 # where ASan's allocator would abort. (A deli container still gets std::bad_alloc.)
 export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=0:check_initialization_order=1:allocator_may_return_null=1:suppressions=$here/asan.supp"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
-export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0:use_tls=0"
+export LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0"
 cd build-asan
 ctest --output-on-failure -j "$jobs" -E "$skip" "$@"

@@ -15,6 +15,14 @@
 #include "support/short_runs.hpp"
 #include "support/source_tree.hpp"
 
+namespace {
+// Read by LeakSanitizer at exit (its __lsan_is_turned_off hook; unused without it).
+bool skip_exit_leak_check = false;
+}  // namespace
+extern "C" int __lsan_is_turned_off() {
+  return skip_exit_leak_check ? 1 : 0;
+}
+
 namespace deli {
 namespace {
 
@@ -84,7 +92,14 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& info) { return info.param.name; });
 
 // The CPU platform computes in single precision: looser, separately reported agreement.
+// Under tools/sanitize.sh this process skips LeakSanitizer's exit check: from stop 48 its
+// tracer took a SIGSEGV there at every run under ctest (OMP_NUM_THREADS=1), reading the main
+// thread's dynamic TLS entry 13 "at 0x16c4", not a pointer, once OpenMM's CPU plugin is loaded
+// (glibc 2.36, GCC 12's LSan; google/sanitizers#1353), after the test had passed. Turning the
+// TLS roots off for every test instead (use_tls=0) reported libgomp's and ld.so's TLS-held
+// blocks as leaks in a dozen others. ctest runs this case in a process of its own.
 TEST(OpenMMCpuPlatform, AgreesToSinglePrecision) {
+  skip_exit_leak_check = true;
   const RunInput input = load({"lj", "inputs/lj_liquid/lj_4000.toml"});
   ValidateOptions options;
   options.lammps = false;
