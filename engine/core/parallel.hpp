@@ -140,6 +140,37 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
   }
 }
 
+// for_each_chunk_then with chunks of the caller's choosing: chunk c of the first pass is the
+// items [first_starts[c], first_starts[c + 1]), of the second [second_starts[c],
+// second_starts[c + 1]) (each ascending, as many chunks in both), chunk c of both on one thread.
+template <class First, class Second>
+void for_each_range_then(const std::vector<std::size_t>& first_starts,
+                         const std::vector<std::size_t>& second_starts, First&& first,
+                         Second&& second) {
+  const int chunks = static_cast<int>(first_starts.size()) - 1;
+  if (chunks <= 1) {
+    first(0, first_starts.front(), first_starts.back());
+    second(0, second_starts.front(), second_starts.back());
+    return;
+  }
+  const auto slots = static_cast<std::size_t>(chunks);
+  std::vector<std::exception_ptr> failed(2 * slots);
+  auto job = [&](int thread, int threads) {
+    detail::ranges_of_thread(first_starts.data(), chunks, thread, threads, first, failed.data());
+    team_barrier();
+    bool any = false;
+    for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
+    if (!any) {
+      detail::ranges_of_thread(second_starts.data(), chunks, thread, threads, second,
+                               failed.data() + slots);
+    }
+  };
+  run_on_team(std::min(chunks, thread_count()), job);
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
 // for_each_chunk(n, chunks, first), then, once every chunk of it has ended, second(c, begin,
 // end) for the chunks of [0, m): one job of the team, a barrier between the passes, and chunk
 // c of both on one thread. Where the chunks of [0, m) are the particles the first pass's chunk c
@@ -148,53 +179,13 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
 // rethrown once all have finished, the first pass's before the second's.
 template <class First, class Second>
 void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first, Second&& second) {
-  if (chunks <= 1) {
-    first(0, std::size_t{0}, n);
-    second(0, std::size_t{0}, m);
-    return;
+  const auto k = static_cast<std::size_t>(std::max(chunks, 1));
+  std::vector<std::size_t> first_starts(k + 1, n), second_starts(k + 1, m);
+  for (std::size_t c = 0; c < k; ++c) {
+    first_starts[c] = chunk_range(n, static_cast<int>(c), static_cast<int>(k)).begin;
+    second_starts[c] = chunk_range(m, static_cast<int>(c), static_cast<int>(k)).begin;
   }
-  const auto slots = static_cast<std::size_t>(chunks);
-  std::vector<std::exception_ptr> failed(2 * slots);
-  auto job = [&](int thread, int threads) {
-    detail::chunks_of_thread(n, chunks, thread, threads, first, failed.data());
-    team_barrier();
-    bool any = false;
-    for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
-    if (!any) detail::chunks_of_thread(m, chunks, thread, threads, second, failed.data() + slots);
-  };
-  run_on_team(std::min(chunks, thread_count()), job);
-  for (const std::exception_ptr& e : failed) {
-    if (e) std::rethrow_exception(e);
-  }
-}
-
-// for_each_chunk_then with chunks of the caller's choosing: chunk c of both passes is the
-// items [starts[c], starts[c + 1]) (starts ascending, starts.size() - 1 chunks), chunk c of
-// both on one thread.
-template <class First, class Second>
-void for_each_range_then(const std::vector<std::size_t>& starts, First&& first, Second&& second) {
-  const int chunks = static_cast<int>(starts.size()) - 1;
-  if (chunks <= 1) {
-    first(0, starts.front(), starts.back());
-    second(0, starts.front(), starts.back());
-    return;
-  }
-  const auto slots = static_cast<std::size_t>(chunks);
-  std::vector<std::exception_ptr> failed(2 * slots);
-  auto job = [&](int thread, int threads) {
-    detail::ranges_of_thread(starts.data(), chunks, thread, threads, first, failed.data());
-    team_barrier();
-    bool any = false;
-    for (std::size_t c = 0; c < slots; ++c) any = any || failed[c] != nullptr;
-    if (!any) {
-      detail::ranges_of_thread(starts.data(), chunks, thread, threads, second,
-                               failed.data() + slots);
-    }
-  };
-  run_on_team(std::min(chunks, thread_count()), job);
-  for (const std::exception_ptr& e : failed) {
-    if (e) std::rethrow_exception(e);
-  }
+  for_each_range_then(first_starts, second_starts, first, second);
 }
 
 // body(i) for every i in [0, n), cheap items independent of each other: the same result on

@@ -393,7 +393,8 @@ class PairForce final : public ForceTerm {
         first = last;
       }
     };
-    for_each_range_then(neighbors.pair_chunk_starts(chunks), chunk_loop, add);
+    const std::vector<std::size_t>& starts = neighbors.pair_chunk_starts(chunks);
+    for_each_range_then(starts, starts, chunk_loop, add);
     // Chunk 0's virial was the caller's own in ChunkedForceLoopOf: added first, then the
     // others in order.
     virial += chunk_virials_[0];
