@@ -180,30 +180,40 @@ void Gvi::start_step(System& system) {
   const bool keep_start_momenta = (feasibility_ == Feasibility::restore && has_inequalities()) ||
                                   contact_ == ContactTreatment::impact_time;
   bool p_start_made = false;  // ws_.p_start holds ws_.p
+  bool p_made = true;         // ws_.p holds the momenta
   ws_.half_kicked = false;
-  if (lagrangian_ == Lagrangian::verlet) {
+  if (steps_by_cluster(P)) {
+    // Nothing in the step reads the list or the momenta before the forces at x: the position
+    // update's cluster passes make q, the half kick and the free step (step_start's numbers)
+    // and test x against the list, which the force evaluation rebuilds where x leaves it.
+    // This pass of its own was a job of the team a step.
+    ws_.q.resize(n);
+    prediction_covered = engine_.neighbors().built_for(n);
+    prediction_known = true;
+    q_copied = true;
+    p_made = false;
+  } else if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
     ws_.q.resize(n);
-    // The same pass tells whether the neighbour list covers the prediction (needs_rebuild's
-    // test, particle by particle), counted per chunk.
     const NeighborList& list = engine_.neighbors();
     const bool listed = list.built_for(n);
-    // Only the contact rows' search and the impact-time step read the prediction; otherwise
-    // (rods alone) it decides the list's cover here and is not stored.
+    // Only the contact rows' search and the impact-time step read the prediction (and the
+    // list before the forces at x): then the same pass tells whether the list covers it
+    // (needs_rebuild's test, particle by particle), counted per chunk. Otherwise (rods alone,
+    // or no row) the list is tested at x, where displaced() makes it, and rebuilt there by
+    // the force evaluation if x leaves it: the free prediction, ignoring the rods' pull,
+    // left the list more often (the rigid melt: 99 builds in 1000 steps, at x 89).
     const bool keep =
         has_inequalities() || constrained_predictor_ || contact_ == ContactTreatment::impact_time;
     if (keep) ws_.predicted.resize(n);
-    // By cluster, each thread's particles are those whose clusters it solves (a partition by
-    // clusters of equal size is this one): their data stay in its cache.
-    const bool by_cluster = steps_by_cluster(P);
-    const int chunks = by_cluster ? chunks_for(n) : chunks_for_cheap(n);
+    const int chunks = chunks_for_cheap(n);
     // Rods alone (no reflection changes the momenta before the position update): the half
     // kick and free step that solve_held_positions starts from are the numbers made here,
-    // kept in this pass instead of made in one of their own (by cluster, made there). Then
-    // nothing reads the momenta before update_momenta makes them anew, but a prediction after
-    // a rebuild below: they are stored only for it.
-    const bool kick = !keep && !constraints_.equalities.empty() && !by_cluster;
+    // kept in this pass instead of made in one of their own. Then nothing reads the momenta
+    // before update_momenta makes them anew, but a prediction after a rebuild below: they are
+    // stored only for it.
+    const bool kick = !keep && !constraints_.equalities.empty();
     const bool zero = kick && !equalities_hold_every_particle(P);
     if (kick) {
       ws_.half.resize(n);
@@ -220,7 +230,7 @@ void Gvi::start_step(System& system) {
     pass.velocity = numbers(P.velocity);
     pass.mass = P.mass.data();
     pass.force = numbers(f);
-    pass.at_build = listed ? numbers(list.positions_at_build()) : nullptr;
+    pass.at_build = listed && keep ? numbers(list.positions_at_build()) : nullptr;
     pass.list_limit2 = list.valid_distance2();
     pass.q = numbers(ws_.q);
     pass.p = kick ? nullptr : numbers(ws_.p);
@@ -238,6 +248,7 @@ void Gvi::start_step(System& system) {
     });
     // A rebuild below wraps the positions, which leaves these numbers as they are.
     ws_.half_kicked = kick;
+    p_made = !kick;
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
     // neighbors_cover's answer for the prediction: its test, made above (a list not built for
@@ -254,9 +265,7 @@ void Gvi::start_step(System& system) {
       (prediction_known || !engine_.neighbors_cover(ws_.predicted))) {
     engine_.ensure_neighbors(system, true);  // may wrap P.position
     q_copied = false;
-    if (ws_.half_kicked) {
-      parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
-    }
+    if (!p_made) parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
     predict(system, ws_.p, ws_.predicted, false);
     if (!engine_.neighbors_cover(ws_.predicted)) {
       throw SimulationError("step " + std::to_string(system.step + 1) +
@@ -707,11 +716,20 @@ void Gvi::held_positions_by_cluster(System& system) {
   const NeighborList& list = engine_.neighbors();
   const bool built = list.built_for(n);
   ClusterPasses passes;
-  passes.before = [&, h](int, const ParticleRun& run) {
-    run.for_each_range([&, h](std::size_t begin, std::size_t end) {
-      gvi_passes::half_kick(h, numbers(ws_.p), numbers(f), P.mass.data(), numbers(ws_.half),
-                            numbers(ws_.free), begin, end);
-    });
+  // q, the momenta's half kick and the free step, made from the velocities (start_step made
+  // none of them).
+  gvi_passes::StepStart start;
+  start.h = h;
+  start.position = numbers(P.position);
+  start.velocity = numbers(P.velocity);
+  start.mass = P.mass.data();
+  start.force = numbers(f);
+  start.q = numbers(ws_.q);
+  start.half = numbers(ws_.half);
+  start.free = numbers(ws_.free);
+  passes.before = [&](int, const ParticleRun& run) {
+    run.for_each_range(
+        [&](std::size_t begin, std::size_t end) { gvi_passes::step_start(start, begin, end); });
   };
   // x = q + (half + impulse) (h / m), in vectors.
   const gvi_passes::EndPositions end_pass = end_positions_pass(ws_, P, h, list, built, nullptr);

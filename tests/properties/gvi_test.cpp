@@ -16,6 +16,7 @@
 #include "support/process_temp_dir.hpp"
 #include "support/short_runs.hpp"
 #include "support/statistic.hpp"
+#include "support/test_systems.hpp"
 #include "support/thread_count.hpp"
 
 namespace deli {
@@ -364,6 +365,38 @@ TEST(Gvi, ForcesAtTheStepsEndUseAListValidAtItsPositions) {
   }
 }
 
+// And only there, when nothing in the step reads the list before the forces at x (rods alone).
+// A dumbbell at rest (rod 1) whose beads repel each other (LJ, sigma 1.1, no exclusions):
+// F = 24 (2 1.1^12 - 1.1^6) = 108.1 along the rod, so each bead's free step h^2 F / (2 m) =
+// 0.135 leaves the list (half the skin: 0.0715) while the rod holds x at the start. No
+// rebuild, and the forces at x are those of a fresh list. (Tested on the free prediction, the
+// step was refused: "a particle would move more than half the neighbour skin".)
+TEST(Gvi, RodsAloneKeepTheListWhereOnlyTheFreeStepLeavesIt) {
+  for (const int threads : {1, 2}) {
+    if (threads > 1 && !testing::kThreaded) continue;
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    const testing::ThreadCount count(threads);
+    GviRun run(input_with_atoms("repelling_dumbbell", {{{5.5, 5, 5}, {}}, {{4.5, 5, 5}, {}}}, "ppp",
+                                {0, 0, 0}, {10, 10, 10},
+                                "[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\n"
+                                "coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.1 }]\n"
+                                "[neighbor]\nskin = 0.143\n"
+                                "[constraints]\nrods = [{ atoms = [1, 2], length = 1.0 }]\n"
+                                "[integrator]\ntype = \"gvi\"\nlagrangian = \"verlet\"\n"
+                                "timestep = 0.05\n[run]\nsteps = 0\n"));
+    const NeighborList& list = run.gvi->forces().neighbors();
+    const double h = 0.05, f = 24.0 * (2.0 * std::pow(1.1, 12) - std::pow(1.1, 6));
+    ASSERT_NEAR(run.gvi->forces().force()[0].x, f, 1e-9 * f);  // the pair is not excluded
+    ASSERT_GT(0.5 * h * h * f, 0.143 / 2);
+    const Vec3 start = run.particles().position[0];
+    const std::int64_t builds = list.builds();
+    run.step();
+    EXPECT_LT(norm(run.particles().position[0] - start), 1e-12);
+    EXPECT_EQ(list.builds(), builds);
+    const testing::Evaluated fresh = testing::evaluate(run.input);
+    EXPECT_EQ(run.gvi->forces().force()[0].x, fresh.force[0].x);
+  }
+}
 // Pair contacts exchange momentum only: a hard-sphere gas in a periodic box keeps its total
 // momentum to rounding.
 TEST(Gvi, HardSphereGasKeepsLinearMomentum) {
