@@ -10,8 +10,8 @@
 #   THREADS="1 2 4" bench/threads.sh       other thread (and rank) counts
 #   PEERS=0 bench/threads.sh               deli alone
 #   CEILING=0 bench/threads.sh             without the machine's ceiling (below)
-#   SPLIT=1 bench/threads.sh               also deli with [run] split_small_loops = true on
-#                                          each count above 1 ("split-deli": README, "Threads
+#   UNSPLIT=1 bench/threads.sh             also deli with [run] split_small_loops = false on
+#                                          each count above 1 ("unsplit-deli": README, "Threads
 #                                          and vector instructions"), its speed over deli's
 # The peers run in process from bench/peers (deli-peers, built here on first use): OpenMM's
 # CPU platform on the same thread counts (CCMA at 1e-4 for rods), LAMMPS on as many MPI ranks
@@ -29,7 +29,7 @@ deli=${DELI:-$top/build/deli}
 old=${DELI_OLD:-}
 rounds=${ROUNDS:-3}
 ceiling=${CEILING:-1}
-split=${SPLIT:-0}
+unsplit=${UNSPLIT:-0}
 read -r -a counts <<< "${THREADS:-1 2}"
 source "$top/bench/peers/locate.sh"
 mpirun=${MPIRUN:-$(command -v mpirun || true)}
@@ -60,7 +60,7 @@ for line in sys.stdin:
           f" (runs: {' '.join(rates)})")
 counts = sorted({t for _, t in order}, key=int)
 for engine in dict.fromkeys(e for e, _ in order):
-    if engine in ("old-deli", "two-deli", "split-deli"):
+    if engine in ("old-deli", "two-deli", "unsplit-deli"):
         continue
     base = median.get((engine, counts[0]))
     scaling = [f"{t}: {median[(engine, t)] / base:.2f}x" for t in counts[1:]
@@ -76,10 +76,10 @@ if ("two-deli", "1") in median and ("deli", "1") in median:
     print(f"  machine's ceiling (two one-thread runs at once / one alone): "
           f"{median[('two-deli', '1')] / median[('deli', '1')]:.2f}x")
 for t in counts[1:]:
-    if ("split-deli", t) in median and ("deli", t) in median:
-        scaling = (f", over deli on {counts[0]}: {median[('split-deli', t)] / median[('deli', counts[0])]:.2f}x"
+    if ("unsplit-deli", t) in median and ("deli", t) in median:
+        scaling = (f", over deli on {counts[0]}: {median[('unsplit-deli', t)] / median[('deli', counts[0])]:.2f}x"
                    if ("deli", counts[0]) in median else "")
-        print(f"  split_small_loops on {t}: {median[('split-deli', t)] / median[('deli', t)]:.2f}x"
+        print(f"  split_small_loops = false on {t}: {median[('unsplit-deli', t)] / median[('deli', t)]:.2f}x"
               f" deli's speed{scaling}")
 if ("old-deli", counts[0]) in median and ("deli", counts[0]) in median:
     print(f"  new / old deli on {counts[0]}: "
@@ -112,15 +112,15 @@ for spec in "${cases[@]}"; do
     section == "[output]" { next }
     section == "[run]" && /^steps *=/ { $0 = "steps = " cap }
     { print }' "$top/$input" > "$dir/input.toml"
-  if [[ $split == 1 ]]; then
-    sed 's/^\[run\]$/[run]\nsplit_small_loops = true/' "$dir/input.toml" > "$dir/input_split.toml"
+  if [[ $unsplit == 1 ]]; then
+    sed 's/^\[run\]$/[run]\nsplit_small_loops = false/' "$dir/input.toml" > "$dir/input_unsplit.toml"
   fi
   declare -A rate=()
   variants=()
   [[ -n $old ]] && variants+=("old-deli ${counts[0]}")
   for t in "${counts[@]}"; do variants+=("deli $t"); done
-  if [[ $split == 1 ]]; then
-    for t in "${counts[@]:1}"; do variants+=("split-deli $t"); done
+  if [[ $unsplit == 1 ]]; then
+    for t in "${counts[@]:1}"; do variants+=("unsplit-deli $t"); done
   fi
   [[ $ceiling == 1 && ${counts[0]} == 1 && ${counts[1]:-} == 2 ]] && variants+=("two-deli 1")
   has_peers=
@@ -148,9 +148,9 @@ for spec in "${cases[@]}"; do
         deli)
           line=$(cd "$dir" && "${pin[@]}" env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run input.toml \
             --threads "$threads" | grep "^loop time") ;;
-        split-deli)
+        unsplit-deli)
           line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run \
-            input_split.toml --threads "$threads" | grep "^loop time") ;;
+            input_unsplit.toml --threads "$threads" | grep "^loop time") ;;
         two-deli)
           # Both runs' rates summed, printed as one line for the parse below; one run a core.
           runs=$(cd "$dir" && {

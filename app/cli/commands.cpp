@@ -90,9 +90,9 @@ int command_run(const std::vector<std::string>& args) {
       throw InputError(std::string("deli run: ") + e.what());
     }
   }
-  if (input.split_small_loops) {
-    set_cheap_loop_minimum(kSmallLoopSplit);
-    set_cluster_work_minimum(kSmallClusterSplit);
+  if (!input.split_small_loops) {
+    set_cheap_chunk_minimum(kUnsplitCheapChunk);
+    set_cluster_chunk_minimum(kUnsplitClusterChunk);
   }
   const std::uint64_t fingerprint = system_fingerprint(input.system, input.model_text);
   Checkpoint checkpoint;
@@ -140,7 +140,7 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
   for (const std::string& note : input.notes) out.print("%s\n", note.c_str());
   out.print("%s\n", input.degrees_of_freedom.describe().c_str());
   out.print("%d thread%s%s\n", thread_count(), thread_count() == 1 ? "" : "s",
-            input.split_small_loops && thread_count() > 1 ? " (small loops split)" : "");
+            !input.split_small_loops && thread_count() > 1 ? " (small loops not split)" : "");
   if (input.thermostat) {
     const ThermostatSettings& t = *input.thermostat;
     out.print("thermostat %s: T %g, damping %g, seed %llu%s\n",

@@ -10,24 +10,24 @@
 namespace deli {
 
 namespace {
-std::size_t cheap_minimum = 16384;
-std::size_t cluster_minimum = 2048;
+std::size_t cheap_chunk = 512;
+std::size_t cluster_chunk = 256;
 }  // namespace
 
-std::size_t cluster_work_minimum() {
-  return cluster_minimum;
+std::size_t cluster_chunk_minimum() {
+  return cluster_chunk;
 }
 
-void set_cluster_work_minimum(std::size_t n) {
-  cluster_minimum = n;
+void set_cluster_chunk_minimum(std::size_t n) {
+  cluster_chunk = n;
 }
 
-std::size_t cheap_loop_minimum() {
-  return cheap_minimum;
+std::size_t cheap_chunk_minimum() {
+  return cheap_chunk;
 }
 
-void set_cheap_loop_minimum(std::size_t n) {
-  cheap_minimum = n;
+void set_cheap_chunk_minimum(std::size_t n) {
+  cheap_chunk = n;
 }
 
 int thread_count() {

@@ -27,28 +27,36 @@ inline int chunks_for(std::size_t n) {
 }
 
 // Loops whose items are a few arithmetic operations each (a particle's kick, drift or
-// displacement test, a row's gap) are split only from this many items on (16384 unless set):
-// a parallel region's start and end cost as much as thousands of such items. Split from 1024
-// items, the hard-sphere fluid (4000 spheres, GVI, about twenty such loops a step) ran on 2
-// threads at 0.35x of one thread's speed (OMP_WAIT_POLICY=passive), 0.66x (active), on an
-// idle 2-core machine. The split, like every split here, depends on n alone.
-// These splits are set for machines where a parallel region costs microseconds. Where it
-// costs a fraction of one (an idle AMD EPYC, Zen 3, 2 cores: an empty region 0.27 us, a kick
-// over 4000 particles 3.2 us on one thread and 1.8 us in two chunks; bench/parallel_overhead)
-// the smaller splits below win: [run] split_small_loops sets them (loop time on 2 threads:
-// the 4000-sphere fluid 0.64x, the default input 0.84x, LJ 4000 0.95x, the rigid melt
-// 0.83-0.99x).
-// Splits change the sums' grouping on several threads: a run's split is its input's.
-std::size_t cheap_loop_minimum();
+// displacement test, a row's gap) give each chunk at least this many items (512 unless set):
+// a job on the team costs as much as hundreds of such items. So 2 threads split them from 1024
+// items, 8 threads from 4096 in full. On an idle AMD EPYC (Zen 3, 2 cores: an empty job 0.27
+// us, a kick over 4000 particles 3.2 us on one thread and 1.8 us in two chunks;
+// bench/parallel_overhead), against chunks of 8192 items (split from 16384 on 2 threads, the
+// default before stop 49), loop time on 2 threads: the 4000-sphere fluid 0.64x, the default
+// input 0.84-0.88x, LJ 4000 0.95x, the rigid melt 0.99-1.01x (bench/README.md, stops 44 and
+// 49). Where a job costs microseconds (OpenMP's parallel regions on the machine of stops
+// 28-42: 3.2 us) chunks of 512 made the 4000-sphere fluid 1.5x slower than one thread:
+// [run] split_small_loops = false keeps the larger chunks (kUnsplitCheapChunk).
+// The chunks, like every split here, depend on n and the thread count alone; they change the
+// sums' grouping on several threads, so a run's split is its input's.
+std::size_t cheap_chunk_minimum();
 // For tests, which run the split paths of these loops on small systems, and for
 // [run] split_small_loops.
-void set_cheap_loop_minimum(std::size_t n);
-inline constexpr std::size_t kSmallLoopSplit = 1024;
-inline constexpr std::size_t kSmallClusterSplit = 512;
+void set_cheap_chunk_minimum(std::size_t n);
+inline constexpr std::size_t kUnsplitCheapChunk = 8192;
+inline constexpr std::size_t kUnsplitClusterChunk = 1024;
 
-// Chunks for a loop over n cheap items: the thread count, or 1 below cheap_loop_minimum().
+// Chunks of at least `minimum` of n items each, one per thread at most.
+inline int chunks_of_at_least(std::size_t n, std::size_t minimum) {
+  const std::size_t fit = n / std::max<std::size_t>(minimum, 1);
+  return static_cast<int>(
+      std::clamp<std::size_t>(fit, 1, static_cast<std::size_t>(thread_count())));
+}
+
+// Chunks for a loop over n cheap items: one per cheap_chunk_minimum() items, one per thread at
+// most.
 inline int chunks_for_cheap(std::size_t n) {
-  return n < cheap_loop_minimum() ? 1 : thread_count();
+  return chunks_of_at_least(n, cheap_chunk_minimum());
 }
 
 // Chunks for a loop over `rows` rows (candidate contacts) that read the data of particles
@@ -62,23 +70,24 @@ inline int chunks_for_rows_of(std::size_t particles, std::size_t rows) {
   return chunks_for_cheap(particles) > 1 ? chunks_for(rows) : 1;
 }
 
-// Below this many rows (2048 unless set) a cluster loop (rod chains' solves and projections,
-// by cluster) runs on the calling thread alone. Split from 1024 rows, the default input (60
-// chains of 20 beads: 1140 rods) ran slower on 2 threads than on 1 (loop 1.21 -> 1.40 s per
-// 3000 steps: its prediction 0.100 -> 0.182 s, position update 0.023 -> 0.058, momentum
-// update 0.037 -> 0.067): each thread's share of a call's solves is a few microseconds, less
-// than the region and the other core's lines cost. The rigid melt's 3900 rods still gain
-// (position update 1.19x).
-std::size_t cluster_work_minimum();
+// A cluster loop (rod chains' solves and projections, by cluster) gives each chunk at least
+// this many rows (256 unless set). The default input (30 chains of 40 beads, 1170 rods) on 2
+// threads, its cluster loops split with its cheap loops against neither split: loop 0.88x
+// (stop 49). Split alone, with its particle passes on one thread, they cost more than they
+// saved (loop 1.01x: the position update 1.34x slower, each thread's solves reading lines the
+// other core wrote; at stop 39, with OpenMP's regions, the loop 1.16x slower).
+std::size_t cluster_chunk_minimum();
 // For tests, which run the split paths of these loops on small systems, and for
 // [run] split_small_loops.
-void set_cluster_work_minimum(std::size_t n);
+void set_cluster_chunk_minimum(std::size_t n);
 
 // Chunks for a loop over `items` items of uneven size holding `work` units in all (a
-// cluster loop: its rows): one where the work is short or there is a single item.
+// cluster loop: its rows): one per cluster_chunk_minimum() units, one per thread and one per
+// item at most.
 inline int chunks_for_work(std::size_t items, std::size_t work) {
-  if (items < 2 || work < cluster_work_minimum()) return 1;
-  return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(thread_count()), items));
+  return std::min(chunks_of_at_least(work, cluster_chunk_minimum()),
+                  static_cast<int>(std::max<std::size_t>(
+                      std::min<std::size_t>(items, static_cast<std::size_t>(thread_count())), 1)));
 }
 
 struct IndexRange {

@@ -24,11 +24,11 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
   // Rebuilds are rare, and every non-finite position triggers one (needs_rebuild): the
   // one place a blown-up run is caught on the step it happens. Each chunk checks its atoms
-  // and wraps them (a wrap is a few divisions' worth: substantial items, also below
-  // cheap_loop_minimum()) in one pass; the scans that name a bad atom run only if a chunk
-  // found one. Checked first on one thread and then wrapped, the rigid melt's 4000 beads were
-  // read three times a build while the other thread waited.
-  // Nothing reads a list of zero reach: keep the first one, unwrapped.
+  // and wraps them (a wrap is a few divisions' worth: substantial items, split as the pair
+  // loop, not in chunks of cheap_chunk_minimum()) in one pass; the scans that name a bad atom run
+  // only if a chunk found one. Checked first on one thread and then wrapped, the rigid melt's 4000
+  // beads were read three times a build while the other thread waited. Nothing reads a list of zero
+  // reach: keep the first one, unwrapped.
   const bool keep_list = neighbors_.cutoff() <= 0 && neighbors_.builds() > 0;
   const int chunks = chunks_for(p.size());
   std::vector<char> usable(static_cast<std::size_t>(chunks), 1);

@@ -573,7 +573,8 @@ void NeighborList::rearrange_by_particle(const std::size_t* slot_of,
   neighbors_.resize(pairs_);
   image_codes_.resize(coded_ ? pairs_ : 0);
   // A particle's partners (some 40 on a liquid) are a substantial item: split as the scan,
-  // not from cheap_loop_minimum() on (the rigid melt's 4000 particles moved on one thread).
+  // not in chunks of cheap_chunk_minimum() (the rigid melt's 4000 particles, then split from
+  // 16384, moved on one thread).
   for_each_chunk(n, chunks_for(n), [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const std::size_t s = slot_of[i];

@@ -331,7 +331,7 @@ class PairForce final : public ForceTerm {
   // trip between the cores (about 500 ns on the 2-core machine of bench/README.md), and LJ
   // 4000's pair loop took as long on two threads as on one. Each chunk once copied every
   // position and made a whole force buffer, added up by the calling thread alone after the
-  // job where the particle passes are not split (below cheap_loop_minimum()); copying and
+  // job where the particle passes are not split (cheap_chunk_minimum()); copying and
   // adding only the touched blocks, in the job, took LJ 4000's pair phase on two threads to
   // 0.97x, the Kremer-Grest melt's (inputs/lj_chains/melt.toml) to 0.89x, the rigid melt's to
   // 0.99x, the default input's to 1.00x (bench/README.md, "Stop 47"). The chunks hold equal

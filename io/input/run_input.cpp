@@ -118,7 +118,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     if (threads < 1 || threads > 4096) run->fail("must be from 1 to 4096", "threads");
     input.threads = static_cast<int>(threads);
   }
-  input.split_small_loops = run->boolean("split_small_loops", false);
+  input.split_small_loops = run->boolean("split_small_loops", true);
   run->finish();
 
   const std::vector<OutputFile> output_files = read_output(root, input);

@@ -41,9 +41,10 @@ struct RunInput {
   double skin = 0.3;
   std::int64_t steps = 0;
   int threads = 0;  // [run] threads; 0: OpenMP's default (OMP_NUM_THREADS, else all cores)
-  // [run] split_small_loops: the per-particle passes split over the threads from 1024 items
-  // and the rod-cluster loops from 512 rows, not 16384 and 2048 (core/parallel.hpp).
-  bool split_small_loops = false;
+  // [run] split_small_loops: the per-particle passes split over the threads in chunks of at
+  // least 512 items and the rod-cluster loops in chunks of 256 rows (false: 8192 and 1024;
+  // core/parallel.hpp).
+  bool split_small_loops = true;
   ThermoOutputSpec thermo;
   TrajectorySpec trajectory;
   DumpOutputSpec dump;

@@ -7,24 +7,24 @@
 namespace deli::testing {
 
 // Sets the thread count for a scope (the tests run with OMP_NUM_THREADS=1), and splits the
-// loops of cheap items and the cluster loops from kParallelMinimum items (rows) on, as the
-// others: the systems of the tests (a few thousand particles, about a thousand rods) are below
-// the default cheap_loop_minimum() and cluster_work_minimum(), and these tests are about the
-// split paths' results.
+// loops of cheap items and the cluster loops in chunks of half kParallelMinimum items (rows),
+// so that 2 threads split them from kParallelMinimum on, as the others: these tests are about
+// the split paths' results on systems of a thousand particles or rods, whatever the default
+// cheap_chunk_minimum() and cluster_chunk_minimum().
 class ThreadCount {
  public:
   explicit ThreadCount(int n)
       : before_(thread_count()),
-        cheap_before_(cheap_loop_minimum()),
-        cluster_before_(cluster_work_minimum()) {
+        cheap_before_(cheap_chunk_minimum()),
+        cluster_before_(cluster_chunk_minimum()) {
     set_thread_count(n);
-    set_cheap_loop_minimum(kParallelMinimum);
-    set_cluster_work_minimum(kParallelMinimum);
+    set_cheap_chunk_minimum(kParallelMinimum / 2);
+    set_cluster_chunk_minimum(kParallelMinimum / 2);
   }
   ~ThreadCount() {
     set_thread_count(before_);
-    set_cheap_loop_minimum(cheap_before_);
-    set_cluster_work_minimum(cluster_before_);
+    set_cheap_chunk_minimum(cheap_before_);
+    set_cluster_chunk_minimum(cluster_before_);
   }
   ThreadCount(const ThreadCount&) = delete;
   ThreadCount& operator=(const ThreadCount&) = delete;

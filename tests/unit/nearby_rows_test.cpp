@@ -93,9 +93,9 @@ TEST(NearbyRows, RowsWithinTheReachInTheScansOrder) {
 
 // On two threads the list's scan and the screen (both cheap items) run in chunks joined in
 // chunk order: the same rows, in the same order, with the same gaps bit for bit as on one
-// thread, and those of the plain scan. Split from 1024 items, the 1200 particles' scan is cut
-// in two and each thread screens its own chunk's pairs; split from 2000, the scan is whole and
-// its pairs (several times the rows) are cut in two for the screen.
+// thread, and those of the plain scan. In chunks of at least 512 items, the 1200 particles'
+// scan is cut in two and each thread screens its own chunk's pairs; of at least 1000, the scan
+// is whole and its pairs (several times the rows) are cut in two for the screen.
 TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
 #ifndef _OPENMP
   GTEST_SKIP() << "built without OpenMP";
@@ -114,9 +114,9 @@ TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
   };
   auto collect = [&](int threads, std::size_t minimum) {
     const int before = thread_count();
-    const std::size_t cheap_before = cheap_loop_minimum();
+    const std::size_t cheap_before = cheap_chunk_minimum();
     set_thread_count(threads);
-    set_cheap_loop_minimum(minimum);
+    set_cheap_chunk_minimum(minimum);
     NearbyRows rows;
     std::vector<Collected> out(2);
     for (std::size_t pass = 0; pass < 2; ++pass) {
@@ -126,10 +126,10 @@ TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
       if (threads == 2) expect_nearby_rows(fluid, rows, at, list, true);
     }
     set_thread_count(before);
-    set_cheap_loop_minimum(cheap_before);
+    set_cheap_chunk_minimum(cheap_before);
     return out;
   };
-  for (const std::size_t minimum : {kParallelMinimum, std::size_t{2000}}) {
+  for (const std::size_t minimum : {std::size_t{512}, std::size_t{1000}}) {
     SCOPED_TRACE(minimum);
     const std::vector<Collected> one = collect(1, minimum), two = collect(2, minimum);
     for (std::size_t pass = 0; pass < 2; ++pass) {

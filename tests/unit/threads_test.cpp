@@ -308,6 +308,39 @@ TEST(Threads, OrderedSumOnOneChunkIsTheSerialSum) {
   EXPECT_EQ(ordered_sum<double>(terms.size(), [&](std::size_t i) { return terms[i]; }), serial);
 }
 
+// The splits' rule (core/parallel.hpp): a cheap loop's chunks hold at least
+// cheap_chunk_minimum() items (512 by default), a cluster loop's at least
+// cluster_chunk_minimum() rows (256) and one cluster, one chunk a thread at most; with
+// [run] split_small_loops = false, 8192 and 1024 (2 threads then split from 16384 items and
+// 2048 rows, deli's splits until stop 49).
+TEST(Threads, ChunksHoldTheirMinimumAndAtMostOneAThread) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const int threads_before = thread_count();
+  set_thread_count(8);
+  EXPECT_EQ(cheap_chunk_minimum(), 512u);
+  EXPECT_EQ(cluster_chunk_minimum(), 256u);
+  EXPECT_EQ(chunks_for_cheap(0), 1);
+  EXPECT_EQ(chunks_for_cheap(1023), 1);
+  EXPECT_EQ(chunks_for_cheap(1024), 2);
+  EXPECT_EQ(chunks_for_cheap(4000), 7);  // the 4000-sphere fluid: 571 items a chunk
+  EXPECT_EQ(chunks_for_cheap(4096), 8);
+  EXPECT_EQ(chunks_for_cheap(1000000), 8);
+  EXPECT_EQ(chunks_for_work(30, 1170), 4);  // the default input's 30 chains, 1170 rods
+  EXPECT_EQ(chunks_for_work(3, 100000), 3);
+  EXPECT_EQ(chunks_for_work(1, 100000), 1);
+  EXPECT_EQ(chunks_for_work(100, 511), 1);
+  set_cheap_chunk_minimum(kUnsplitCheapChunk);
+  set_cluster_chunk_minimum(kUnsplitClusterChunk);
+  set_thread_count(2);
+  EXPECT_EQ(chunks_for_cheap(16383), 1);
+  EXPECT_EQ(chunks_for_cheap(16384), 2);
+  EXPECT_EQ(chunks_for_work(100, 2047), 1);
+  EXPECT_EQ(chunks_for_work(100, 2048), 2);
+  set_cheap_chunk_minimum(512);
+  set_cluster_chunk_minimum(256);
+  set_thread_count(threads_before);
+}
+
 TEST(Threads, AChunksExceptionIsTheOneASerialLoopMeetsFirst) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
   const ThreadCount threads(2);
@@ -409,12 +442,27 @@ TEST(ThreadsGvi, RigidChainsOnTwoThreadsAreTheOneThreadTrajectory) {
   const RunInput input = rigid_chains();
   {
     const ThreadCount two(2);  // the cluster loops' split, as run_gvi's runs make it
-    ASSERT_GE(input.constraints.equalities.size(), cluster_work_minimum());
+    ASSERT_EQ(chunks_for_work(40, input.constraints.equalities.size()), 2);
   }
   const GviTrajectory one = run_gvi(input, 1, kGviSteps), two = run_gvi(input, 2, kGviSteps),
                       again = run_gvi(input, 2, kGviSteps);
   expect_same_trajectory(two, again);
   expect_same_trajectory(one, two);
+  EXPECT_NE(one.constraint_virial, 0.0);
+}
+
+// On 4 threads the 1200 particles' passes and the 1160 rods' cluster loops run in 2 chunks
+// (of at least 512 items and rows: ThreadCount), fewer than the threads: the same trajectory.
+TEST(ThreadsGvi, RigidChainsOnFourThreadsInTwoChunksAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const RunInput input = rigid_chains();
+  {
+    const ThreadCount four(4);
+    ASSERT_EQ(chunks_for_cheap(input.system.particles.size()), 2);
+    ASSERT_EQ(chunks_for_work(40, input.constraints.equalities.size()), 2);
+  }
+  const GviTrajectory one = run_gvi(input, 1, kGviSteps), four = run_gvi(input, 4, kGviSteps);
+  expect_same_trajectory(one, four);
   EXPECT_NE(one.constraint_virial, 0.0);
 }
 
