@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "core/parallel.hpp"
+
 namespace deli {
 
 double ConstraintSet::contact_reach(const Particles& particles) const {
@@ -134,12 +136,53 @@ std::vector<Constraint> ConstraintSet::active_among(const std::vector<Constraint
   return active;
 }
 
+// for_each_inequality's rows, in chunks of particles (a pair with the particle that lists it,
+// a wall's row with its particle), each bounded by its own running minimum: every gap below
+// the bound is evaluated exactly, so the minimum is the serial loop's on any number of
+// threads. A pair is looked up among the bonded pairs only when its gap is below the bound
+// (a few times a chunk, not at each of the list's pairs). Taken at every thermo sample; on
+// one thread, the default input's 30000 listed pairs took 2 % of its two-thread loop.
 double ConstraintSet::minimum_gap(const Particles& particles, const Vec3* x,
                                   const NeighborList& list, const Box& box) const {
-  double smallest = std::numeric_limits<double>::infinity();
-  for_each_inequality(*this, particles, list, [&](const Constraint& c) {
-    smallest = std::min(smallest, gap_unless_beyond(c, x, box, smallest));
+  constexpr double none = std::numeric_limits<double>::infinity();
+  const std::size_t n = particles.size();
+  const int chunks = chunks_for(n);
+  std::vector<double> chunk_smallest(static_cast<std::size_t>(chunks), none);
+  const NeighborList::PartnerRanges ranges =
+      hard_spheres ? list.partner_ranges() : NeighborList::PartnerRanges{};
+  for_each_chunk(n, chunks, [&](int chunk, std::size_t begin, std::size_t end) {
+    double smallest = none;
+    if (hard_spheres) {
+      if (chunk == 0) {
+        for (const auto& [a, b] : always_checked_pairs) {
+          smallest =
+              std::min(smallest, gap_unless_beyond(sphere_pair(a, b, particles), x, box, smallest));
+        }
+      }
+      const std::int32_t* neighbors = ranges.neighbors;
+      for (std::size_t i = begin; i < std::min(end, ranges.particles); ++i) {
+        for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
+          const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
+          const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
+          const double gap = gap_unless_beyond(sphere_pair(a, b, particles), x, box, smallest);
+          if (gap < smallest &&
+              !std::binary_search(unconstrained_pairs.begin(), unconstrained_pairs.end(),
+                                  std::array<std::int32_t, 2>{a, b})) {
+            smallest = gap;
+          }
+        }
+      }
+    }
+    for (const Wall& wall : walls) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const Constraint c = wall_row(wall, static_cast<std::int32_t>(i), particles.radius[i]);
+        smallest = std::min(smallest, gap_unless_beyond(c, x, box, smallest));
+      }
+    }
+    chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
   });
+  double smallest = none;
+  for (const double s : chunk_smallest) smallest = std::min(smallest, s);
   return smallest;
 }
 

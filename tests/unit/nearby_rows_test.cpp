@@ -5,11 +5,16 @@
 // scan's order; gaps at q evaluate()'s wherever they may be within `exact_below`. Hard
 // spheres of diameter 1 in a periodic box with a plane wall, collected at the start
 // positions and again after every particle moved (the short list then serves unchanged).
+// The same fluid's smallest gap (ConstraintSet::minimum_gap) against its definition.
 #include "constraints/nearby_rows.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <limits>
 #include <random>
+#include <string>
 
 #include "core/parallel.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -142,6 +147,74 @@ TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
       }
     }
   }
+}
+
+// ConstraintSet::minimum_gap (the thermo's min_gap) is the smallest gap over every pair not
+// bonded and every wall row, by definition (every pair of the 1200 spheres at the minimum
+// image, evaluate()'s gaps): exactly, on one thread and on two (chunks of particles, each
+// with its own running bound). With the walls taken away and the last two spheres 0.01 apart
+// (the closest pair, in the second chunk), then with that pair among the bonded pairs (the
+// next one is then the smallest), then with the last sphere on the wall.
+TEST(ConstraintSetMinimumGap, TheSmallestOverEveryUnbondedPairAndWallOnAnyThreadCount) {
+  NearbyRowsFluid fluid = nearby_rows_fluid(1200, 9);
+  const std::size_t n = fluid.particles.size();
+  const Vec3* x = fluid.particles.position.data();
+  struct Smallest {
+    double gap = std::numeric_limits<double>::infinity();
+    Constraint row;
+  };
+  auto by_definition = [&] {
+    Smallest out;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = i + 1; j < n; ++j) {
+        const std::array<std::int32_t, 2> pair{static_cast<std::int32_t>(i),
+                                               static_cast<std::int32_t>(j)};
+        const std::vector<std::array<std::int32_t, 2>>& bonded = fluid.set.unconstrained_pairs;
+        if (std::find(bonded.begin(), bonded.end(), pair) != bonded.end()) continue;
+        const Constraint c = sphere_pair(pair[0], pair[1], fluid.particles);
+        const double gap = evaluate(c, x, fluid.box).gap;
+        if (gap < out.gap) out = {gap, c};
+      }
+      for (const Wall& wall : fluid.set.walls) {
+        const Constraint c =
+            fluid.set.wall_row(wall, static_cast<std::int32_t>(i), fluid.particles.radius[i]);
+        const double gap = evaluate(c, x, fluid.box).gap;
+        if (gap < out.gap) out = {gap, c};
+      }
+    }
+    return out;
+  };
+  auto expect_minimum = [&](const Smallest& expected) {
+    NeighborList list(1.0, 0.4);
+    list.build(fluid.particles.position, fluid.box);
+    const int before = thread_count();
+    for (const int threads : {1, 2}) {
+#ifndef _OPENMP
+      if (threads > 1) continue;
+#endif
+      SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+      set_thread_count(threads);
+      EXPECT_EQ(chunks_for(n), threads);
+      EXPECT_EQ(fluid.set.minimum_gap(fluid.particles, x, list, fluid.box), expected.gap);
+    }
+    set_thread_count(before);
+  };
+  const std::vector<Wall> walls = fluid.set.walls;
+  fluid.set.walls.clear();
+  fluid.particles.position[n - 2] = fluid.particles.position[n - 1] + Vec3{0.01, 0, 0};
+  const Smallest closest = by_definition();
+  ASSERT_EQ(closest.row.kind, ConstraintKind::sphere_pair);
+  ASSERT_EQ(closest.row.i, static_cast<std::int32_t>(n - 2));
+  expect_minimum(closest);
+  fluid.set.unconstrained_pairs.push_back({closest.row.i, closest.row.j});
+  const Smallest next = by_definition();
+  ASSERT_GT(next.gap, closest.gap);
+  expect_minimum(next);
+  fluid.set.walls = walls;
+  fluid.particles.position[n - 1].z = 0.01;  // the plane at z 0.5: gap -0.99
+  const Smallest on_wall = by_definition();
+  ASSERT_EQ(on_wall.row.kind, ConstraintKind::plane);
+  expect_minimum(on_wall);
 }
 
 }  // namespace
