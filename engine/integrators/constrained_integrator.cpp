@@ -667,7 +667,16 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
   if (lone_rows_closed && first_inequality == 0) {
     return reflect_inequalities(system, rows, x, p, after);
   }
-  const std::vector<Cluster> clusters = find_clusters(rows, P.size());
+  // Only the clusters holding an inequality are reflected: with the equality rows first (the
+  // rods, prepared), found from the inequality rows alone. Clustering every row took the
+  // default input's 1170 rods through find_clusters at each call (2 % of its loop on one
+  // thread, 3.5 % of the calling thread's on two, serial).
+  const bool prepared_first = first_inequality > 0 &&
+                              first_inequality == constraints_.equalities.size() &&
+                              equality_clusters_.prepared_for(P.size());
+  const std::vector<Cluster> clusters =
+      prepared_first ? equality_clusters_.clusters_holding(rows, first_inequality)
+                     : find_clusters(rows, P.size());
   std::vector<bool> holds_inequality(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     holds_inequality[c] = clusters[c].rows.back() >= static_cast<std::int32_t>(first_inequality);

@@ -1,13 +1,18 @@
 #include "solvers/prepared_clusters.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 namespace deli {
 
 void EqualityClusters::prepare(const std::vector<Constraint>& equalities,
                                const std::vector<double>& mass) {
   particles_ = mass.size();
+  rows_ = equalities.size();
   held_particles_ = 0;
   clusters_.clear();
   cluster_from_first_particle_.assign(mass.size(), -1);
+  cluster_of_particle_.assign(mass.size(), -1);
   for (Cluster& cluster : find_clusters(equalities, mass.size())) {
     PreparedCluster& prepared = clusters_.emplace_back();
     prepared.local = localize(cluster, equalities, mass);
@@ -21,7 +26,52 @@ void EqualityClusters::prepare(const std::vector<Constraint>& equalities,
       clusters_[k].chain = RodChain::make(clusters_[k].local);
     cluster_from_first_particle_[clusters_[k].cluster.particles.front()] =
         static_cast<std::int32_t>(k);
+    for (const std::int32_t p : clusters_[k].cluster.particles) {
+      cluster_of_particle_[p] = static_cast<std::int32_t>(k);
+    }
   }
+}
+
+// A cluster's particles are ascending: its first is its smallest, and stands for it. The
+// components of the other rows over the stand-ins are the clusters sought, and a component's
+// smallest stand-in is its cluster's smallest particle, so find_clusters orders them as it
+// orders the whole rows' clusters.
+std::vector<Cluster> EqualityClusters::clusters_holding(const std::vector<Constraint>& rows,
+                                                        std::size_t first) const {
+  if (first != rows_) {
+    throw std::logic_error("clusters_holding: the rows do not start with the prepared equalities");
+  }
+  auto stand_in = [&](std::int32_t p) {
+    const std::int32_t k = cluster_of_particle_[static_cast<std::size_t>(p)];
+    return k < 0 ? p : clusters_[static_cast<std::size_t>(k)].cluster.particles.front();
+  };
+  std::vector<Constraint> others(rows.begin() + static_cast<std::ptrdiff_t>(first), rows.end());
+  for (Constraint& c : others) {
+    c.i = stand_in(c.i);
+    if (c.j >= 0) c.j = stand_in(c.j);
+  }
+  std::vector<Cluster> found = find_clusters(others, particles_);
+  for (Cluster& cluster : found) {
+    std::vector<std::int32_t> particles, held_rows;
+    for (const std::int32_t s : cluster.particles) {
+      const std::int32_t k = cluster_from_first_particle_[static_cast<std::size_t>(s)];
+      if (k < 0) {
+        particles.push_back(s);
+        continue;
+      }
+      const Cluster& held = clusters_[static_cast<std::size_t>(k)].cluster;
+      particles.insert(particles.end(), held.particles.begin(), held.particles.end());
+      held_rows.insert(held_rows.end(), held.rows.begin(), held.rows.end());
+    }
+    std::sort(particles.begin(), particles.end());
+    std::sort(held_rows.begin(), held_rows.end());
+    for (const std::int32_t r : cluster.rows) {
+      held_rows.push_back(static_cast<std::int32_t>(first) + r);
+    }
+    cluster.particles = std::move(particles);
+    cluster.rows = std::move(held_rows);
+  }
+  return found;
 }
 
 const PreparedCluster* EqualityClusters::find(const Cluster& cluster,

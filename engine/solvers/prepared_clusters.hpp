@@ -32,10 +32,19 @@ class EqualityClusters {
   // The prepared cluster with the same particles and, row for row, the same constraints as
   // `cluster` (rows indexing `rows`); null if none.
   const PreparedCluster* find(const Cluster& cluster, const std::vector<Constraint>& rows) const;
+  // The clusters of `rows` (the equality rows prepare() was given, then other rows from index
+  // `first` = their count on) that hold one of the others: find_clusters(rows) without the
+  // clusters of equality rows alone, the same particles and rows in the same order. Found
+  // from the other rows alone, each of their particles standing for its equality cluster
+  // (the reflections' few contacts, not the 1170 rods of the default input, clustered).
+  std::vector<Cluster> clusters_holding(const std::vector<Constraint>& rows,
+                                        std::size_t first) const;
 
  private:
   std::vector<PreparedCluster> clusters_;
   std::vector<std::int32_t> cluster_from_first_particle_;  // -1: no cluster starts there
+  std::vector<std::int32_t> cluster_of_particle_;          // -1: in no cluster
+  std::size_t rows_ = 0;                                   // equality rows prepared
   std::size_t particles_ = static_cast<std::size_t>(-1);
   std::size_t held_particles_ = 0;  // in the clusters (disjoint)
 };

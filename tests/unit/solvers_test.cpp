@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numeric>
+#include <random>
+#include <stdexcept>
 
 #include "constraints/clusters.hpp"
 #include "constraints/constraint_set.hpp"
@@ -372,6 +375,69 @@ TEST(Clusters, MergeAndSplit) {
   // The second chain with the wall is not the prepared one (an extra row).
   EXPECT_EQ(prepared.find(two[1], apart), nullptr);
   EXPECT_EQ(prepared.find(two[0], apart), &prepared.all()[0]);
+}
+
+// EqualityClusters::clusters_holding against its definition, find_clusters of every row with
+// the clusters of rods alone dropped: the same clusters, particles and rows, in the same order.
+// 30 rod chains of 2-9 beads among 200 particles (the rest in no chain; in every other trial
+// the particles shuffled, so that chains interleave), with random pair and wall rows after
+// the rods: pairs within a chain, between chains, between free particles, and several rows on
+// one particle.
+TEST(Clusters, HoldingOtherRowsAreFindClustersWithoutTheRodsAlone) {
+  const std::size_t n = 200;
+  std::mt19937_64 rng(12);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<Constraint> rods;
+    std::uniform_int_distribution<int> length(2, 9);
+    std::int32_t next = 0;
+    for (int chain = 0; chain < 30 && next < 190; ++chain) {
+      next += length(rng) % 3;  // some particles between chains are in none
+      const std::int32_t beads = length(rng);
+      for (std::int32_t b = 1; b < beads && next + b < static_cast<std::int32_t>(n); ++b) {
+        rods.push_back(rod(next + b - 1, next + b, 1.0));
+      }
+      next += beads;
+    }
+    // Chains over particles in no order (as a data file may number them).
+    std::vector<std::int32_t> label(n);
+    std::iota(label.begin(), label.end(), 0);
+    if (trial % 2) std::shuffle(label.begin(), label.end(), rng);
+    for (Constraint& r : rods) r.i = label[r.i], r.j = label[r.j];
+    EqualityClusters prepared;
+    prepared.prepare(rods, std::vector<double>(n, 1.0));
+    std::vector<Constraint> rows = rods;
+    std::uniform_int_distribution<std::int32_t> particle(0, static_cast<std::int32_t>(n) - 1);
+    std::uniform_int_distribution<int> others(0, 12);
+    for (int k = others(rng); k > 0; --k) {
+      if (k % 4 == 0) {
+        rows.push_back(floor_at(particle(rng), 0.0));
+        continue;
+      }
+      Constraint contact;
+      contact.kind = ConstraintKind::sphere_pair;
+      contact.i = particle(rng);
+      contact.j = k % 5 == 0 ? contact.i + 2 : particle(rng);  // often within a chain
+      if (contact.j >= static_cast<std::int32_t>(n) || contact.j == contact.i) continue;
+      contact.length = 1.0;
+      rows.push_back(contact);
+    }
+    std::vector<Cluster> expected;
+    for (Cluster& cluster : find_clusters(rows, n)) {
+      if (cluster.rows.back() >= static_cast<std::int32_t>(rods.size())) {
+        expected.push_back(std::move(cluster));
+      }
+    }
+    const std::vector<Cluster> holding = prepared.clusters_holding(rows, rods.size());
+    ASSERT_EQ(holding.size(), expected.size()) << "trial " << trial;
+    for (std::size_t c = 0; c < expected.size(); ++c) {
+      EXPECT_EQ(holding[c].particles, expected[c].particles)
+          << "trial " << trial << " cluster " << c;
+      EXPECT_EQ(holding[c].rows, expected[c].rows) << "trial " << trial << " cluster " << c;
+    }
+  }
+  EqualityClusters prepared;
+  prepared.prepare({rod(0, 1, 1.0)}, std::vector<double>(3, 1.0));
+  EXPECT_THROW(prepared.clusters_holding({rod(0, 1, 1.0), floor_at(2, 0.0)}, 0), std::logic_error);
 }
 
 }  // namespace
