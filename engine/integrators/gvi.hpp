@@ -137,6 +137,7 @@ class Gvi final : public ConstrainedIntegrator {
   double reflect_and_predict(System& system, const std::vector<Constraint>& rows);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   void solve_held_positions(System& system);
+  const std::vector<Constraint>& equalities_and(const std::vector<Constraint>& others);
   // Whether the step's per-particle passes go with the cluster solves: on several threads,
   // Verlet, every particle in a cluster of rods (strings), no contact rows and the free
   // predictor (a melt of rigid chains).

@@ -48,7 +48,9 @@ struct GviWorkspace {
   std::vector<char> candidate_active;  // per candidate row: in the active set
   std::vector<char> candidate_passed;  // per candidate row: a threaded test's result
   std::vector<std::pair<std::uint64_t, std::int32_t>> row_keys;  // mark_contained's scratch
-  std::vector<Constraint> rows;  // equality rows followed by some inequality rows
+  // The equality rows followed by some inequality rows (Gvi::equalities_and writes it).
+  std::vector<Constraint> rows;
+  bool rows_start_with_equalities = false;
 
   // Position update: half kick, impulses, end positions; rows held as complementarity rows
   // and those the feasibility guard landed.
