@@ -50,6 +50,20 @@ gvi_passes::EndPositions end_positions_pass(GviWorkspace& ws, const Particles& P
   return pass;
 }
 
+// The start pass over the workspace from the particles and the forces f: q = position and the
+// momenta v m, and what the caller asks of the rest (half kick, free step, prediction...).
+gvi_passes::StepStart step_start_pass(GviWorkspace& ws, const Particles& P, double h,
+                                      const std::vector<Vec3>& f) {
+  gvi_passes::StepStart pass;
+  pass.h = h;
+  pass.position = numbers(P.position);
+  pass.velocity = numbers(P.velocity);
+  pass.mass = P.mass.data();
+  pass.force = numbers(f);
+  pass.q = numbers(ws.q);
+  return pass;
+}
+
 // Momentum p after a half kick by force f, p + h/2 f, and the free step h M^-1 of such a
 // momentum, for the passes over some particles (a reflection's prediction, the midpoint's).
 // The passes over all of them make the same numbers in vectors (gvi_passes::step_start and
@@ -179,8 +193,9 @@ void Gvi::start_step(System& system) {
   // impact-time step.
   const bool keep_start_momenta = (feasibility_ == Feasibility::restore && has_inequalities()) ||
                                   contact_ == ContactTreatment::impact_time;
-  bool p_start_made = false;  // ws_.p_start holds ws_.p
-  bool p_made = true;         // ws_.p holds the momenta
+  bool p_start_made = false;    // ws_.p_start holds ws_.p
+  bool p_made = true;           // ws_.p holds the momenta
+  bool prediction_read = true;  // the step reads the prediction and the list before x
   ws_.half_kicked = false;
   if (steps_by_cluster(P)) {
     // Nothing in the step reads the list or the momenta before the forces at x: the position
@@ -192,6 +207,7 @@ void Gvi::start_step(System& system) {
     prediction_known = true;
     q_copied = true;
     p_made = false;
+    prediction_read = false;
   } else if (lagrangian_ == Lagrangian::verlet) {
     const double h = dt_;
     const std::vector<Vec3>& f = engine_.force();
@@ -224,15 +240,9 @@ void Gvi::start_step(System& system) {
     beyond.assign(static_cast<std::size_t>(chunks), 0);
     // The numbers of half_kicked and free_step (free_displacement's d: predict() makes it
     // again where it reads it), in vectors.
-    gvi_passes::StepStart pass;
-    pass.h = h;
-    pass.position = numbers(P.position);
-    pass.velocity = numbers(P.velocity);
-    pass.mass = P.mass.data();
-    pass.force = numbers(f);
+    gvi_passes::StepStart pass = step_start_pass(ws_, P, h, f);
     pass.at_build = listed && keep ? numbers(list.positions_at_build()) : nullptr;
     pass.list_limit2 = list.valid_distance2();
-    pass.q = numbers(ws_.q);
     pass.p = kick ? nullptr : numbers(ws_.p);
     // Made in this pass, each thread on its own particles: copied after it by the calling
     // thread, the other threads' momenta crossed to its core and back every step.
@@ -249,6 +259,7 @@ void Gvi::start_step(System& system) {
     // A rebuild below wraps the positions, which leaves these numbers as they are.
     ws_.half_kicked = kick;
     p_made = !kick;
+    prediction_read = keep;
     prediction_covered =
         listed && std::all_of(beyond.begin(), beyond.end(), [](std::size_t k) { return k == 0; });
     // neighbors_cover's answer for the prediction: its test, made above (a list not built for
@@ -265,12 +276,16 @@ void Gvi::start_step(System& system) {
       (prediction_known || !engine_.neighbors_cover(ws_.predicted))) {
     engine_.ensure_neighbors(system, true);  // may wrap P.position
     q_copied = false;
-    if (!p_made) parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
-    predict(system, ws_.p, ws_.predicted, false);
-    if (!engine_.neighbors_cover(ws_.predicted)) {
-      throw SimulationError("step " + std::to_string(system.step + 1) +
-                            ": a particle would move more than half the neighbour skin in one "
-                            "step; increase [neighbor] skin or reduce the timestep");
+    // Where nothing reads the prediction (rods alone: the list built for other particles),
+    // the test at x follows.
+    if (prediction_read) {
+      if (!p_made) parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
+      predict(system, ws_.p, ws_.predicted, false);
+      if (!engine_.neighbors_cover(ws_.predicted)) {
+        throw SimulationError("step " + std::to_string(system.step + 1) +
+                              ": a particle would move more than half the neighbour skin in one "
+                              "step; increase [neighbor] skin or reduce the timestep");
+      }
     }
   }
   if (!q_copied) copy_in_chunks(P.position, ws_.q);
@@ -727,13 +742,7 @@ void Gvi::held_positions_by_cluster(System& system) {
   ClusterPasses passes;
   // q, the momenta's half kick and the free step, made from the velocities (start_step made
   // none of them).
-  gvi_passes::StepStart start;
-  start.h = h;
-  start.position = numbers(P.position);
-  start.velocity = numbers(P.velocity);
-  start.mass = P.mass.data();
-  start.force = numbers(f);
-  start.q = numbers(ws_.q);
+  gvi_passes::StepStart start = step_start_pass(ws_, P, h, f);
   start.half = numbers(ws_.half);
   start.free = numbers(ws_.free);
   passes.before = [&](int, const ParticleRun& run) {
