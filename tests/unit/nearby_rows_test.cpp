@@ -18,6 +18,7 @@
 
 #include "core/parallel.hpp"
 #include "neighbor/neighbor_list.hpp"
+#include "support/thread_count.hpp"
 
 namespace deli {
 namespace {
