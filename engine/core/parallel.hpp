@@ -85,9 +85,8 @@ void set_cluster_chunk_minimum(std::size_t n);
 // cluster loop: its rows): one per cluster_chunk_minimum() units, one per thread and one per
 // item at most.
 inline int chunks_for_work(std::size_t items, std::size_t work) {
-  return std::min(chunks_of_at_least(work, cluster_chunk_minimum()),
-                  static_cast<int>(std::max<std::size_t>(
-                      std::min<std::size_t>(items, static_cast<std::size_t>(thread_count())), 1)));
+  const int by_work = chunks_of_at_least(work, cluster_chunk_minimum());
+  return items < static_cast<std::size_t>(by_work) ? std::max(static_cast<int>(items), 1) : by_work;
 }
 
 struct IndexRange {

@@ -11,7 +11,6 @@ void EqualityClusters::prepare(const std::vector<Constraint>& equalities,
   rows_ = equalities.size();
   held_particles_ = 0;
   clusters_.clear();
-  cluster_from_first_particle_.assign(mass.size(), -1);
   cluster_of_particle_.assign(mass.size(), -1);
   for (Cluster& cluster : find_clusters(equalities, mass.size())) {
     PreparedCluster& prepared = clusters_.emplace_back();
@@ -24,8 +23,6 @@ void EqualityClusters::prepare(const std::vector<Constraint>& equalities,
     clusters_[k].structure = std::make_unique<ClusterRows>(clusters_[k].local);
     if (clusters_[k].structure->tridiagonal())
       clusters_[k].chain = RodChain::make(clusters_[k].local);
-    cluster_from_first_particle_[clusters_[k].cluster.particles.front()] =
-        static_cast<std::int32_t>(k);
     for (const std::int32_t p : clusters_[k].cluster.particles) {
       cluster_of_particle_[p] = static_cast<std::int32_t>(k);
     }
@@ -54,7 +51,8 @@ std::vector<Cluster> EqualityClusters::clusters_holding(const std::vector<Constr
   for (Cluster& cluster : found) {
     std::vector<std::int32_t> particles, held_rows;
     for (const std::int32_t s : cluster.particles) {
-      const std::int32_t k = cluster_from_first_particle_[static_cast<std::size_t>(s)];
+      // A stand-in in a cluster is that cluster's first particle.
+      const std::int32_t k = cluster_of_particle_[static_cast<std::size_t>(s)];
       if (k < 0) {
         particles.push_back(s);
         continue;
@@ -77,8 +75,8 @@ std::vector<Cluster> EqualityClusters::clusters_holding(const std::vector<Constr
 const PreparedCluster* EqualityClusters::find(const Cluster& cluster,
                                               const std::vector<Constraint>& rows) const {
   const std::int32_t first = cluster.particles.front();
-  if (static_cast<std::size_t>(first) >= cluster_from_first_particle_.size()) return nullptr;
-  const std::int32_t k = cluster_from_first_particle_[first];
+  if (static_cast<std::size_t>(first) >= cluster_of_particle_.size()) return nullptr;
+  const std::int32_t k = cluster_of_particle_[first];
   if (k < 0) return nullptr;
   const PreparedCluster& prepared = clusters_[k];
   if (prepared.cluster.particles != cluster.particles ||

@@ -42,9 +42,8 @@ class EqualityClusters {
 
  private:
   std::vector<PreparedCluster> clusters_;
-  std::vector<std::int32_t> cluster_from_first_particle_;  // -1: no cluster starts there
-  std::vector<std::int32_t> cluster_of_particle_;          // -1: in no cluster
-  std::size_t rows_ = 0;                                   // equality rows prepared
+  std::vector<std::int32_t> cluster_of_particle_;  // -1: in no cluster
+  std::size_t rows_ = 0;                           // equality rows prepared
   std::size_t particles_ = static_cast<std::size_t>(-1);
   std::size_t held_particles_ = 0;  // in the clusters (disjoint)
 };
