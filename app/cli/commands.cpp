@@ -141,6 +141,12 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
   out.print("%s\n", input.degrees_of_freedom.describe().c_str());
   out.print("%d thread%s%s\n", thread_count(), thread_count() == 1 ? "" : "s",
             !input.split_small_loops && thread_count() > 1 ? " (small loops not split)" : "");
+  if (thread_count() > cpus_available()) {
+    out.print(
+        "note: %d threads on %d CPU%s this process may use: waiting threads sleep or yield "
+        "rather than spin; --threads %d is likely faster\n",
+        thread_count(), cpus_available(), cpus_available() == 1 ? "" : "s", cpus_available());
+  }
   if (input.thermostat) {
     const ThermostatSettings& t = *input.thermostat;
     out.print("thermostat %s: T %g, damping %g, seed %llu%s\n",

@@ -39,6 +39,16 @@ void EmptyRegion(benchmark::State& state) {
 }
 BENCHMARK(EmptyRegion)->UseRealTime();
 
+// An empty job of two threads on a team grown to four (the team of a larger machine running a
+// loop of two chunks: the default input's particle passes on more than two cores), against
+// EmptyRegion's team of two: whether the workers a job does not run on cost it anything.
+void EmptyJobOfTwoOnATeamOfFour(benchmark::State& state) {
+  auto nothing = [](int t, int) { benchmark::DoNotOptimize(t); };
+  run_on_team(4, nothing);
+  for (auto _ : state) run_on_team(2, nothing);
+}
+BENCHMARK(EmptyJobOfTwoOnATeamOfFour)->UseRealTime();
+
 // The same empty loop as an OpenMP parallel region, as deli's loops ran before they ran on
 // their own team (core/thread_team.hpp): libgomp ends each of its two barriers with a futex
 // system call.

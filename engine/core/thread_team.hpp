@@ -12,8 +12,10 @@ namespace deli {
 using TeamJob = void (*)(void* context, int thread, int threads);
 
 // Runs job(context, t, threads) for t = 0..threads-1, t = 0 on the calling thread, and
-// returns once every one has returned. The job must not throw. Called from within a job (or
-// with threads <= 1), it runs job(context, 0, 1) on the calling thread alone.
+// returns once every one has returned. Only the workers 1..threads-1 are handed the job: a
+// loop of two chunks on a team grown to sixteen threads leaves fourteen waiting, asleep after
+// a while, rather than waking each to acknowledge it. The job must not throw. Called from within a
+// job (or with threads <= 1), it runs job(context, 0, 1) on the calling thread alone.
 void run_on_team(int threads, TeamJob job, void* context);
 
 // Within a job: returns once every thread of the job has called it (spinning). Outside one,
@@ -22,6 +24,10 @@ void team_barrier();
 
 // The calling thread's number within the running job (0 outside one).
 int team_thread();
+
+// The CPUs this process may run on (its affinity mask, which OpenMP's default thread count
+// counts too), taken once. A job of more threads waits without spinning.
+int cpus_available();
 
 // run_on_team() with a callable: job(thread, threads).
 template <class Job>

@@ -107,5 +107,24 @@ TEST(ThreadsRun, SmallLoopsUnsplitRepeatAndRestartBitForBit) {
   expect_repeat_and_restart_bit_for_bit("threads_unsplit_restart", "split_small_loops = false\n");
 }
 
+// More threads than the CPUs the process may use (pinned to one by taskset): the header says
+// so, and the threads, waiting without spinning, make the trajectory of as many threads on
+// as many CPUs, bit for bit (a run's chunks depend on its thread count alone).
+TEST(ThreadsRun, MoreThreadsThanCpusSaySoAndRunTheSameTrajectory) {
+  const std::string root =
+      deli::testing::process_temp_dir() + "/threads_crowded_" + std::to_string(getpid());
+  const int steps = 20;
+  testing::run_shell("mkdir -p " + root + "/crowded " + root + "/free");
+  const testing::ShellResult crowded =
+      testing::run_shell("taskset -c 0 " DELI_BINARY " run " +
+                         melt_input(root + "/crowded", steps, "") + " --threads 2");
+  ASSERT_EQ(crowded.status, 0) << crowded.output;
+  EXPECT_NE(crowded.output.find("note: 2 threads on 1 CPU this process may use"), std::string::npos)
+      << crowded.output;
+  const std::string free_run = run_melt(root + "/free", steps, "--threads 2");
+  EXPECT_EQ(testing::file_contents(root + "/crowded/out.csv"), free_run);
+  testing::run_shell("rm -rf " + root);
+}
+
 }  // namespace
 }  // namespace deli

@@ -7,10 +7,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <thread>
 
@@ -396,6 +398,93 @@ TEST(Threads, ChunksThenFirstPassExceptionSkipsTheSecond) {
     EXPECT_STREQ(e.what(), "chunk 1");
   }
   EXPECT_EQ(second.load(), 0);
+}
+
+// Jobs of the team of every size from 1 to 4 threads in a random order, each with a barrier:
+// every thread number runs once a job, thread 0 on the calling thread and thread t on the
+// team's worker t (the same thread in every job), and after the barrier each sees what every
+// thread of its job wrote before it. A worker that took a later job's fields for an earlier
+// one's (a job handed only to the workers it runs on) would run a number twice or not at all.
+TEST(Team, JobsOfEverySizeRunEachThreadOnceOnItsOwnWorker) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  constexpr int kMost = 4;
+  std::mt19937 random(5);
+  std::vector<std::thread::id> worker(kMost);
+  for (int job = 0; job < 2000; ++job) {
+    const int threads = 1 + static_cast<int>(random() % kMost);
+    std::array<std::atomic<int>, kMost> runs{}, seen_after_barrier{};
+    std::array<std::thread::id, kMost> ran_on{};
+    std::array<std::atomic<int>, kMost> written{};
+    auto body = [&](int t, int count) {
+      // EXPECT: a thread returning before the barrier would leave the others waiting there.
+      EXPECT_EQ(count, threads);
+      EXPECT_EQ(team_thread(), t);
+      ++runs[static_cast<std::size_t>(t)];
+      ran_on[static_cast<std::size_t>(t)] = std::this_thread::get_id();
+      written[static_cast<std::size_t>(t)].store(job + 1, std::memory_order_relaxed);
+      team_barrier();
+      int all = 0;
+      for (int u = 0; u < count; ++u) {
+        all += written[static_cast<std::size_t>(u)].load(std::memory_order_relaxed) == job + 1;
+      }
+      seen_after_barrier[static_cast<std::size_t>(t)] = all;
+    };
+    run_on_team(threads, body);
+    for (int t = 0; t < kMost; ++t) {
+      const auto k = static_cast<std::size_t>(t);
+      ASSERT_EQ(runs[k].load(), t < threads ? 1 : 0) << "job " << job << " thread " << t;
+      if (t >= threads) continue;
+      ASSERT_EQ(seen_after_barrier[k].load(), threads) << "job " << job << " thread " << t;
+      if (t == 0) {
+        ASSERT_EQ(ran_on[k], std::this_thread::get_id());
+      } else if (threads > 1) {
+        if (worker[k] == std::thread::id{}) worker[k] = ran_on[k];
+        ASSERT_EQ(ran_on[k], worker[k]) << "job " << job << " thread " << t;
+      }
+    }
+  }
+}
+
+// The voluntary context switches of thread `tid` of this process so far (Linux).
+long voluntary_switches(pid_t tid) {
+  std::ifstream status("/proc/self/task/" + std::to_string(tid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("voluntary_ctxt_switches:", 0) == 0) return std::stol(line.substr(24));
+  }
+  return -1;
+}
+
+// A job of two threads on a team grown to four leaves workers 2 and 3 asleep: with waiting
+// threads asleep (OMP_WAIT_POLICY=passive, the tests' policy), a worker woken for each job
+// would switch in and out each time (100 jobs: about 100 switches each).
+TEST(Team, AJobOfTwoThreadsLeavesTheOtherWorkersAsleep) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  if (!policy || std::string(policy) != "passive") GTEST_SKIP() << "workers asleep only if passive";
+  constexpr int kMost = 4;
+  std::array<pid_t, kMost> tid{};
+  auto record = [&](int t, int) { tid[static_cast<std::size_t>(t)] = gettid(); };
+  run_on_team(kMost, record);
+  // Workers 2 and 3 asleep (they sleep at once when passive, but may not have got there yet).
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const long before2 = voluntary_switches(tid[2]), before3 = voluntary_switches(tid[3]);
+  const long before1 = voluntary_switches(tid[1]);
+  ASSERT_GE(before2, 0);
+  ASSERT_GE(before3, 0);
+  constexpr int kJobs = 100;
+  std::atomic<int> on_worker_1{0};
+  for (int job = 0; job < kJobs; ++job) {
+    auto two = [&](int t, int) { on_worker_1 += t == 1; };
+    run_on_team(2, two);
+    // Time for the workers to fall asleep between jobs, as between a run's output steps.
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  EXPECT_EQ(on_worker_1.load(), kJobs);
+  // Worker 1 did wake for them: the count sees wakes where they happen.
+  EXPECT_GE(voluntary_switches(tid[1]) - before1, kJobs / 2);
+  EXPECT_LT(voluntary_switches(tid[2]) - before2, 5);
+  EXPECT_LT(voluntary_switches(tid[3]) - before3, 5);
 }
 
 // GVI's constraint phases on several threads: clusters solved and reflected on their own,
