@@ -177,14 +177,21 @@ class PairForce final : public ForceTerm {
     struct Touching {
       std::int32_t i, j;
     };
+    // The pairs in reach, by component (so that the blocks' pass runs in vectors).
     struct InReach {
-      std::int32_t i, j;
-      Vec3 d;
-      double r2;
-      std::size_t params;
+      std::vector<std::int32_t> i, j;
+      std::vector<double> dx, dy, dz, r2;
+      std::vector<std::size_t> params;
+      // The blocks' upper triangles (the blocks are symmetric bit for bit: u_a u_b = u_b u_a).
+      std::vector<double> xx, xy, xz, yy, yz, zz;
+      void resize(std::size_t n) {
+        for (auto* v : {&i, &j}) v->resize(n);
+        for (auto* v : {&dx, &dy, &dz, &r2, &xx, &xy, &xz, &yy, &yz, &zz}) v->resize(n);
+        params.resize(n);
+      }
     };
     thread_local std::vector<Touching> touching;
-    thread_local std::vector<InReach> in_reach;
+    thread_local InReach in_reach;
     const std::vector<Vec3>& x = system.particles.position;
     const std::vector<int>& type = system.particles.type;
     std::size_t count = 0;
@@ -202,23 +209,58 @@ class PairForce final : public ForceTerm {
         }
       }
     }
-    if (in_reach.size() < count) in_reach.resize(count);
+    InReach& q = in_reach;
+    if (q.r2.size() < count) q.resize(count);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < count; ++k) {
       const auto [i, j] = touching[k];
       const Vec3 d = system.box.minimum_image(x[i] - x[j]);
       const double r2 = norm2(d);
       const auto params = static_cast<std::size_t>(type[i] * type_count_ + type[j]);
-      in_reach[kept] = {i, j, d, r2, params};
+      q.i[kept] = i, q.j[kept] = j, q.dx[kept] = d.x, q.dy[kept] = d.y, q.dz[kept] = d.z;
+      q.r2[kept] = r2, q.params[kept] = params;
       kept += !(r2 >= table_[params].cutoff2);  // as visit_hessian: a NaN r2 kept
     }
+    // pair_hessian_block's operations on each pair: its bits. Through restrict pointers: the
+    // compiler then needs no test of the arrays' overlap to run the loop in vectors.
+    auto blocks = [kept](auto params_of, const double* __restrict r2s, const double* __restrict dxs,
+                         const double* __restrict dys, const double* __restrict dzs,
+                         double* __restrict xx, double* __restrict xy, double* __restrict xz,
+                         double* __restrict yy, double* __restrict yz, double* __restrict zz) {
+      for (std::size_t k = 0; k < kept; ++k) {
+        const Params& p = params_of(k);
+        const double r2 = r2s[k];
+        double f_over_r, e;
+        Evaluator::evaluate(p, r2, f_over_r, e);
+        const double second = Evaluator::second_derivative(p, r2);
+        const double r = std::sqrt(r2);
+        const double ux = dxs[k] / r, uy = dys[k] / r, uz = dzs[k] / r;
+        const double uxx = ux * ux, uxy = ux * uy, uxz = ux * uz;
+        const double uyy = uy * uy, uyz = uy * uz, uzz = uz * uz;
+        xx[k] = second * uxx - f_over_r * (1.0 - uxx);
+        xy[k] = second * uxy - f_over_r * (0.0 - uxy);
+        xz[k] = second * uxz - f_over_r * (0.0 - uxz);
+        yy[k] = second * uyy - f_over_r * (1.0 - uyy);
+        yz[k] = second * uyz - f_over_r * (0.0 - uyz);
+        zz[k] = second * uzz - f_over_r * (1.0 - uzz);
+      }
+    };
+    auto run_blocks = [&](auto params_of) {
+      blocks(params_of, q.r2.data(), q.dx.data(), q.dy.data(), q.dz.data(), q.xx.data(),
+             q.xy.data(), q.xz.data(), q.yy.data(), q.yz.data(), q.zz.data());
+    };
+    if (type_count_ == 1) {
+      const Params one = table_[0];
+      run_blocks([one](std::size_t) -> const Params& { return one; });
+    } else {
+      const std::size_t* params = q.params.data();
+      const Params* table = table_.data();
+      run_blocks([params, table](std::size_t k) -> const Params& { return table[params[k]]; });
+    }
     for (std::size_t k = 0; k < kept; ++k) {
-      const InReach& q = in_reach[k];
-      const Params& p = table_[q.params];
-      double f_over_r, e;
-      Evaluator::evaluate(p, q.r2, f_over_r, e);
-      visit(q.i, q.j,
-            pair_hessian_block(q.d, q.r2, f_over_r, Evaluator::second_derivative(p, q.r2)));
+      Eigen::Matrix3d block;
+      block << q.xx[k], q.xy[k], q.xz[k], q.xy[k], q.yy[k], q.yz[k], q.xz[k], q.yz[k], q.zz[k];
+      visit(q.i[k], q.j[k], block);
     }
   }
   template <class Visit>
