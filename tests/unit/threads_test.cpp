@@ -22,6 +22,7 @@
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "neighbor/neighbor_list.hpp"
+#include "pair/lennard_jones.hpp"
 #include "support/scratch_files.hpp"
 #include "support/short_runs.hpp"
 #include "support/statistic.hpp"
@@ -257,9 +258,10 @@ TEST(Threads, PairCurvatureOnTwoThreadsRepeatsAndAgreesWithOneToRoundOff) {
 
 // The pair Hessian blocks of the pairs touching masked particles (shadow-H reflections' blocks),
 // made in chunks of particles on two threads: the one-thread blocks, bit for bit and in the
-// same order. Every block's pair touches a masked particle, and every listed pair within the
-// cutoff that touches one has its block (counted pair by pair from the list by particle; the
-// special bonds 0 1 1 leave no scaled pair outside the list).
+// same order. On one thread they are, bit for bit and in order, the blocks of the listed pairs
+// within the cutoff that touch a masked particle, each made here pair by pair from the list
+// by particle by pair_hessian_block (the special bonds 0 1 1 leave no scaled pair outside the
+// list): the pair style's loop runs in vectors, with the same operations on each pair.
 TEST(Threads, MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks) {
   const RunInput input = chain_melt();
   NeighborList list(input.force_field->neighbor_cutoff(), 0.3);
@@ -278,19 +280,30 @@ TEST(Threads, MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks) {
     return blocks;
   };
   const std::vector<PairHessian> one = blocks_on(1);
-  std::size_t expected = 0;
+  std::vector<PairHessian> expected;
   const double cutoff = input.force_field->neighbor_cutoff();
+  const LennardJones::Params lj = LennardJones::make(1.0, 1.0, cutoff);  // the melt's pair style
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = list.offsets()[i]; k < list.offsets()[i + 1]; ++k) {
       const auto j = static_cast<std::size_t>(list.neighbors()[k]);
       const Vec3 d = input.system.box.minimum_image(input.system.particles.position[i] -
                                                     input.system.particles.position[j]);
-      expected += (mask[i] || mask[j]) && norm2(d) < cutoff * cutoff;
+      const double r2 = norm2(d);
+      if (!(mask[i] || mask[j]) || r2 >= cutoff * cutoff) continue;
+      double f_over_r, energy;
+      LennardJones::evaluate(lj, r2, f_over_r, energy);
+      expected.push_back(
+          {static_cast<std::int32_t>(i), static_cast<std::int32_t>(j),
+           pair_hessian_block(d, r2, f_over_r, LennardJones::second_derivative(lj, r2))});
     }
   }
-  EXPECT_GT(expected, 1000u);
-  EXPECT_EQ(one.size(), expected);
-  for (const PairHessian& b : one) ASSERT_TRUE(mask[b.a] || mask[b.b]);
+  EXPECT_GT(expected.size(), 1000u);
+  ASSERT_EQ(one.size(), expected.size());
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    ASSERT_EQ(one[k].a, expected[k].a) << k;
+    ASSERT_EQ(one[k].b, expected[k].b) << k;
+    for (int e = 0; e < 9; ++e) ASSERT_EQ(one[k].block(e), expected[k].block(e)) << k << " " << e;
+  }
   if (!kThreaded) return;
   const std::vector<PairHessian> two = blocks_on(2);
   ASSERT_EQ(two.size(), one.size());
