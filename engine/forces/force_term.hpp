@@ -27,6 +27,23 @@ inline Eigen::Matrix3d pair_hessian_block(const Vec3& d, double r2, double f_ove
   return second_derivative * uu - f_over_r * (Eigen::Matrix3d::Identity() - uu);
 }
 
+// pair_hessian_block's six distinct elements, each by its operations (the same bits; the block
+// is symmetric bit for bit, u_a u_b being u_b u_a): the form a loop over many pairs runs in
+// vectors (PairForce's masked blocks).
+struct PairHessianUpper {
+  double xx, xy, xz, yy, yz, zz;
+};
+inline PairHessianUpper pair_hessian_upper(double dx, double dy, double dz, double r2,
+                                           double f_over_r, double second_derivative) {
+  const double r = std::sqrt(r2);
+  const double ux = dx / r, uy = dy / r, uz = dz / r;
+  auto element = [&](double uu, double identity) {
+    return second_derivative * uu - f_over_r * (identity - uu);
+  };
+  return {element(ux * ux, 1.0), element(ux * uy, 0.0), element(ux * uz, 0.0),
+          element(uy * uy, 1.0), element(uy * uz, 0.0), element(uz * uz, 1.0)};
+}
+
 // One term of the potential energy (all pairs of one style, all bonds of one style...).
 // compute() adds its forces and, when `tally`, its virial, and returns its energy (0 when
 // not `tally`: most steps need forces only). One virtual call per term per step, never per

@@ -183,7 +183,7 @@ class PairForce final : public ForceTerm {
       std::vector<std::int32_t> i, j;
       std::vector<double> dx, dy, dz, r2;
       std::vector<std::size_t> params;
-      // The blocks' upper triangles (the blocks are symmetric bit for bit: u_a u_b = u_b u_a).
+      // The blocks' upper triangles (pair_hessian_upper).
       std::vector<double> xx, xy, xz, yy, yz, zz;
       void resize(std::size_t n) {
         for (auto* v : {&i, &j}) v->resize(n);
@@ -222,8 +222,8 @@ class PairForce final : public ForceTerm {
       q.r2[kept] = r2, q.params[kept] = params;
       kept += !(r2 >= table_[params].cutoff2);  // as visit_hessian: a NaN r2 kept
     }
-    // pair_hessian_block's operations on each pair: its bits. Through restrict pointers: the
-    // compiler then needs no test of the arrays' overlap to run the loop in vectors.
+    // pair_hessian_upper on each pair: pair_hessian_block's bits. Through restrict pointers:
+    // the compiler then needs no test of the arrays' overlap to run the loop in vectors.
     auto blocks = [kept](auto params_of, const double* __restrict r2s, const double* __restrict dxs,
                          const double* __restrict dys, const double* __restrict dzs,
                          double* __restrict xx, double* __restrict xy, double* __restrict xz,
@@ -233,17 +233,9 @@ class PairForce final : public ForceTerm {
         const double r2 = r2s[k];
         double f_over_r, e;
         Evaluator::evaluate(p, r2, f_over_r, e);
-        const double second = Evaluator::second_derivative(p, r2);
-        const double r = std::sqrt(r2);
-        const double ux = dxs[k] / r, uy = dys[k] / r, uz = dzs[k] / r;
-        const double uxx = ux * ux, uxy = ux * uy, uxz = ux * uz;
-        const double uyy = uy * uy, uyz = uy * uz, uzz = uz * uz;
-        xx[k] = second * uxx - f_over_r * (1.0 - uxx);
-        xy[k] = second * uxy - f_over_r * (0.0 - uxy);
-        xz[k] = second * uxz - f_over_r * (0.0 - uxz);
-        yy[k] = second * uyy - f_over_r * (1.0 - uyy);
-        yz[k] = second * uyz - f_over_r * (0.0 - uyz);
-        zz[k] = second * uzz - f_over_r * (1.0 - uzz);
+        const PairHessianUpper b = pair_hessian_upper(dxs[k], dys[k], dzs[k], r2, f_over_r,
+                                                      Evaluator::second_derivative(p, r2));
+        xx[k] = b.xx, xy[k] = b.xy, xz[k] = b.xz, yy[k] = b.yy, yz[k] = b.yz, zz[k] = b.zz;
       }
     };
     auto run_blocks = [&](auto params_of) {
