@@ -10,6 +10,7 @@
 
 #include "cli/exit_status.hpp"
 #include "cli/integrator_factory.hpp"
+#include "core/cpu_quota.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "h5md/checkpoint.hpp"
@@ -81,7 +82,8 @@ int command_run(const std::vector<std::string>& args) {
   }
   if (path.empty()) path = DELI_DEFAULT_INPUT;
   RunInput input = load_run_input(path);
-  // The command line's count over the input's; neither: OpenMP's default.
+  // The command line's count over the input's; neither: OpenMP's default, within a cgroup's
+  // CPU quota.
   if (threads == 0) threads = input.threads;
   if (threads > 0) {
     try {
@@ -89,6 +91,11 @@ int command_run(const std::vector<std::string>& args) {
     } catch (const std::invalid_argument& e) {
       throw InputError(std::string("deli run: ") + e.what());
     }
+  } else if (const int quota = use_default_thread_count(); quota > 0) {
+    input.notes.push_back("note: this process's cgroup has a CPU quota of " +
+                          std::to_string(quota) + " CPU" + (quota == 1 ? "" : "s") + ": " +
+                          std::to_string(quota) + " thread" + (quota == 1 ? "" : "s") +
+                          " by default (--threads N to choose)");
   }
   if (!input.split_small_loops) {
     set_cheap_chunk_minimum(kUnsplitCheapChunk);
@@ -146,6 +153,11 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
         "note: %d threads on %d CPU%s this process may use: waiting threads sleep or yield "
         "rather than spin; --threads %d is likely faster\n",
         thread_count(), cpus_available(), cpus_available() == 1 ? "" : "s", cpus_available());
+  } else if (const std::optional<int> quota = quota_cpus(); quota && thread_count() > *quota) {
+    out.print(
+        "note: %d threads in a cgroup whose CPU quota is %d CPU%s: the threads wait for the "
+        "quota's time; --threads %d is likely faster\n",
+        thread_count(), *quota, *quota == 1 ? "" : "s", *quota);
   }
   if (input.thermostat) {
     const ThermostatSettings& t = *input.thermostat;

@@ -44,7 +44,8 @@ constexpr const char* kRunUsage =
     "  --restart CHECKPOINT      continue from a checkpoint written by a run of this INPUT,\n"
     "                            to its [run] steps, appending to its outputs\n"
     "  --threads N               run on N threads (over [run] threads; neither: the\n"
-    "                            OMP_NUM_THREADS environment variable, else all cores).\n"
+    "                            OMP_NUM_THREADS environment variable, else all cores,\n"
+    "                            within a cgroup's CPU quota).\n"
     "                            The same input on as many threads gives the same\n"
     "                            results bit for bit\n";
 constexpr const char* kValidateUsage =

@@ -1,7 +1,12 @@
 #include "core/parallel.hpp"
 
+#include <algorithm>
+#include <cstdlib>
+#include <optional>
 #include <stdexcept>
 #include <string>
+
+#include "core/cpu_quota.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -47,6 +52,17 @@ void set_thread_count(int n) {
     throw std::invalid_argument("this deli was built without OpenMP: it runs on one thread only");
   }
 #endif
+}
+
+int use_default_thread_count() {
+  const char* asked = std::getenv("OMP_NUM_THREADS");
+  if (asked && *asked) return 0;
+  const std::optional<int> quota = quota_cpus();
+  if (!quota) return 0;
+  const int cpus = std::min(cpus_available(), *quota);
+  if (thread_count() <= cpus) return 0;
+  set_thread_count(cpus);
+  return cpus;
 }
 
 }  // namespace deli

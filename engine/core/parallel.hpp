@@ -15,6 +15,11 @@ namespace deli {
 int thread_count();
 // n >= 1. Throws std::invalid_argument in a build without OpenMP when n > 1.
 void set_thread_count(int n);
+// The count where none is asked for (no --threads, no [run] threads): OMP_NUM_THREADS where
+// set, else OpenMP's default (the CPUs of the affinity mask) lowered to the CPUs a cgroup's
+// CPU quota allows (quota_cpus(), core/cpu_quota.hpp). Returns the count where the quota
+// lowered it, else 0.
+int use_default_thread_count();
 
 // Below this many items a loop of substantial items (a particle's pairs or cell scan) runs
 // on the calling thread alone: starting a parallel region costs microseconds.

@@ -2,10 +2,13 @@
 // and restarted, gives the same thermo rows bit for bit; on one thread it gives the same
 // rows to round-off (the sums are regrouped). The one-thread rows are the expected values.
 // The same with [run] split_small_loops = false (the 4000 atoms' passes on one thread, as by
-// default until stop 49).
+// default until stop 49). The thread count where the process may use fewer CPUs than asked
+// for (its affinity mask, a cgroup's CPU quota).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -123,6 +126,81 @@ TEST(ThreadsRun, MoreThreadsThanCpusSaySoAndRunTheSameTrajectory) {
       << crowded.output;
   const std::string free_run = run_melt(root + "/free", steps, "--threads 2");
   EXPECT_EQ(testing::file_contents(root + "/crowded/out.csv"), free_run);
+  testing::run_shell("rm -rf " + root);
+}
+
+// A cgroup of its own with a CPU quota of 1 CPU (v1's cpu.cfs_quota_us, or v2's cpu.max where
+// the cpu controller is enabled there), made under the first cgroup file system with the cpu
+// controller, and removed with it; empty where none can be made (not root, cgroups read-only,
+// as in many containers).
+class QuotaCgroup {
+ public:
+  QuotaCgroup() {
+    std::ifstream mounts("/proc/self/mountinfo");
+    std::string line;
+    while (dir_.empty() && std::getline(mounts, line)) {
+      std::istringstream in(line);
+      std::vector<std::string> f;
+      for (std::string word; in >> word;) f.push_back(word);
+      const auto dash = std::find(f.begin(), f.end(), "-");
+      if (f.size() < 5 || f.end() - dash < 4) continue;
+      const bool v2 = dash[1] == "cgroup2";
+      const bool v1 =
+          dash[1] == "cgroup" && ("," + dash[3] + ",").find(",cpu,") != std::string::npos;
+      if (!v1 && !v2) continue;
+      const std::string dir = f[4] + "/deli-test-" + std::to_string(getpid());
+      if (::mkdir(dir.c_str(), 0755) != 0) continue;
+      const std::string file = dir + (v2 ? "/cpu.max" : "/cpu.cfs_quota_us");
+      const std::string period = dir + "/cpu.cfs_period_us";
+      std::ofstream quota(file);
+      if (quota && (v2 || std::ifstream(period)) &&
+          (quota << (v2 ? "100000 100000" : "100000") << std::flush)) {
+        dir_ = dir;
+      } else {
+        ::rmdir(dir.c_str());
+      }
+    }
+  }
+  QuotaCgroup(const QuotaCgroup&) = delete;
+  QuotaCgroup& operator=(const QuotaCgroup&) = delete;
+  ~QuotaCgroup() {
+    if (!dir_.empty()) ::rmdir(dir_.c_str());
+  }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+};
+
+// With no count asked for, a run in a cgroup whose quota is 1 CPU runs 1 thread and says why;
+// asked for 2 there, it runs 2 and says that 1 is likely faster (README, "A container's CPU
+// quota"). On two CPUs of the affinity mask (taskset), where OpenMP's default is 2.
+TEST(ThreadsRun, DefaultThreadsKeepWithinTheCgroupsCpuQuota) {
+  if (::sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "needs two CPUs";
+  const QuotaCgroup cgroup;
+  if (cgroup.dir().empty()) GTEST_SKIP() << "no cgroup with a CPU quota can be made here";
+  const std::string root =
+      deli::testing::process_temp_dir() + "/threads_quota_" + std::to_string(getpid());
+  testing::run_shell("mkdir -p " + root);
+  const std::string input = melt_input(root, 2, "");
+  auto in_cgroup = [&](const std::string& extra) {
+    return testing::run_shell("env -u OMP_NUM_THREADS sh -c 'echo $$ > " + cgroup.dir() +
+                              "/cgroup.procs && exec taskset -c 0,1 " DELI_BINARY " run " + input +
+                              extra + "'");
+  };
+  const testing::ShellResult by_default = in_cgroup("");
+  ASSERT_EQ(by_default.status, 0) << by_default.output;
+  EXPECT_NE(by_default.output.find("note: this process's cgroup has a CPU quota of 1 CPU: 1 "
+                                   "thread by default"),
+            std::string::npos)
+      << by_default.output;
+  EXPECT_NE(by_default.output.find("\n1 thread\n"), std::string::npos) << by_default.output;
+  const testing::ShellResult asked = in_cgroup(" --threads 2");
+  ASSERT_EQ(asked.status, 0) << asked.output;
+  EXPECT_NE(asked.output.find("\n2 threads\n"), std::string::npos) << asked.output;
+  EXPECT_NE(asked.output.find("note: 2 threads in a cgroup whose CPU quota is 1 CPU"),
+            std::string::npos)
+      << asked.output;
   testing::run_shell("rm -rf " + root);
 }
 
