@@ -60,7 +60,7 @@ class PairForce final : public ForceTerm {
     for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
       std::vector<PairHessian>& to = c == 0 ? out : chunk_hessians_[static_cast<std::size_t>(c)];
       if (c > 0) to.clear();
-      for_each_listed_hessian(system, ranges, mask, begin, end,
+      for_each_listed_hessian(system, ranges, neighbors.image_shifts().data(), mask, begin, end,
                               [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
                                 to.push_back({i, j, block});
                               });
@@ -173,10 +173,11 @@ class PairForce final : public ForceTerm {
   // same blocks (Threads.MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks).
   template <class Visit>
   void for_each_listed_hessian(const System& system, const NeighborList::PartnerRanges& ranges,
-                               const std::vector<char>& mask, std::size_t begin, std::size_t end,
-                               Visit&& visit) const {
+                               const Vec3* shifts, const std::vector<char>& mask, std::size_t begin,
+                               std::size_t end, Visit&& visit) const {
     struct Touching {
-      std::int32_t i, j;
+      std::int32_t i;
+      std::uint32_t k;  // the pair's entry in the list (under 2^32: 16 GB of partners)
     };
     // The pairs in reach, by component (so that the blocks' pass runs in vectors).
     struct InReach {
@@ -201,26 +202,43 @@ class PairForce final : public ForceTerm {
       if (touching.size() < count + (last - first)) touching.resize(2 * (count + last - first));
       const auto ii = static_cast<std::int32_t>(i);
       if (mask.empty() || mask[i]) {
-        for (std::size_t k = first; k < last; ++k) touching[count++] = {ii, ranges.neighbors[k]};
+        for (std::size_t k = first; k < last; ++k) {
+          touching[count++] = {ii, static_cast<std::uint32_t>(k)};
+        }
       } else {
         for (std::size_t k = first; k < last; ++k) {
-          const std::int32_t j = ranges.neighbors[k];
-          touching[count] = {ii, j};
-          count += mask[static_cast<std::size_t>(j)] != 0;
+          touching[count] = {ii, static_cast<std::uint32_t>(k)};
+          count += mask[static_cast<std::size_t>(ranges.neighbors[k])] != 0;
         }
       }
     }
     InReach& q = in_reach;
     if (q.r2.size() < count) q.resize(count);
     std::size_t kept = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      const auto [i, j] = touching[k];
-      const Vec3 d = system.box.minimum_image(x[i] - x[j]);
-      const double r2 = norm2(d);
-      const auto params = static_cast<std::size_t>(type[i] * type_count_ + type[j]);
-      q.i[kept] = i, q.j[kept] = j, q.dx[kept] = d.x, q.dy[kept] = d.y, q.dz[kept] = d.z;
-      q.r2[kept] = r2, q.params[kept] = params;
-      kept += !(r2 >= table_[params].cutoff2);  // as visit_hessian: a NaN r2 kept
+    auto keep_in_reach = [&](auto separation) {
+      for (std::size_t k = 0; k < count; ++k) {
+        const Touching t = touching[k];
+        const std::int32_t j = ranges.neighbors[t.k];
+        const Vec3 d = separation(t.i, j, t.k);
+        const double r2 = norm2(d);
+        const auto params = static_cast<std::size_t>(type[t.i] * type_count_ + type[j]);
+        q.i[kept] = t.i, q.j[kept] = j, q.dx[kept] = d.x, q.dy[kept] = d.y, q.dz[kept] = d.z;
+        q.r2[kept] = r2, q.params[kept] = params;
+        kept += !(r2 >= table_[params].cutoff2);  // as visit_hessian: a NaN r2 kept
+      }
+    };
+    // With image codes, x_i - x_j - shift: the minimum image's bits (the shift is the
+    // rounding's multiple of the period) without minimum_image()'s rounding, which g++ makes
+    // a branch per axis (the default input, one thread: this function 0.93x its samples).
+    if (const std::uint8_t* codes = ranges.image_codes) {
+      keep_in_reach([&](std::int32_t i, std::int32_t j, std::uint32_t k) {
+        return x[i] - x[j] - shifts[codes[k]];
+      });
+    } else {
+      const Box& box = system.box;
+      keep_in_reach([&](std::int32_t i, std::int32_t j, std::uint32_t) {
+        return box.minimum_image(x[i] - x[j]);
+      });
     }
     // pair_hessian_upper on each pair: pair_hessian_block's bits. Through restrict pointers:
     // the compiler then needs no test of the arrays' overlap to run the loop in vectors.
