@@ -154,29 +154,48 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   std::vector<Vec3>& d = ws_.displacement;
-  free_displacement(system, momenta, d);
-  x.resize(n);
-  parallel_for(n, [&](std::size_t i) { x[i] = P.position[i] + d[i]; });
-  if (!constrained || constraints_.equalities.empty()) return;
+  const bool solved = constrained && !constraints_.equalities.empty();
   std::vector<Vec3>& j = ws_.prediction_kick;
   // Again in the same step: only the chains whose free displacement changed (those the
   // reflections touched) are solved again; the others' kicks would come out the same.
-  const bool reuse = again && ws_.kicked_displacement.size() == n && j.size() == n;
-  if (reuse) {
-    ws_.displacement_changed.resize(n);
-    parallel_for(n, [&](std::size_t i) {
+  const bool reuse = solved && again && ws_.kicked_displacement.size() == n && j.size() == n;
+  x.resize(n);
+  if (reuse) ws_.displacement_changed.resize(n);
+  // x = q + d, and (reuse) which displacements changed, particle by particle.
+  auto after_displacement = [&, reuse](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) x[i] = P.position[i] + d[i];
+    for (std::size_t i = begin; reuse && i < end; ++i) {
       const Vec3& a = d[i];
       const Vec3& b = ws_.kicked_displacement[i];
       ws_.displacement_changed[i] = !(a.x == b.x && a.y == b.y && a.z == b.z);
+    }
+  };
+  if (lagrangian_ == Lagrangian::verlet) {
+    // Verlet: the free step's pass also makes them, on the thread that made the chunk's
+    // displacements (as free_displacement() makes them: one job of the team, not three).
+    d.resize(n);
+    const std::vector<Vec3>& f = engine_.force();
+    for_each_chunk(n, chunks_for_cheap(n), [&, h = dt_](int, std::size_t begin, std::size_t end) {
+      gvi_passes::half_kick(h, numbers(momenta), numbers(f), P.mass.data(), nullptr, numbers(d),
+                            begin, end);
+      after_displacement(begin, end);
     });
   } else {
-    j.assign(n, Vec3{});
+    free_displacement(system, momenta, d);
+    for_each_chunk(n, chunks_for_cheap(n), [&](int, std::size_t begin, std::size_t end) {
+      after_displacement(begin, end);
+    });
   }
+  if (!solved) return;
+  if (!reuse) j.assign(n, Vec3{});
   ws_.all_equality.assign(constraints_.equalities.size(), true);
   solve_positions(system, constraints_.equalities, ws_.all_equality, P.position, d, j,
                   reuse ? &ws_.displacement_changed : nullptr);
-  ws_.kicked_displacement = d;
-  parallel_for(n, [&, h = dt_](std::size_t i) { x[i] += j[i] * (h / P.mass[i]); });
+  ws_.kicked_displacement.resize(n);
+  parallel_for(n, [&, h = dt_](std::size_t i) {
+    ws_.kicked_displacement[i] = d[i];
+    x[i] += j[i] * (h / P.mass[i]);
+  });
 }
 
 void Gvi::start_step(System& system) {
