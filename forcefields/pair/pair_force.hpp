@@ -60,10 +60,7 @@ class PairForce final : public ForceTerm {
     for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
       std::vector<PairHessian>& to = c == 0 ? out : chunk_hessians_[static_cast<std::size_t>(c)];
       if (c > 0) to.clear();
-      for_each_listed_hessian(system, ranges, neighbors.image_shifts().data(), mask, begin, end,
-                              [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
-                                to.push_back({i, j, block});
-                              });
+      append_listed_hessians(system, ranges, neighbors.image_shifts().data(), mask, begin, end, to);
     });
     for (std::size_t c = 1; c < static_cast<std::size_t>(chunks); ++c) {
       out.insert(out.end(), chunk_hessians_[c].begin(), chunk_hessians_[c].end());
@@ -162,19 +159,18 @@ class PairForce final : public ForceTerm {
   }
 
   // The Hessian block of every listed pair in reach touching a masked particle (all with an
-  // empty mask), of particles begin..end-1 in list order; pair_hessians() adds the scaled
-  // pairs'. In three passes, as the scalar force loop: the pairs touching the mask, those of
-  // them in reach, then their blocks, each pass without a branch per pair. A mask holds a few
-  // reflected clusters (the default input: 60 of 1200 particles, 2200 of 48000 listed pairs
-  // a call), so a branch on each pair's mask, then on its reach, was mispredicted often
-  // enough to take a third of this loop (stop 50, the default input: reflections phase 0.76
-  // and loop 0.91 on one thread, 0.72 and 0.80 on two); the blocks' pass then in vectors:
-  // 0.95 and 0.98 on one thread, 0.84 and 0.88 on two. The same operations on each pair: the
-  // same blocks (Threads.MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks).
-  template <class Visit>
-  void for_each_listed_hessian(const System& system, const NeighborList::PartnerRanges& ranges,
-                               const Vec3* shifts, const std::vector<char>& mask, std::size_t begin,
-                               std::size_t end, Visit&& visit) const {
+  // empty mask), of particles begin..end-1 in list order, appended to `to`; pair_hessians()
+  // adds the scaled pairs'. In three passes, as the scalar force loop: the pairs touching the mask,
+  // those of them in reach, then their blocks, each pass without a branch per pair. A mask holds a
+  // few reflected clusters (the default input: 60 of 1200 particles, 2200 of 48000 listed pairs a
+  // call), so a branch on each pair's mask, then on its reach, was mispredicted often enough to
+  // take a third of this loop (stop 50, the default input: reflections phase 0.76 and loop 0.91 on
+  // one thread, 0.72 and 0.80 on two); the blocks' pass then in vectors: 0.95 and 0.98 on one
+  // thread, 0.84 and 0.88 on two. The same operations on each pair: the same blocks
+  // (Threads.MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks).
+  void append_listed_hessians(const System& system, const NeighborList::PartnerRanges& ranges,
+                              const Vec3* shifts, const std::vector<char>& mask, std::size_t begin,
+                              std::size_t end, std::vector<PairHessian>& to) const {
     struct Touching {
       std::int32_t i;
       std::uint32_t k;  // the pair's entry in the list (under 2^32: 16 GB of partners)
@@ -268,10 +264,17 @@ class PairForce final : public ForceTerm {
       const Params* table = table_.data();
       run_blocks([params, table](std::size_t k) -> const Params& { return table[params[k]]; });
     }
+    // Written in place (a block made, then copied in by push_back, took 17 cycles a pair).
+    const std::size_t base = to.size();
+    to.resize(base + kept);
+    PairHessian* out = to.data() + base;
     for (std::size_t k = 0; k < kept; ++k) {
-      Eigen::Matrix3d block;
-      block << q.xx[k], q.xy[k], q.xz[k], q.xy[k], q.yy[k], q.yz[k], q.xz[k], q.yz[k], q.zz[k];
-      visit(q.i[k], q.j[k], block);
+      PairHessian& h = out[k];
+      h.a = q.i[k], h.b = q.j[k];
+      double* b = h.block.data();  // column-major; the block is symmetric
+      b[0] = q.xx[k], b[1] = q.xy[k], b[2] = q.xz[k];
+      b[3] = q.xy[k], b[4] = q.yy[k], b[5] = q.yz[k];
+      b[6] = q.xz[k], b[7] = q.yz[k], b[8] = q.zz[k];
     }
   }
   template <class Visit>
