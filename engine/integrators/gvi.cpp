@@ -117,8 +117,8 @@ void Gvi::step(System& system, bool tally) {
 // Displacement of the unconstrained forward step from (q, p): D1Ld(q, q + d) + p = 0.
 // Verlet: d = h M^-1 (p + h/2 F(q)). Midpoint: d = h M^-1 (p + h/2 F(q + d/2)), by fixed
 // point from the Verlet guess.
-void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
-                            std::vector<Vec3>& d) {
+void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d,
+                            const std::function<void(std::size_t, std::size_t)>& after) {
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
@@ -126,11 +126,13 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
   d.resize(n);
   // The step is captured by value here and below: a double behind a reference could alias
   // the doubles the loop stores, and would be loaded again at every particle.
-  for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
+  const bool verlet = lagrangian_ != Lagrangian::midpoint;
+  for_each_chunk(n, chunks_for_cheap(n), [&, h, verlet](int, std::size_t begin, std::size_t end) {
     gvi_passes::half_kick(h, numbers(momenta), numbers(f), P.mass.data(), nullptr, numbers(d),
                           begin, end);
+    if (verlet) after(begin, end);
   });
-  if (lagrangian_ != Lagrangian::midpoint) return;
+  if (verlet) return;
   std::vector<Vec3>& mid = ws_.prediction_mid;
   mid.resize(n);
   iterate_midpoint(system, 0, [&] {
@@ -144,6 +146,8 @@ void Gvi::free_displacement(System& system, const std::vector<Vec3>& momenta,
       return change;
     });
   });
+  for_each_chunk(n, chunks_for_cheap(n),
+                 [&](int, std::size_t begin, std::size_t end) { after(begin, end); });
 }
 
 // The predictor: the unconstrained step, or (predictor = "constrained") that step with the
@@ -170,22 +174,8 @@ void Gvi::predict(System& system, const std::vector<Vec3>& momenta, std::vector<
       ws_.displacement_changed[i] = !(a.x == b.x && a.y == b.y && a.z == b.z);
     }
   };
-  if (lagrangian_ == Lagrangian::verlet) {
-    // Verlet: the free step's pass also makes them, on the thread that made the chunk's
-    // displacements (as free_displacement() makes them: one job of the team, not three).
-    d.resize(n);
-    const std::vector<Vec3>& f = engine_.force();
-    for_each_chunk(n, chunks_for_cheap(n), [&, h = dt_](int, std::size_t begin, std::size_t end) {
-      gvi_passes::half_kick(h, numbers(momenta), numbers(f), P.mass.data(), nullptr, numbers(d),
-                            begin, end);
-      after_displacement(begin, end);
-    });
-  } else {
-    free_displacement(system, momenta, d);
-    for_each_chunk(n, chunks_for_cheap(n), [&](int, std::size_t begin, std::size_t end) {
-      after_displacement(begin, end);
-    });
-  }
+  // Verlet: in the free step's own pass (one job of the team, not three).
+  free_displacement(system, momenta, d, after_displacement);
   if (!solved) return;
   if (!reuse) j.assign(n, Vec3{});
   ws_.all_equality.assign(constraints_.equalities.size(), true);

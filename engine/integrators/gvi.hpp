@@ -110,8 +110,11 @@ class Gvi final : public ConstrainedIntegrator {
   void drift_with_covering_rows(System& system, bool pairs_matter,
                                 const std::function<DriftSpan()>& drift_once);
 
-  // The unconstrained step's displacement from the current positions for momenta `momenta`.
-  void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d);
+  // The unconstrained step's displacement from the current positions for momenta `momenta`;
+  // then after(begin, end) for each chunk of particles, the chunks as the particle passes split
+  // (Verlet: in the displacement's own pass, on the thread that made the chunk's).
+  void free_displacement(System& system, const std::vector<Vec3>& momenta, std::vector<Vec3>& d,
+                         const std::function<void(std::size_t, std::size_t)>& after);
   // The predictor's end positions into `x`: the free step, or (`constrained`) that step with
   // the equality rows solved. `again`: a later prediction of the same step (same positions
   // and forces, momenta changed by reflections), which re-solves only the chains it must.
