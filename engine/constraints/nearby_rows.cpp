@@ -14,6 +14,8 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
   if (bonded_pairs) index_bonded_pairs(set, particles.size());
   shifted_ = list.coded();
+  one_radius_ = std::all_of(particles.radius.begin(), particles.radius.end(),
+                            [&](double r) { return r == particles.radius.front(); });
   // The list where the build left it (its list by particle is not made for this).
   const NeighborList::PartnerRanges ranges = list.partner_ranges();
   // By chunks of the list's particles, each into its own pairs: joined in chunk order, the
@@ -56,28 +58,77 @@ void NearbyRows::scan_list(const NeighborList& list, const NeighborList::Partner
                            std::vector<PairBound>& bounds) const {
   const std::int32_t* neighbors = ranges.neighbors;
   const std::uint8_t* codes = ranges.image_codes;
+  const Vec3* shifts = list.image_shifts().data();
   const bool shifted = shifted_;
   const double margin = margin_;
-  for (std::size_t i = first; i < last; ++i) {
-    for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
-      const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
-      const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
-      Vec3 shift;
-      if (shifted) {
-        // The list's shift is for q_i - q_j: negated when i is the pair's second particle.
-        shift = list.image_shifts()[codes[k]];
-        if (a != static_cast<std::int32_t>(i)) shift = -shift;
+  // Generous by far more than rounding: no pair within contact + margin is dropped.
+  auto beyond = [margin](double d2, double contact) {
+    const double within = contact + margin;
+    return d2 > within * within * (1.0 + 1e-6) + 1e-300;
+  };
+  // Entry k of owner i, at squared distance d2, as the pair a < b with the shift oriented
+  // for q_a - q_b, unless bonded.
+  auto add = [&](std::size_t i, std::size_t k, double d2) {
+    const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
+    const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
+    if (bonded_pairs && bonded(a, b)) return;
+    Vec3 shift;
+    if (shifted) {
+      // The list's shift is for q_i - q_j: negated when i is the pair's second particle.
+      shift = shifts[codes[k]];
+      if (a != static_cast<std::int32_t>(i)) shift = -shift;
+    }
+    const double contact = radius[a] + radius[b];
+    pairs.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
+    bounds.push_back({a, b, pairs.back().anchor_gap});
+  };
+  if (!shifted) {
+    for (std::size_t i = first; i < last; ++i) {
+      for (std::size_t k = ranges.begin[i]; k < ranges.end[i]; ++k) {
+        const auto a = std::min<std::size_t>(i, neighbors[k]);
+        const auto b = std::max<std::size_t>(i, neighbors[k]);
+        const double d2 = norm2(box.minimum_image(q[a] - q[b]));
+        if (!beyond(d2, radius[a] + radius[b])) add(i, k, d2);
       }
-      // Through the list's shift, as collect() measures (the minimum image up to rounding).
-      // Generous by far more than rounding: no pair within contact + margin is dropped.
-      const double d2 =
-          shifted ? norm2(q[a] - q[b] - shift) : norm2(box.minimum_image(q[a] - q[b]));
-      const double contact = radius[a] + radius[b];
-      const double within = contact + margin;
-      if (d2 > within * within * (1.0 + 1e-6) + 1e-300) continue;
-      if (bonded_pairs && bonded(a, b)) continue;
-      pairs.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
-      bounds.push_back({a, b, pairs.back().anchor_gap});
+    }
+    return;
+  }
+  // Through the list's shift, as collect() measures (the minimum image up to rounding):
+  // q_i - q_j - s, the negation (exactly) of q_a - q_b less the oriented shift, so that its
+  // square is the pair's either way. One entry in seven of the default input's is within
+  // contact + margin, unpredictably, and nearly every entry has the zero shift: each owner's
+  // entries are tested without a branch on the outcome (those within, and their squares,
+  // gathered first), without the zero shift's subtraction (x - 0 is x but for the sign of a
+  // zero, which squares alike), and, where every particle has one radius, against one bound.
+  std::uint8_t unshifted = 255;  // no code (no shift is zero)
+  for (int code = 26; code >= 0; --code) {
+    const Vec3& shift = shifts[code];
+    if (shift.x == 0.0 && shift.y == 0.0 && shift.z == 0.0) {
+      unshifted = static_cast<std::uint8_t>(code);
+    }
+  }
+  auto separation2 = [&](const Vec3& qi, std::size_t k) {
+    const std::uint8_t code = codes[k];
+    const Vec3 d = qi - q[neighbors[k]];
+    return norm2(code == unshifted ? d : d - shifts[code]);
+  };
+  std::uint32_t within[kScanBlock];
+  double within_d2[kScanBlock];
+  for (std::size_t i = first; i < last; ++i) {
+    const Vec3 qi = q[i];
+    const double ri = radius[i];
+    const double one_contact = ri + ri;
+    for (std::size_t block = ranges.begin[i]; block < ranges.end[i]; block += kScanBlock) {
+      const std::size_t block_end = std::min(ranges.end[i], block + kScanBlock);
+      std::size_t count = 0;
+      for (std::size_t k = block; k < block_end; ++k) {
+        const double d2 = separation2(qi, k);
+        const double contact = one_radius_ ? one_contact : ri + radius[neighbors[k]];
+        within[count] = static_cast<std::uint32_t>(k - block);
+        within_d2[count] = d2;
+        count += beyond(d2, contact) ? 0 : 1;
+      }
+      for (std::size_t m = 0; m < count; ++m) add(i, block + within[m], within_d2[m]);
     }
   }
 }

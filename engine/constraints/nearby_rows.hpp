@@ -68,6 +68,8 @@ class NearbyRows {
     std::vector<double> near_d2;     // their squared distances at q, after the second screen
   };
   std::vector<ScannedChunk> scanned_;
+  // Entries of one owner scan_list() tests at a time (its buffers on the stack).
+  static constexpr std::size_t kScanBlock = 64;
   // The list's pairs of particles [first, last) within contact + margin at q, appended.
   void scan_list(const NeighborList& list, const NeighborList::PartnerRanges& ranges, const Vec3* q,
                  const Box& box, const double* radius, bool bonded_pairs, std::size_t first,
@@ -81,6 +83,7 @@ class NearbyRows {
   std::vector<std::vector<Constraint>> chunk_rows_;
   std::vector<std::vector<double>> chunk_gaps_;
   bool shifted_ = false;
+  bool one_radius_ = false;  // every particle's radius the same (one contact distance)
   std::vector<Vec3> anchor_;
   std::vector<double> moved_;  // per particle, |q - anchor| at the last call (+ its reach)
   const NeighborList* list_ = nullptr;

@@ -97,6 +97,34 @@ TEST(NearbyRows, RowsWithinTheReachInTheScansOrder) {
   }
 }
 
+// Spheres of two sizes (radius 0.5 and 0.05, alternating), each even particle bonded to the
+// next, placed 0.01 beyond contact (bonded pairs have no contact row): the short list's first
+// test then takes each pair's own contact distance, and drops the bonded pairs it meets, as
+// the plain scan does. With one contact distance for all taken from the owner, a pair whose
+// owner is small would be dropped from the short list beyond 0.1 + margin 0.5, short of its
+// 0.55 + reach.
+TEST(NearbyRows, SpheresOfTwoSizesAndBondedPairs) {
+  for (const bool per_particle : {false, true}) {
+    NearbyRowsFluid fluid = nearby_rows_fluid(400, per_particle ? 11 : 12);
+    for (std::size_t i = 0; i < fluid.particles.size(); ++i) {
+      fluid.particles.radius[i] = i % 2 == 0 ? 0.5 : 0.05;
+    }
+    for (std::size_t i = 0; i + 1 < fluid.particles.size(); i += 2) {
+      const auto a = static_cast<std::int32_t>(i);
+      fluid.set.unconstrained_pairs.push_back({a, a + 1});
+      Vec3 partner = fluid.particles.position[i] + Vec3{0.56, 0.0, 0.0};
+      std::array<int, 3> image{};
+      fluid.box.wrap(partner, image);
+      fluid.particles.position[i + 1] = partner;
+    }
+    NeighborList list(1.0, 0.4);
+    list.build(fluid.particles.position, fluid.box);
+    NearbyRows rows;
+    std::vector<Vec3> q = fluid.particles.position;
+    expect_nearby_rows(fluid, rows, q.data(), list, per_particle);
+  }
+}
+
 // On two threads the list's scan and the screen (both cheap items) run in chunks joined in
 // chunk order: the same rows, in the same order, with the same gaps bit for bit as on one
 // thread, and those of the plain scan. In chunks of at least 512 items, the 1200 particles'
