@@ -14,8 +14,12 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
   if (bonded_pairs) index_bonded_pairs(set, particles.size());
   shifted_ = list.coded();
+  shifts_ = list.image_shifts();
   one_radius_ = std::all_of(particles.radius.begin(), particles.radius.end(),
                             [&](double r) { return r == particles.radius.front(); });
+  one_contact_ = one_radius_ && !particles.radius.empty()
+                     ? particles.radius.front() + particles.radius.front()
+                     : 0.0;
   // The list where the build left it (its list by particle is not made for this).
   const NeighborList::PartnerRanges ranges = list.partner_ranges();
   // By chunks of the list's particles, each into its own pairs: joined in chunk order, the
@@ -42,23 +46,20 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   for_each_chunk(listed, chunks, [&](int c, std::size_t begin, std::size_t end) {
     ScannedChunk& chunk = scanned_[static_cast<std::size_t>(c)];
     chunk.pairs.clear();
-    chunk.bounds.clear();
     if (anchored_by_chunk) anchor(begin, end);
-    scan_list(list, ranges, q, box, particles.radius.data(), bonded_pairs, begin, end, chunk.pairs,
-              chunk.bounds);
+    scan_list(ranges, q, box, particles.radius.data(), bonded_pairs, begin, end, chunk.pairs);
   });
   if (!anchored_by_chunk) anchor(0, n);
   list_ = &list;
   list_builds_ = list.builds();
 }
 
-void NearbyRows::scan_list(const NeighborList& list, const NeighborList::PartnerRanges& ranges,
-                           const Vec3* q, const Box& box, const double* radius, bool bonded_pairs,
-                           std::size_t first, std::size_t last, std::vector<Pair>& pairs,
-                           std::vector<PairBound>& bounds) const {
+void NearbyRows::scan_list(const NeighborList::PartnerRanges& ranges, const Vec3* q, const Box& box,
+                           const double* radius, bool bonded_pairs, std::size_t first,
+                           std::size_t last, std::vector<Pair>& pairs) const {
   const std::int32_t* neighbors = ranges.neighbors;
   const std::uint8_t* codes = ranges.image_codes;
-  const Vec3* shifts = list.image_shifts().data();
+  const Vec3* shifts = shifts_.data();
   const bool shifted = shifted_;
   const double margin = margin_;
   // Generous by far more than rounding: no pair within contact + margin is dropped.
@@ -66,21 +67,18 @@ void NearbyRows::scan_list(const NeighborList& list, const NeighborList::Partner
     const double within = contact + margin;
     return d2 > within * within * (1.0 + 1e-6) + 1e-300;
   };
-  // Entry k of owner i, at squared distance d2, as the pair a < b with the shift oriented
-  // for q_a - q_b, unless bonded.
+  // Entry k of owner i, at squared distance d2, as the pair a < b, unless bonded.
   auto add = [&](std::size_t i, std::size_t k, double d2) {
     const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
     const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
     if (bonded_pairs && bonded(a, b)) return;
-    Vec3 shift;
-    if (shifted) {
-      // The list's shift is for q_i - q_j: negated when i is the pair's second particle.
-      shift = shifts[codes[k]];
-      if (a != static_cast<std::int32_t>(i)) shift = -shift;
+    const double gap = std::sqrt(d2) - (radius[a] + radius[b]);
+    auto below = static_cast<float>(gap);
+    if (static_cast<double>(below) > gap) {
+      below = std::nextafter(below, -std::numeric_limits<float>::infinity());
     }
-    const double contact = radius[a] + radius[b];
-    pairs.push_back({a, b, contact, std::sqrt(d2) - contact, shift});
-    bounds.push_back({a, b, pairs.back().anchor_gap});
+    const bool negated = shifted && a != static_cast<std::int32_t>(i);
+    pairs.push_back({a, b, below, shifted ? codes[k] : std::uint8_t{0}, negated});
   };
   if (!shifted) {
     for (std::size_t i = first; i < last; ++i) {
@@ -212,6 +210,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     // split as cheap items: a pair's screen is a few operations (the 4000-sphere fluid's
     // 12700 pairs took 80 us a call on one thread), and on 2 threads of the loaded 2-core
     // machine a split call took 460 us (the sleeping partner's wake-up), bench/README.md.
+    const double* radius = particles.radius.data();
     const bool by_scanned_chunk = scanned_.size() > 1;
     const std::size_t first_count = scanned_[0].pairs.size();
     const std::size_t items = by_scanned_chunk ? scanned_.size() : first_count;
@@ -231,11 +230,11 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
         ScannedChunk& chunk = scanned_[static_cast<std::size_t>(c)];
         chunk.near.resize(chunk.pairs.size());
         chunk.near_d2.resize(chunk.pairs.size());
-        screen_pairs(chunk, q, box, reach, particle_reach, exact_below, beyond, 0,
+        screen_pairs(chunk, q, box, radius, reach, particle_reach, exact_below, beyond, 0,
                      chunk.pairs.size(), rows, gaps);
       } else {
-        screen_pairs(scanned_[0], q, box, reach, particle_reach, exact_below, beyond, begin, end,
-                     rows, gaps);
+        screen_pairs(scanned_[0], q, box, radius, reach, particle_reach, exact_below, beyond, begin,
+                     end, rows, gaps);
       }
     });
     for (int c = 1; c < chunks; ++c) {
@@ -263,9 +262,10 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
 // the nearest image): it differs from the minimum image by rounding at most, far inside the
 // screen's margin. A pair inside contact + reach by far more than rounding is kept without
 // its square root, and its gap is needed only if it may be at most `exact_below`.
-void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box, double reach,
-                              const double* particle_reach, double exact_below, double beyond,
-                              std::size_t first, std::size_t last, std::vector<Constraint>& out,
+void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box,
+                              const double* radius, double reach, const double* particle_reach,
+                              double exact_below, double beyond, std::size_t first,
+                              std::size_t last, std::vector<Constraint>& out,
                               std::vector<double>& gap_at_q) const {
   const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
   const double infinity = std::numeric_limits<double>::infinity();
@@ -280,19 +280,29 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
   // squared distances, which are then tested in order. This chunk's indices go to its own
   // stretch of the chunk's near / near_d2, [first, last).
   const double* moved = moved_.data();
-  const PairBound* bounds = chunk.bounds.data();
   const Pair* pairs = chunk.pairs.data();
+  // The pair's contact distance and shift, as make() took them.
+  const bool one_radius = one_radius_;
+  const double one_contact = one_contact_;
+  auto contact_of = [=](const Pair& pair) {
+    return one_radius ? one_contact : radius[pair.a] + radius[pair.b];
+  };
+  auto shift_of = [this](const Pair& pair) {
+    const Vec3& shift = shifts_[pair.code];
+    return pair.negated ? -shift : shift;
+  };
   std::int32_t* near = chunk.near.data() + first;
   double* near_d2 = chunk.near_d2.data() + first;
   std::size_t count = 0;
   for (std::size_t k = first; k < last; ++k) {
-    const PairBound& bound = bounds[k];
+    const Pair& pair = pairs[k];
     near[count] = static_cast<std::int32_t>(k);
-    count += !(bound.anchor_gap - moved[bound.a] - moved[bound.b] > beyond) ? 1 : 0;
+    count +=
+        !(static_cast<double>(pair.anchor_gap) - moved[pair.a] - moved[pair.b] > beyond) ? 1 : 0;
   }
   std::size_t within_count = 0;
   auto screen_pair = [&](std::int32_t k, double d2) {
-    const double within = pairs[k].contact + pair_reach(pairs[k].a, pairs[k].b);
+    const double within = contact_of(pairs[k]) + pair_reach(pairs[k].a, pairs[k].b);
     near[within_count] = k;
     near_d2[within_count] = d2;
     within_count += !(d2 > within * within * screen + 1e-300) ? 1 : 0;
@@ -300,7 +310,7 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
   if (shifted_) {
     for (std::size_t m = 0; m < count; ++m) {
       const Pair& pair = pairs[near[m]];
-      screen_pair(near[m], norm2(q[pair.a] - q[pair.b] - pair.shift));
+      screen_pair(near[m], norm2(q[pair.a] - q[pair.b] - shift_of(pair)));
     }
   } else {
     for (std::size_t m = 0; m < count; ++m) {
@@ -311,13 +321,14 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
   for (std::size_t m = 0; m < within_count; ++m) {
     const Pair& pair = pairs[near[m]];
     const double d2 = near_d2[m];
+    const double contact = contact_of(pair);
     const double row_reach = pair_reach(pair.a, pair.b);
-    const double within = pair.contact + row_reach;
-    const double near_gap = pair.contact + exact_below;
+    const double within = contact + row_reach;
+    const double near_gap = contact + exact_below;
     double gap = infinity;
-    if (!(d2 <= within * within * sure) || exact_below < -0.5 * pair.contact ||
+    if (!(d2 <= within * within * sure) || exact_below < -0.5 * contact ||
         d2 <= near_gap * near_gap * screen + 1e-300) {
-      gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - pair.contact;
+      gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - contact;
       if (!(gap <= row_reach)) continue;
     }
     // sphere_pair(a, b)'s row, made in place (its contact is the pair's).
@@ -325,7 +336,7 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
     row.kind = ConstraintKind::sphere_pair;
     row.i = pair.a;
     row.j = pair.b;
-    row.length = pair.contact;
+    row.length = contact;
     gap_at_q.push_back(gap);
   }
 }

@@ -44,18 +44,19 @@ class NearbyRows {
   bool bonded(std::int32_t a, std::int32_t b) const;
 
   double margin_;
-  // a < b, in the neighbour list's order, with their contact distance, their gap at the
-  // anchor positions and, when the list has image codes, the periodic shift that makes
-  // q_a - q_b - shift their separation.
+  // a < b, in the neighbour list's order, with a lower bound on their gap at the anchor
+  // positions (in single precision, rounded down: a first screen may pass more pairs, never
+  // fewer) and, when the list has image codes, the code of the list's periodic shift for
+  // q_i - q_j, negated when a is the list's partner j (then q_a - q_b - shift is their
+  // separation). Contact distances are the radii's sums, made again where needed. 16 bytes a
+  // pair: the screen's second pass reads the pairs its first leaves in no order, one line of
+  // memory each (with the shift and contact kept, 48 bytes a pair, that pass was 40 % of
+  // screen_pairs' samples in the 32000-sphere fluid).
   struct Pair {
     std::int32_t a, b;
-    double contact, anchor_gap;
-    Vec3 shift;
-  };
-  // What the first screen reads of each pair, packed apart (a third of Pair's bytes).
-  struct PairBound {
-    std::int32_t a, b;
-    double anchor_gap;
+    float anchor_gap;
+    std::uint8_t code;
+    bool negated;
   };
   // The short list as make()'s chunks of the list's particles scanned it, each chunk's pairs
   // kept where its thread wrote them and screened there (joined in chunk order, they are the
@@ -63,7 +64,6 @@ class NearbyRows {
   // core at every make, and back at every screen.
   struct ScannedChunk {
     std::vector<Pair> pairs;
-    std::vector<PairBound> bounds;
     std::vector<std::int32_t> near;  // pairs that may be within reach, by index
     std::vector<double> near_d2;     // their squared distances at q, after the second screen
   };
@@ -71,19 +71,21 @@ class NearbyRows {
   // Entries of one owner scan_list() tests at a time (its buffers on the stack).
   static constexpr std::size_t kScanBlock = 64;
   // The list's pairs of particles [first, last) within contact + margin at q, appended.
-  void scan_list(const NeighborList& list, const NeighborList::PartnerRanges& ranges, const Vec3* q,
-                 const Box& box, const double* radius, bool bonded_pairs, std::size_t first,
-                 std::size_t last, std::vector<Pair>& pairs, std::vector<PairBound>& bounds) const;
+  void scan_list(const NeighborList::PartnerRanges& ranges, const Vec3* q, const Box& box,
+                 const double* radius, bool bonded_pairs, std::size_t first, std::size_t last,
+                 std::vector<Pair>& pairs) const;
   // The screen of the scanned chunk's pairs [first, last), their scratch at the same indices.
-  void screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box, double reach,
-                    const double* particle_reach, double exact_below, double beyond,
+  void screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box, const double* radius,
+                    double reach, const double* particle_reach, double exact_below, double beyond,
                     std::size_t first, std::size_t last, std::vector<Constraint>& out,
                     std::vector<double>& gap_at_q) const;
   // Screen chunks 1.. of collect() (chunk 0 writes in place).
   std::vector<std::vector<Constraint>> chunk_rows_;
   std::vector<std::vector<double>> chunk_gaps_;
   bool shifted_ = false;
-  bool one_radius_ = false;  // every particle's radius the same (one contact distance)
+  std::array<Vec3, 27> shifts_{};  // the list's image shifts by code
+  bool one_radius_ = false;        // every particle's radius the same:
+  double one_contact_ = 0.0;       // then every pair's contact distance
   std::vector<Vec3> anchor_;
   std::vector<double> moved_;  // per particle, |q - anchor| at the last call (+ its reach)
   const NeighborList* list_ = nullptr;
