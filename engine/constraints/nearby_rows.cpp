@@ -72,11 +72,13 @@ void NearbyRows::scan_list(const NeighborList::PartnerRanges& ranges, const Vec3
     const auto a = static_cast<std::int32_t>(std::min<std::size_t>(i, neighbors[k]));
     const auto b = static_cast<std::int32_t>(std::max<std::size_t>(i, neighbors[k]));
     if (bonded_pairs && bonded(a, b)) return;
+    // At most the gap: the nearest float (within half a unit in its last place) less two units
+    // and a floor for gaps near zero, rounded (half a unit) at most one and a half units down.
+    // Without a branch (the nearest float is above the gap half the time, unpredictably). An
+    // infinite or NaN gap gives NaN, which the first screen passes.
     const double gap = std::sqrt(d2) - (radius[a] + radius[b]);
-    auto below = static_cast<float>(gap);
-    if (static_cast<double>(below) > gap) {
-      below = std::nextafter(below, -std::numeric_limits<float>::infinity());
-    }
+    const auto nearest = static_cast<float>(gap);
+    const float below = nearest - (std::abs(nearest) * 0x1p-22f + 0x1p-100f);
     const bool negated = shifted && a != static_cast<std::int32_t>(i);
     pairs.push_back({a, b, below, shifted ? codes[k] : std::uint8_t{0}, negated});
   };
