@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/compact.hpp"
 #include "core/parallel.hpp"
 
 namespace deli {
@@ -269,7 +270,7 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
                               double exact_below, double beyond, std::size_t first,
                               std::size_t last, std::vector<Constraint>& out,
                               std::vector<double>& gap_at_q) const {
-  const double screen = 1.0 + 1e-6, sure = 1.0 - 1e-6;
+  const double screen_factor = 1.0 + 1e-6, sure = 1.0 - 1e-6;
   const double infinity = std::numeric_limits<double>::infinity();
   // A row's reach: the pair's two particle reaches, or the one reach for all.
   auto pair_reach = [particle_reach, reach](std::int32_t a, std::int32_t b) {
@@ -295,31 +296,35 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
   };
   std::int32_t* near = chunk.near.data() + first;
   double* near_d2 = chunk.near_d2.data() + first;
-  std::size_t count = 0;
-  for (std::size_t k = first; k < last; ++k) {
-    const Pair& pair = pairs[k];
-    near[count] = static_cast<std::int32_t>(k);
-    count +=
-        !(static_cast<double>(pair.anchor_gap) - moved[pair.a] - moved[pair.b] > beyond) ? 1 : 0;
-  }
-  std::size_t within_count = 0;
-  auto screen_pair = [&](std::int32_t k, double d2) {
-    const double within = contact_of(pairs[k]) + pair_reach(pairs[k].a, pairs[k].b);
-    near[within_count] = k;
-    near_d2[within_count] = d2;
-    within_count += !(d2 > within * within * screen + 1e-300) ? 1 : 0;
+  const std::size_t count = compact_passing(
+      first, last, 0,
+      [&](std::size_t k, std::size_t) {
+        const Pair& pair = pairs[k];
+        return !(static_cast<double>(pair.anchor_gap) - moved[pair.a] - moved[pair.b] > beyond);
+      },
+      [&](std::size_t at, std::size_t k, std::size_t) { near[at] = static_cast<std::int32_t>(k); });
+  // The second screen in place over near[0, count).
+  double d2_of_slot[kCompactBlock];
+  auto screen = [&](auto separation2) {
+    return compact_passing(
+        0, count, 0,
+        [&](std::size_t m, std::size_t slot) {
+          const Pair& pair = pairs[near[m]];
+          const double d2 = separation2(pair);
+          const double within = contact_of(pair) + pair_reach(pair.a, pair.b);
+          d2_of_slot[slot] = d2;
+          return !(d2 > within * within * screen_factor + 1e-300);
+        },
+        [&](std::size_t at, std::size_t m, std::size_t slot) {
+          near[at] = near[m];
+          near_d2[at] = d2_of_slot[slot];
+        });
   };
-  if (shifted_) {
-    for (std::size_t m = 0; m < count; ++m) {
-      const Pair& pair = pairs[near[m]];
-      screen_pair(near[m], norm2(q[pair.a] - q[pair.b] - shift_of(pair)));
-    }
-  } else {
-    for (std::size_t m = 0; m < count; ++m) {
-      const Pair& pair = pairs[near[m]];
-      screen_pair(near[m], norm2(box.minimum_image(q[pair.a] - q[pair.b])));
-    }
-  }
+  const std::size_t within_count =
+      shifted_
+          ? screen([&](const Pair& pair) { return norm2(q[pair.a] - q[pair.b] - shift_of(pair)); })
+          : screen(
+                [&](const Pair& pair) { return norm2(box.minimum_image(q[pair.a] - q[pair.b])); });
   for (std::size_t m = 0; m < within_count; ++m) {
     const Pair& pair = pairs[near[m]];
     const double d2 = near_d2[m];
@@ -329,7 +334,7 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
     const double near_gap = contact + exact_below;
     double gap = infinity;
     if (!(d2 <= within * within * sure) || exact_below < -0.5 * contact ||
-        d2 <= near_gap * near_gap * screen + 1e-300) {
+        d2 <= near_gap * near_gap * screen_factor + 1e-300) {
       gap = norm(box.minimum_image(q[pair.a] - q[pair.b])) - contact;
       if (!(gap <= row_reach)) continue;
     }

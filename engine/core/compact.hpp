@@ -1,0 +1,35 @@
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+namespace deli {
+
+// The items of [first, last) that pass a test, kept in order: test(k, slot) for each item k
+// (slot: k's place in its block of kCompactBlock, for the test's own scratch), then
+// emit(count, k, slot) for each item, count the number passed before it; a failed item's
+// emit is overwritten by the next one's. Returns count plus the number passed.
+//
+// The tests run first, a block at a time, into flags, then the block is compacted. Fused
+// (out[count] = k; count += test(k)), each store's address waits for the previous item's
+// test, and the loop waited with it: a 32000-sphere fluid's first screen (two loads and a
+// compare an item) took 7.0 ns an item, 1.4 ns with the tests first (AMD Zen 3,
+// bench/README.md, stop 52).
+inline constexpr std::size_t kCompactBlock = 256;
+template <class Test, class Emit>
+std::size_t compact_passing(std::size_t first, std::size_t last, std::size_t count, Test&& test,
+                            Emit&& emit) {
+  std::uint8_t passed[kCompactBlock];
+  for (std::size_t base = first; base < last; base += kCompactBlock) {
+    const std::size_t end = std::min(last, base + kCompactBlock);
+    for (std::size_t k = base; k < end; ++k) passed[k - base] = test(k, k - base) ? 1 : 0;
+    for (std::size_t k = base; k < end; ++k) {
+      emit(count, k, k - base);
+      count += passed[k - base];
+    }
+  }
+  return count;
+}
+
+}  // namespace deli
