@@ -13,9 +13,10 @@ namespace deli {
 //
 // The tests run first, a block at a time, into flags, then the block is compacted. Fused
 // (out[count] = k; count += test(k)), each store's address waits for the previous item's
-// test, and the loop waited with it: a 32000-sphere fluid's first screen (two loads and a
-// compare an item) took 7.0 ns an item, 1.4 ns with the tests first (AMD Zen 3,
-// bench/README.md, stop 52). Where each test is short, the fused loop is the faster: the
+// test, and the loop waited with it: a replica of the 32000-sphere fluid's first screen
+// (two loads and a compare an item) took 7.0 ns an item, 1.4 ns with the tests first (AMD
+// Zen 3), and in the fluid's run NearbyRows::screen_pairs took 0.57x its samples
+// (bench/README.md, stop 52). Where each test is short, the fused loop is the faster: the
 // masked pair Hessians' scan (a load and a compare an entry) took 1.4x its samples this way,
 // the test of their reach 1.07x, the short list's scan of the neighbour list 1.07x.
 inline constexpr std::size_t kCompactBlock = 256;
