@@ -278,10 +278,11 @@ void NearbyRows::screen_pairs(ScannedChunk& chunk, const Vec3* q, const Box& box
   };
   // A pair whose gap at q is certainly beyond the reach (its anchor gap less both
   // displacements exceeds it by far more than rounding) is one the exact test drops too.
-  // The others' indices are gathered first without a branch (about half the pairs pass,
-  // unpredictably), then, again without a branch, those within the screen with their
-  // squared distances, which are then tested in order. This chunk's indices go to its own
-  // stretch of the chunk's near / near_d2, [first, last).
+  // The others' indices are gathered first without a branch (about a quarter of the pairs
+  // pass, unpredictably), then, again without a branch, those within the screen with their
+  // squared distances, which are then tested in order; each gathering with its tests first
+  // (compact_passing). This chunk's indices go to its own stretch of the chunk's near /
+  // near_d2, [first, last).
   const double* moved = moved_.data();
   const Pair* pairs = chunk.pairs.data();
   // The pair's contact distance and shift, as make() took them.
