@@ -192,7 +192,10 @@ bool normal_triples_vectorised() {
   return true;
 }
 
-// The AVX-512 form four streams at a time, its masks as lanes of all ones.
+// The AVX-512 form four streams at a time, its masks as lanes of all ones; the third block
+// made only for the vectors with a lane that has not accepted two of its first four pairs
+// (one vector in eight: a pair is accepted with probability pi/4, so a stream lacks two in
+// four with probability 0.033), the same numbers as made for every vector.
 constexpr int kBlocks = 3;
 
 void normal_triples(std::uint64_t seed, const PhiloxCounter* start, std::size_t count, Vec3* out) {
@@ -208,36 +211,49 @@ void normal_triples(std::uint64_t seed, const PhiloxCounter* start, std::size_t 
     for (int q = 0; q < 4; ++q) {
       counter.w[q] = _mm256_load_si256(reinterpret_cast<const __m256i*>(word[q]));
     }
+    // The stream's blocks: the counter's last word plus 0, 1 and 2 (RandomStream::refill),
+    // in 32 bits.
     Block4 block[kBlocks];
-    for (int b = 0; b < kBlocks; ++b) {
+    auto make_block = [&](int b) {
       block[b] = philox4(counter, key0, key1);
       counter.w[3] = _mm256_and_si256(_mm256_add_epi64(counter.w[3], _mm256_set1_epi64x(1)),
                                       _mm256_set1_epi64x(0xffffffffLL));
-    }
-    constexpr int pairs = 2 * kBlocks;
-    __m256d u[pairs], v[pairs], s[pairs], accepted[pairs];
-    for (int q = 0; q < pairs; ++q) {
-      const Block4& b = block[q / 2];
-      u[q] = symmetric(b.w[2 * (q % 2)]);
-      v[q] = symmetric(b.w[2 * (q % 2) + 1]);
-      s[q] = _mm256_add_pd(_mm256_mul_pd(u[q], u[q]), _mm256_mul_pd(v[q], v[q]));
-      accepted[q] = _mm256_cmp_pd(s[q], one, _CMP_LT_OQ);
-    }
-    __m256d u1 = u[0], v1 = v[0], s1 = s[0];
-    __m256d u2 = u[0], s2 = s[0];
+    };
+    // The first accepted pair (u1, v1, s1), then the next accepted one after it (u2, s2);
+    // lanes with fewer than two accepted among the first six pairs are drawn by RandomStream
+    // (s = 1 until a pair is found: such a lane takes no logarithm of 0).
+    __m256d u1 = _mm256_setzero_pd(), v1 = u1, u2 = u1, s1 = one, s2 = one;
     __m256d none_before = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
     __m256d one_before = _mm256_setzero_pd(), second_found = _mm256_setzero_pd();
-    for (int q = 0; q < pairs; ++q) {
-      const __m256d first_here = _mm256_and_pd(none_before, accepted[q]);
-      const __m256d second_here = _mm256_and_pd(one_before, accepted[q]);
-      u1 = _mm256_blendv_pd(u1, u[q], first_here);
-      v1 = _mm256_blendv_pd(v1, v[q], first_here);
-      s1 = _mm256_blendv_pd(s1, s[q], first_here);
-      u2 = _mm256_blendv_pd(u2, u[q], second_here);
-      s2 = _mm256_blendv_pd(s2, s[q], second_here);
-      second_found = _mm256_or_pd(second_found, second_here);
-      one_before = _mm256_or_pd(_mm256_andnot_pd(accepted[q], one_before), first_here);
-      none_before = _mm256_andnot_pd(accepted[q], none_before);
+    auto take_pairs = [&](int first_pair, int last_pair) {
+      constexpr int pairs = 2 * kBlocks;
+      __m256d u[pairs], v[pairs], s[pairs], accepted[pairs];
+      for (int q = first_pair; q < last_pair; ++q) {
+        const Block4& b = block[q / 2];
+        u[q] = symmetric(b.w[2 * (q % 2)]);
+        v[q] = symmetric(b.w[2 * (q % 2) + 1]);
+        s[q] = _mm256_add_pd(_mm256_mul_pd(u[q], u[q]), _mm256_mul_pd(v[q], v[q]));
+        accepted[q] = _mm256_cmp_pd(s[q], one, _CMP_LT_OQ);
+      }
+      for (int q = first_pair; q < last_pair; ++q) {
+        const __m256d first_here = _mm256_and_pd(none_before, accepted[q]);
+        const __m256d second_here = _mm256_and_pd(one_before, accepted[q]);
+        u1 = _mm256_blendv_pd(u1, u[q], first_here);
+        v1 = _mm256_blendv_pd(v1, v[q], first_here);
+        s1 = _mm256_blendv_pd(s1, s[q], first_here);
+        u2 = _mm256_blendv_pd(u2, u[q], second_here);
+        s2 = _mm256_blendv_pd(s2, s[q], second_here);
+        second_found = _mm256_or_pd(second_found, second_here);
+        one_before = _mm256_or_pd(_mm256_andnot_pd(accepted[q], one_before), first_here);
+        none_before = _mm256_andnot_pd(accepted[q], none_before);
+      }
+    };
+    make_block(0);
+    make_block(1);
+    take_pairs(0, 4);
+    if (_mm256_movemask_pd(second_found) != 0xf) {
+      make_block(2);
+      take_pairs(4, 6);
     }
     const __m256d f1 = polar_factor(s1), f2 = polar_factor(s2);
     alignas(32) double x[4], y[4], z[4];
