@@ -101,13 +101,9 @@ void NearbyRows::scan_list(const NeighborList::PartnerRanges& ranges, const Vec3
   // entries are tested without a branch on the outcome (those within, and their squares,
   // gathered first), without the zero shift's subtraction (x - 0 is x but for the sign of a
   // zero, which squares alike), and, where every particle has one radius, against one bound.
-  std::uint8_t unshifted = 255;  // no code (no shift is zero)
-  for (int code = 26; code >= 0; --code) {
-    const Vec3& shift = shifts[code];
-    if (shift.x == 0.0 && shift.y == 0.0 && shift.z == 0.0) {
-      unshifted = static_cast<std::uint8_t>(code);
-    }
-  }
+  const auto unshifted = static_cast<std::uint8_t>(zero_shift_code(shifts));
+  const bool one_radius = one_radius_;
+  const double one_contact = one_contact_;
   auto separation2 = [&](const Vec3& qi, std::size_t k) {
     const std::uint8_t code = codes[k];
     const Vec3 d = qi - q[neighbors[k]];
@@ -118,13 +114,12 @@ void NearbyRows::scan_list(const NeighborList::PartnerRanges& ranges, const Vec3
   for (std::size_t i = first; i < last; ++i) {
     const Vec3 qi = q[i];
     const double ri = radius[i];
-    const double one_contact = ri + ri;
     for (std::size_t block = ranges.begin[i]; block < ranges.end[i]; block += kScanBlock) {
       const std::size_t block_end = std::min(ranges.end[i], block + kScanBlock);
       std::size_t count = 0;
       for (std::size_t k = block; k < block_end; ++k) {
         const double d2 = separation2(qi, k);
-        const double contact = one_radius_ ? one_contact : ri + radius[neighbors[k]];
+        const double contact = one_radius ? one_contact : ri + radius[neighbors[k]];
         within[count] = static_cast<std::uint32_t>(k - block);
         within_d2[count] = d2;
         count += beyond(d2, contact) ? 0 : 1;

@@ -210,4 +210,16 @@ class NeighborList {
   mutable std::int64_t chunk_starts_build_ = -1;
 };
 
+// Of the 27 image shifts by code (image_shifts()), the code of the zero shift (the list's
+// numbering, not assumed), or 255, never a code, if there is none: loops over the list skip
+// the shift's subtraction where an entry has it.
+inline int zero_shift_code(const Vec3* shifts) {
+  int zero_shift = 255;
+  for (int code = 26; code >= 0; --code) {
+    const Vec3& s = shifts[code];
+    if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) zero_shift = code;
+  }
+  return zero_shift;
+}
+
 }  // namespace deli

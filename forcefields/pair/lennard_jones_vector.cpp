@@ -2,6 +2,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "neighbor/neighbor_list.hpp"
 #include "pair/lennard_jones.hpp"
 
 #if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512BW__)
@@ -50,17 +51,6 @@ inline void add_tallies_in_lane_order(const double (&pair)[7][8], unsigned in, d
     w.xx += pair[1][l], w.yy += pair[2][l], w.zz += pair[3][l];
     w.xy += pair[4][l], w.xz += pair[5][l], w.yz += pair[6][l];
   }
-}
-
-// The code of a zero image shift (the list's numbering, not assumed here), or 255, never a
-// code, if there is none: vectors whose lanes all have it skip the shift.
-inline int zero_shift_code(const Vec3* shifts) {
-  int zero_shift = 255;
-  for (int code = 26; code >= 0; --code) {
-    const Vec3& s = shifts[code];
-    if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) zero_shift = code;
-  }
-  return zero_shift;
 }
 
 }  // namespace
