@@ -174,27 +174,29 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     bool fresh = list_ == &list && list_builds_ == list.builds() &&
                  anchor_.size() == particles.size() && reach < margin_;
     if (fresh) {
-      // The squares first, then the roots as packets (std::sqrt, which may set errno, does
-      // not vectorise), chunk by chunk as the step's other passes over the particles (each
-      // thread on the particles whose lines it holds); the largest square is exact in any
-      // grouping.
+      // The squares first, then, in the same job, the roots as packets (std::sqrt, which may
+      // set errno, does not vectorise), chunk by chunk as the step's other passes over the
+      // particles (each thread on the particles whose lines it holds); the largest square is
+      // exact in any grouping.
       const std::size_t count = anchor_.size();
       const Vec3* anchor = anchor_.data();
       double* moved = moved_.data();
-      const double largest2 = ordered_max(count, 0.0, [&](std::size_t i) {
-        moved[i] = norm2(q[i] - anchor[i]);
-        return moved[i];
-      });
-      for_each_chunk(count, chunks_for_cheap(count), [&](int, std::size_t begin, std::size_t end) {
-        const auto length = static_cast<Eigen::Index>(end - begin);
-        Eigen::Map<Eigen::ArrayXd> distance(moved + begin, length);
-        if (particle_reach) {
-          distance =
-              distance.sqrt() + Eigen::Map<const Eigen::ArrayXd>(particle_reach + begin, length);
-        } else {
-          distance = distance.sqrt();
-        }
-      });
+      const double largest2 = ordered_max_then(
+          count, 0.0,
+          [&](std::size_t i) {
+            moved[i] = norm2(q[i] - anchor[i]);
+            return moved[i];
+          },
+          [&](std::size_t begin, std::size_t end) {
+            const auto length = static_cast<Eigen::Index>(end - begin);
+            Eigen::Map<Eigen::ArrayXd> distance(moved + begin, length);
+            if (particle_reach) {
+              distance = distance.sqrt() +
+                         Eigen::Map<const Eigen::ArrayXd>(particle_reach + begin, length);
+            } else {
+              distance = distance.sqrt();
+            }
+          });
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);
       fresh = largest2 <= room * room;

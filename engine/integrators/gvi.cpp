@@ -386,7 +386,7 @@ bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32
   }
   // Without a branch per particle (none is expected to fail): a count of failures.
   const int chunks = chunks_for_cheap(x.size());
-  std::vector<std::size_t> outgrown(static_cast<std::size_t>(chunks), 0);
+  ChunkSlots<std::size_t> outgrown(static_cast<std::size_t>(chunks));
   for_each_chunk(x.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
     std::size_t count = 0;
     for (std::size_t i = begin; i < end; ++i) count += !(norm2(at[i] - q[i]) <= limit2[i]);
@@ -460,9 +460,12 @@ void Gvi::find_active_set(System& system) {
   // made again (the same numbers a whole prediction would give).
   const bool local_predictions =
       lagrangian_ == Lagrangian::verlet && constraints_.equalities.empty();
+  const bool clear =
+      local_predictions && ws_.prediction_changed_clear && ws_.prediction_changed.size() == n;
+  ws_.prediction_changed_clear = false;
   ws_.prediction_changed.resize(n);
   const char initial = local_predictions ? 0 : 1;
-  parallel_for(n, [&, initial](std::size_t i) { ws_.prediction_changed[i] = initial; });
+  if (!clear) parallel_for(n, [&, initial](std::size_t i) { ws_.prediction_changed[i] = initial; });
   ws_.changed_particles.clear();
   bool settled = false;
   // After the first round: a bound on max |prediction - q|^2, from the last round's and the
@@ -480,7 +483,7 @@ void Gvi::find_active_set(System& system) {
     // Split as the pass that wrote the predictions was.
     filter_in_order(
         candidates.size(), chunks_for_rows_of(system.particles.size(), candidates.size()),
-        ws_.candidate_passed,
+        ws_.candidate_passing,
         [&, every_row, gap_tolerance](std::size_t k) {
           const Constraint& c = candidates[k];
           if (!every_row && !ws_.prediction_changed[c.i] &&
@@ -527,6 +530,11 @@ void Gvi::find_active_set(System& system) {
       if (!changed) return 0.0;
       return norm2(a - ws_.q[i]);
     });
+  }
+  if (local_predictions) {
+    // The last round's marks (reflect_and_predict unmarks the earlier rounds').
+    for (std::int32_t i : ws_.changed_particles) ws_.prediction_changed[i] = 0;
+    ws_.prediction_changed_clear = true;
   }
   stats_.active += static_cast<std::int64_t>(active.size());
   if (!settled) ++stats_.active_set_caps;
@@ -807,27 +815,36 @@ void Gvi::update_positions(System& system) {
       // that wrote x was.
       const std::vector<Constraint>& candidates =
           candidates_for(system, ws_.x, ws_.x_largest2, true);
-      const int chunks = chunks_for_rows_of(system.particles.size(), candidates.size());
-      ws_.candidate_passed.resize(candidates.size());
-      std::vector<double> chunk_smallest(static_cast<std::size_t>(chunks),
-                                         std::numeric_limits<double>::infinity());
-      for_each_chunk(candidates.size(), chunks,
-                     [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
-                       double smallest = std::numeric_limits<double>::infinity();
-                       for (std::size_t k = begin; k < end; ++k) {
-                         const double gap =
-                             gap_unless_beyond(candidates[k], ws_.x.data(), system.box,
-                                               std::max(smallest, -gap_tolerance));
-                         smallest = std::min(smallest, gap);
-                         ws_.candidate_passed[k] = gap < -gap_tolerance;
-                       }
-                       chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
-                     });
+      const std::size_t count = candidates.size();
+      const int chunks = chunks_for_rows_of(system.particles.size(), count);
+      // Each chunk keeps its overlapping rows at the start of its stretch of `passing`: the
+      // calling thread reads those alone, not a flag per row.
+      std::vector<std::uint32_t>& passing = ws_.candidate_passing;
+      passing.resize(count);
+      const auto slots = static_cast<std::size_t>(chunks);
+      ws_.chunk_smallest.assign(slots, std::numeric_limits<double>::infinity());
+      ws_.chunk_kept.assign(slots, 0);
+      for_each_chunk(
+          count, chunks, [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
+            double smallest = std::numeric_limits<double>::infinity();
+            std::size_t at = begin;
+            for (std::size_t k = begin; k < end; ++k) {
+              const double gap = gap_unless_beyond(candidates[k], ws_.x.data(), system.box,
+                                                   std::max(smallest, -gap_tolerance));
+              smallest = std::min(smallest, gap);
+              if (gap < -gap_tolerance) passing[at++] = static_cast<std::uint32_t>(k);
+            }
+            ws_.chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
+            ws_.chunk_kept[static_cast<std::size_t>(chunk)] = at - begin;
+          });
       double smallest = std::numeric_limits<double>::infinity();
-      for (const double s : chunk_smallest) smallest = std::min(smallest, s);
-      for (std::size_t k = 0; k < candidates.size(); ++k) {
-        if (ws_.candidate_passed[k] && !contains(ws_.held, candidates[k])) {
-          ws_.violated.push_back(candidates[k]);
+      for (const double s : ws_.chunk_smallest) smallest = std::min(smallest, s);
+      for (int c = 0; c < chunks; ++c) {
+        const std::size_t begin = chunk_range(count, c, chunks).begin;
+        const std::size_t end = begin + ws_.chunk_kept[static_cast<std::size_t>(c)];
+        for (std::size_t m = begin; m < end; ++m) {
+          const Constraint& row = candidates[passing[m]];
+          if (!contains(ws_.held, row)) ws_.violated.push_back(row);
         }
       }
       ws_.x_smallest_gap = smallest;
@@ -904,9 +921,20 @@ void Gvi::update_momenta(System& system, bool tally) {
   }
   // momentum = half + impulse; momentum += f (0.5 h), in vectors.
   const double* impulse = held_impulses(ws_);
+  // No row to project the momenta on, none landed (the hard-sphere fluid's usual step): the
+  // velocities in the kick's pass, one job of the team rather than two.
+  const bool kick_alone = ws_.held.empty() && constraints_.equalities.empty() && !landed;
   for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
     gvi_passes::second_kick(h, numbers(ws_.half), impulse, numbers(f), numbers(p), begin, end);
+    if (kick_alone) {
+      gvi_passes::velocities(numbers(p), P.mass.data(), numbers(P.velocity), begin, end);
+    }
   });
+  if (kick_alone) {
+    ws_.momentum_rows.clear();
+    step_virial_ += ws_.position_virial;
+    return;
+  }
   const bool elastic = feasibility_ == Feasibility::reflect || feasibility_ == Feasibility::restore;
   ws_.momentum_rows.clear();
   for (const Constraint& c : ws_.held) {

@@ -41,12 +41,16 @@ struct GviWorkspace {
   std::vector<Vec3> previous_prediction;
   std::vector<char> prediction_changed;
   std::vector<std::int32_t> changed_particles;  // those marked in prediction_changed
+  // prediction_changed holds zeros alone (local predictions unmark their particles at the
+  // end of the search): the next search need not clear it in a pass of its own.
+  bool prediction_changed_clear = false;
   // By share of the reflections: the particles whose prediction changed, and the bound on
   // their max |prediction - q|^2.
   std::vector<std::vector<std::int32_t>> changed_of_chunk;
   std::vector<double> changed_largest2;
   std::vector<char> candidate_active;  // per candidate row: in the active set
-  std::vector<char> candidate_passed;  // per candidate row: a threaded test's result
+  // The candidate rows that passed a threaded test, at the start of each chunk's stretch.
+  std::vector<std::uint32_t> candidate_passing;
   std::vector<std::pair<std::uint64_t, std::int32_t>> row_keys;  // mark_contained's scratch
   // The equality rows followed by some inequality rows (Gvi::equalities_and writes it).
   std::vector<Constraint> rows;
@@ -65,6 +69,10 @@ struct GviWorkspace {
   std::vector<std::size_t> chunk_unlisted;  // displaced()'s per chunk
   std::vector<double> chunk_largest2;       // displaced()'s per chunk
   std::vector<std::size_t> chunk_outgrown;  // displaced()'s and start_step()'s, per chunk
+  // The feasibility guard's, per chunk: its smallest gap and its rows kept in
+  // candidate_passing.
+  std::vector<double> chunk_smallest;
+  std::vector<std::size_t> chunk_kept;
   std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
   double x_smallest_gap = 0.0;        // smallest candidate gap at x (feasibility guard's pass)
   bool x_smallest_gap_known = false;  // for the x of the last position update

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -370,6 +371,46 @@ TEST(Threads, AChunksExceptionIsTheOneASerialLoopMeetsFirst) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "chunk 0");
   }
+}
+
+// filter_in_order joins the items that pass in the serial loop's order, whatever the split:
+// 1, 3 and 20 chunks (past the 16 per-chunk slots kept on the stack), items passing
+// unevenly (none in some chunks, all in others).
+TEST(Threads, FilterJoinsThePassingItemsInTheSerialOrder) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const ThreadCount threads(4);
+  const std::size_t n = 5000;
+  auto passes = [](std::size_t k) { return (k % 7 == 3) || (k >= 2000 && k < 2600) || k == n - 1; };
+  std::vector<std::size_t> serial;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (passes(k)) serial.push_back(k);
+  }
+  std::vector<std::uint32_t> scratch;
+  for (const int chunks : {1, 3, 20}) {
+    std::vector<std::size_t> joined;
+    filter_in_order(n, chunks, scratch, passes, [&](std::size_t k) { joined.push_back(k); });
+    EXPECT_EQ(joined, serial) << chunks << " chunks";
+  }
+}
+
+// ordered_max_then: the serial maximum, and after() run once on every item's chunk, after
+// the terms of that chunk (each item's output seen there).
+TEST(Threads, OrderedMaxThenRunsAfterOnEveryChunkItsTermsWrote) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  const ThreadCount threads(2);
+  const std::size_t n = 4096;
+  std::vector<double> term_of(n, 0.0), after_of(n, -1.0);
+  const double largest = ordered_max_then(
+      n, -1.0,
+      [&](std::size_t i) {
+        term_of[i] = static_cast<double>((i * 37) % 1001);
+        return term_of[i];
+      },
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) after_of[i] = 2.0 * term_of[i];
+      });
+  EXPECT_EQ(largest, 1000.0);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(after_of[i], 2.0 * term_of[i]) << i;
 }
 
 // The second pass of for_each_chunk_then reads what every chunk of the first wrote (the
