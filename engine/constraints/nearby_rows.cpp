@@ -206,7 +206,11 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
     // Each scanned chunk screened on its own thread into its own rows, joined in chunk order:
     // the serial screen's rows in its order on any number of threads (chunk 0 appends in
-    // place). One scanned chunk (fewer listed pairs than split as cheap items) has its pairs
+    // place, the others are appended after it by chunk 1's thread, in the same job: the rows
+    // it screened stay on its core, as do the rows of `out` after chunk 0's, which the
+    // active set's tests split in two read there; joined by the calling thread, they crossed
+    // to its core and back, 4 % of the 4000-sphere fluid's loop on two threads). One scanned
+    // chunk (fewer listed pairs than split as cheap items) has its pairs
     // split as cheap items: a pair's screen is a few operations (the 4000-sphere fluid's
     // 12700 pairs took 80 us a call on one thread), and on 2 threads of the loaded 2-core
     // machine a split call took 460 us (the sleeping partner's wake-up), bench/README.md.
@@ -222,7 +226,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     }
     chunk_rows_.resize(static_cast<std::size_t>(chunks));
     chunk_gaps_.resize(static_cast<std::size_t>(chunks));
-    for_each_chunk(items, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    auto screen = [&](int c, std::size_t begin, std::size_t end) {
       std::vector<Constraint>& rows = c == 0 ? out : chunk_rows_[static_cast<std::size_t>(c)];
       std::vector<double>& gaps = c == 0 ? gap_at_q : chunk_gaps_[static_cast<std::size_t>(c)];
       if (c != 0) rows.clear(), gaps.clear();
@@ -236,12 +240,15 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
         screen_pairs(scanned_[0], q, box, radius, reach, particle_reach, exact_below, beyond, begin,
                      end, rows, gaps);
       }
-    });
-    for (int c = 1; c < chunks; ++c) {
-      const auto k = static_cast<std::size_t>(c);
-      out.insert(out.end(), chunk_rows_[k].begin(), chunk_rows_[k].end());
-      gap_at_q.insert(gap_at_q.end(), chunk_gaps_[k].begin(), chunk_gaps_[k].end());
-    }
+    };
+    auto join = [&](int c, std::size_t, std::size_t) {
+      if (c != 1) return;
+      for (std::size_t k = 1; k < static_cast<std::size_t>(chunks); ++k) {
+        out.insert(out.end(), chunk_rows_[k].begin(), chunk_rows_[k].end());
+        gap_at_q.insert(gap_at_q.end(), chunk_gaps_[k].begin(), chunk_gaps_[k].end());
+      }
+    };
+    for_each_chunk_then(items, items, chunks, screen, join);
   }
   for (const Wall& wall : set.walls) {
     for (std::size_t i = 0; i < particles.size(); ++i) {
