@@ -3,6 +3,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/cache_line.hpp"
+
 namespace deli {
 
 // The terms of a sum (a virial) that a loop over items makes item by item, possibly on
@@ -12,29 +14,36 @@ namespace deli {
 class OrderedTerms {
  public:
   // Room for `items` items, item k making at most capacity(k) terms; no term made yet.
+  // per_thread: the items are the threads' (a few, each adding many terms), and each item's
+  // count of terms made is kept on a cache line of its own.
   template <class Capacity>
-  void reset(std::size_t items, Capacity&& capacity) {
+  void reset(std::size_t items, Capacity&& capacity, bool per_thread = false) {
+    items_ = items;
+    stride_ = per_thread ? kCountsALine : 1;
     begin_.resize(items + 1);
-    made_.assign(items, 0);
+    made_.assign(items * stride_, 0);
     begin_[0] = 0;
     for (std::size_t k = 0; k < items; ++k) begin_[k + 1] = begin_[k] + capacity(k);
     terms_.resize(begin_[items]);
   }
-  void add(std::size_t item, double term) { terms_[begin_[item] + made_[item]++] = term; }
+  void add(std::size_t item, double term) { terms_[begin_[item] + made_[item * stride_]++] = term; }
   // Item k's next `count` slots, to be written by the caller.
   double* take(std::size_t item, std::size_t count) {
-    double* slots = terms_.data() + begin_[item] + made_[item];
-    made_[item] += count;
+    double* slots = terms_.data() + begin_[item] + made_[item * stride_];
+    made_[item * stride_] += count;
     return slots;
   }
   // total += every term, in item order.
   void add_to(double& total) const {
-    for (std::size_t k = 0; k < made_.size(); ++k) {
-      for (std::size_t t = begin_[k]; t < begin_[k] + made_[k]; ++t) total += terms_[t];
+    for (std::size_t k = 0; k < items_; ++k) {
+      const std::size_t end = begin_[k] + made_[k * stride_];
+      for (std::size_t t = begin_[k]; t < end; ++t) total += terms_[t];
     }
   }
 
  private:
+  static constexpr std::size_t kCountsALine = kCacheLine / sizeof(std::size_t);
+  std::size_t items_ = 0, stride_ = 1;
   std::vector<std::size_t> begin_, made_;
   std::vector<double> terms_;
 };

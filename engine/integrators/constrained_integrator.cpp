@@ -772,11 +772,12 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   const std::vector<Cluster> shared =
       shared_rows_.empty() ? std::vector<Cluster>{} : find_clusters(shared_rows_, n);
   // Each row makes one virial term at most.
-  reflection_terms_.reset(slots, [&](std::size_t) { return rows.size(); });
-  reflection_stats_.assign(slots, ConstraintStatistics{});
+  reflection_terms_.reset(
+      slots, [&](std::size_t) { return rows.size(); }, true);
+  reflection_stats_.assign(slots, OnItsOwnLine<ConstraintStatistics>{});
   for_each_chunk(slots, chunks, [&](int chunk, std::size_t, std::size_t) {
     const auto c = static_cast<std::size_t>(chunk);
-    const ReflectionTally tally{reflection_terms_, c, reflection_stats_[c]};
+    const ReflectionTally tally{reflection_terms_, c, reflection_stats_[c].value};
     // The lone rows' first particles are distinct: any sort orders them alike.
     std::vector<std::int32_t>& lone = lone_rows_of_chunk_[c];
     std::sort(lone.begin(), lone.end(),
@@ -816,7 +817,9 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     reflect_shared_before(static_cast<std::int32_t>(particles_of(c).end));
   });
   reflection_terms_.add_to(step_virial_);
-  for (const ConstraintStatistics& figures : reflection_stats_) stats_.add(figures);
+  for (const OnItsOwnLine<ConstraintStatistics>& figures : reflection_stats_) {
+    stats_.add(figures.value);
+  }
 }
 
 void ConstrainedIntegrator::reflect_cluster(const System& system,

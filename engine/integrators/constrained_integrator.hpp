@@ -9,6 +9,7 @@
 
 #include "constraints/clusters.hpp"
 #include "constraints/constraint_set.hpp"
+#include "core/cache_line.hpp"
 #include "core/ordered_terms.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/reflection.hpp"
@@ -261,7 +262,7 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<Constraint> shared_rows_;
   // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
   OrderedTerms reflection_terms_;
-  std::vector<ConstraintStatistics> reflection_stats_;
+  std::vector<OnItsOwnLine<ConstraintStatistics>> reflection_stats_;
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);

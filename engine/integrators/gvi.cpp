@@ -552,8 +552,10 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
   // Per share of the reflections: its changed particles and its bound.
   const auto shares = static_cast<std::size_t>(thread_count());
   ws_.changed_of_chunk.resize(shares);
-  for (std::vector<std::int32_t>& changed : ws_.changed_of_chunk) changed.clear();
-  ws_.changed_largest2.assign(shares, ws_.largest2);
+  for (OnItsOwnLine<std::vector<std::int32_t>>& changed : ws_.changed_of_chunk) {
+    changed.value.clear();
+  }
+  ws_.changed_largest2.assign(shares, OnItsOwnLine<double>{ws_.largest2});
   // The arrays by value: behind references they would be loaded again at every particle.
   const Vec3* p = ws_.p.data();
   const Vec3* force = f.data();
@@ -572,17 +574,18 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
       if (next.x != now.x || next.y != now.y || next.z != now.z) {
         now = next;
         changed[i] = 1;
-        ws_.changed_of_chunk[c].push_back(i);
-        ws_.changed_largest2[c] = std::max(ws_.changed_largest2[c], norm2(next - q[i]));
+        ws_.changed_of_chunk[c].value.push_back(i);
+        double& largest2 = ws_.changed_largest2[c].value;
+        largest2 = std::max(largest2, norm2(next - q[i]));
       }
     }
   };
   reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again);
   double largest2_bound = ws_.largest2;
   for (std::size_t c = 0; c < shares; ++c) {
-    const std::vector<std::int32_t>& of_chunk = ws_.changed_of_chunk[c];
+    const std::vector<std::int32_t>& of_chunk = ws_.changed_of_chunk[c].value;
     ws_.changed_particles.insert(ws_.changed_particles.end(), of_chunk.begin(), of_chunk.end());
-    largest2_bound = std::max(largest2_bound, ws_.changed_largest2[c]);
+    largest2_bound = std::max(largest2_bound, ws_.changed_largest2[c].value);
   }
   return largest2_bound;
 }

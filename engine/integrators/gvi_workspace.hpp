@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "constraints/constraint.hpp"
+#include "core/cache_line.hpp"
 #include "core/vec3.hpp"
 
 namespace deli {
@@ -46,8 +47,8 @@ struct GviWorkspace {
   bool prediction_changed_clear = false;
   // By share of the reflections: the particles whose prediction changed, and the bound on
   // their max |prediction - q|^2.
-  std::vector<std::vector<std::int32_t>> changed_of_chunk;
-  std::vector<double> changed_largest2;
+  std::vector<OnItsOwnLine<std::vector<std::int32_t>>> changed_of_chunk;
+  std::vector<OnItsOwnLine<double>> changed_largest2;
   std::vector<char> candidate_active;  // per candidate row: in the active set
   // The candidate rows that passed a threaded test, at the start of each chunk's stretch.
   std::vector<std::uint32_t> candidate_passing;
