@@ -83,12 +83,21 @@ thread_local bool in_job = false;
 
 // One worker thread and what the calling thread posts to it alone: a job is posted only to the
 // workers it runs on (threads 1..threads-1 of the job), so that a job of fewer chunks than the
-// team has threads wakes no other worker. Its own cache line: a worker spins on its counter
-// without reading a line the others write.
+// team has threads wakes no other worker. The job's fields share the post's cache line, and
+// the worker's count of jobs done has a line of its own that only the worker writes: where the
+// cores are far apart (a cache line's round trip of 400 ns) each line the worker reads after
+// the calling thread wrote it, or the calling thread after the worker, is a round trip on the
+// job's path (the job's fields on the team's line, a count of workers still running that both
+// sides wrote: an empty job 1.1 us there, bench/README.md, "Stop 53").
 struct alignas(64) Worker {
-  std::atomic<std::uint64_t> posted{0};  // jobs posted to this worker
+  // Written by the calling thread before the post, read by the worker after it.
+  TeamJob job = nullptr;
+  void* context = nullptr;
+  int threads = 1;
   std::atomic<bool> asleep{false};
-  std::mutex sleep_mutex;
+  std::atomic<std::uint64_t> posted{0};            // jobs posted to this worker
+  alignas(64) std::atomic<std::uint64_t> done{0};  // jobs it has finished
+  alignas(64) std::mutex sleep_mutex;
   std::condition_variable wake;
   std::thread thread;
 };
@@ -109,28 +118,35 @@ class Team {
       Worker& w = *workers_.back();
       w.thread = std::thread([this, index, &w] { work(index, w); });
     }
-    // The job's fields are read by the workers it is posted to, after their post, and
-    // written here only once the last job's workers have all finished it (below).
-    job_ = job;
-    context_ = context;
-    threads_ = threads;
-    arrived_.store(0, std::memory_order_relaxed);
-    remaining_.store(threads - 1, std::memory_order_relaxed);
-    for (int t = 1; t < threads; ++t) post(*workers_[static_cast<std::size_t>(t - 1)]);
+    // A worker reads its job's fields after their post, and finished the last job it was
+    // posted before this thread returned from it (below).
+    for (int t = 1; t < threads; ++t) {
+      Worker& w = *workers_[static_cast<std::size_t>(t - 1)];
+      w.job = job;
+      w.context = context;
+      w.threads = threads;
+      post(w);
+    }
     enter(0, threads);
     job(context, 0, threads);
     leave();
-    spin_until(threads, [&] { return remaining_.load(std::memory_order_acquire) == 0; });
+    for (int t = 1; t < threads; ++t) {
+      const Worker& w = *workers_[static_cast<std::size_t>(t - 1)];
+      const std::uint64_t posted = w.posted.load(std::memory_order_relaxed);
+      spin_until(threads, [&] { return w.done.load(std::memory_order_acquire) == posted; });
+    }
   }
 
-  void barrier() {
+  // `threads`: the job's. The last to arrive sets the count back to zero before it lets the
+  // others go, so every barrier, and every job, starts from zero.
+  void barrier(int threads) {
     const std::uint64_t phase = barrier_phase_.load(std::memory_order_acquire);
-    if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == threads_) {
+    if (arrived_.fetch_add(1, std::memory_order_acq_rel) + 1 == threads) {
       arrived_.store(0, std::memory_order_relaxed);
       barrier_phase_.store(phase + 1, std::memory_order_release);
       return;
     }
-    spin_until(threads_, [&] { return barrier_phase_.load(std::memory_order_acquire) != phase; });
+    spin_until(threads, [&] { return barrier_phase_.load(std::memory_order_acquire) != phase; });
   }
 
  private:
@@ -178,24 +194,21 @@ class Team {
       }
       seen = w.posted.load(std::memory_order_acquire);
       if (stop_.load(std::memory_order_acquire)) return;
-      last_threads = threads_;
+      last_threads = w.threads;
       enter(index, last_threads);
-      job_(context_, index, last_threads);
+      w.job(w.context, index, last_threads);
       leave();
-      remaining_.fetch_sub(1, std::memory_order_acq_rel);
+      w.done.store(seen, std::memory_order_release);
     }
   }
 
   std::mutex run_mutex_;
   std::vector<std::unique_ptr<Worker>> workers_;
-  // The running job.
-  TeamJob job_ = nullptr;
-  void* context_ = nullptr;
-  int threads_ = 1;
-  alignas(64) std::atomic<int> remaining_{0};
+  // Barriers within a job (their own line: written only by them).
   alignas(64) std::atomic<int> arrived_{0};
   std::atomic<std::uint64_t> barrier_phase_{0};
-  std::atomic<bool> stop_{false};
+  // Read by the workers at every job, written once.
+  alignas(64) std::atomic<bool> stop_{false};
 };
 
 Team& team() {
@@ -223,7 +236,7 @@ void run_on_team(int threads, TeamJob job, void* context) {
 
 void team_barrier() {
   if (!in_job || job_threads <= 1) return;
-  team().barrier();
+  team().barrier(job_threads);
 }
 
 int team_thread() {
