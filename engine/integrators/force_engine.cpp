@@ -73,7 +73,14 @@ const ForceEvaluation& ForceEngine::compute(System& system, bool tally) {
 
 const ForceEvaluation& ForceEngine::compute(System& system, bool tally, bool listed) {
   if (!listed) ensure_neighbors(system);
+  const bool no_terms = force_field_.terms().empty();
+  if (no_terms && force_zero_ && force_.size() == system.particles.size()) {
+    last_ = ForceEvaluation{};  // what compute() returns without terms
+    last_.tallied = tally;
+    return last_;
+  }
   last_ = force_field_.compute(system, neighbors_, force_, tally);
+  force_zero_ = no_terms;
   return last_;
 }
 

@@ -48,6 +48,9 @@ class ForceEngine {
   const ForceField& force_field_;
   NeighborList neighbors_;
   std::vector<Vec3> force_;
+  // force_ holds zeros from a force field without terms (nothing else writes it): a hard-sphere
+  // fluid's evaluations then zero nothing again (a job of the team a step).
+  bool force_zero_ = false;
   ForceEvaluation last_;
 };
 

@@ -604,7 +604,7 @@ void Gvi::find_smooth_set(const System& system) {
   stats_.smooth += static_cast<std::int64_t>(ws_.smooth.size());
 }
 
-void Gvi::displaced(const Particles& P) {
+void Gvi::displaced(const Particles& P, bool kick) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
@@ -627,7 +627,12 @@ void Gvi::displaced(const Particles& P) {
   const double* limit2 = by_particle ? ws_.reach_limit2.data() : nullptr;
   // x = q + (half + impulse) (h / m), in vectors.
   const gvi_passes::EndPositions pass = end_positions_pass(ws_, P, h, list, built, limit2);
+  const std::vector<Vec3>& f_start = engine_.force();
   for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    if (kick) {
+      gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
+                            nullptr, begin, end);
+    }
     const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(pass, begin, end);
     largest2[static_cast<std::size_t>(c)] = tally.largest2;
     outgrown[static_cast<std::size_t>(c)] = tally.beyond_reach;
@@ -660,7 +665,7 @@ const std::vector<Constraint>& Gvi::equalities_and(const std::vector<Constraint>
 // Momenta before the new forces: half = p + h/2 F_start, positions q + h M^-1 (half +
 // impulse), with F_start = F(q) (Verlet) or F at the step's midpoint (midpoint, by fixed
 // point around the constrained solve).
-void Gvi::solve_held_positions(System& system) {
+bool Gvi::solve_held_positions(System& system) {
   const Particles& P = system.particles;
   const std::size_t n = P.size();
   const double h = dt_;
@@ -685,6 +690,11 @@ void Gvi::solve_held_positions(System& system) {
                             numbers(ws_.free), begin, end);
       if (zero) std::fill(ws_.impulse.begin() + begin, ws_.impulse.begin() + end, Vec3{});
     });
+  } else if (lagrangian_ == Lagrangian::verlet && rows.empty()) {
+    // No row held (a hard-sphere fluid's usual step): the half kick in the end positions'
+    // pass, one job of the team rather than two.
+    ws_.impulse.clear();
+    return true;
   } else {
     for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
       gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
@@ -713,7 +723,7 @@ void Gvi::solve_held_positions(System& system) {
   };
   if (lagrangian_ == Lagrangian::verlet) {
     solve();
-    return;
+    return false;
   }
   iterate_midpoint(system, 1, [&] {
     solve();
@@ -728,6 +738,7 @@ void Gvi::solve_held_positions(System& system) {
       return change;
     });
   });
+  return false;
 }
 
 // On one thread the passes over every particle are as fast (measured on the rigid melt:
@@ -804,8 +815,8 @@ void Gvi::update_positions(System& system) {
     if (by_cluster) {
       held_positions_by_cluster(system);
     } else {
-      solve_held_positions(system);
-      displaced(system.particles);
+      const bool kick = solve_held_positions(system);
+      displaced(system.particles, kick);
     }
     ws_.violated.clear();
     ws_.x_smallest_gap_known = false;

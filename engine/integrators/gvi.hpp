@@ -139,7 +139,9 @@ class Gvi final : public ConstrainedIntegrator {
   // again for the reflected particles alone.
   double reflect_and_predict(System& system, const std::vector<Constraint>& rows);
   // One solve of the position update for the rows held, with its midpoint fixed point.
-  void solve_held_positions(System& system);
+  // Returns true where it left the half kick to displaced() (Verlet, no row held: nothing
+  // reads it before the end positions).
+  bool solve_held_positions(System& system);
   const std::vector<Constraint>& equalities_and(const std::vector<Constraint>& others);
   // Whether the step's per-particle passes go with the cluster solves: on several threads,
   // Verlet, every particle in a cluster of rods (strings), no contact rows and the free
@@ -149,8 +151,8 @@ class Gvi final : public ConstrainedIntegrator {
   // clusters made before their solves and their end positions after (the same numbers).
   void held_positions_by_cluster(System& system);
   // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
-  // ws_.x_largest2.
-  void displaced(const Particles& particles);
+  // ws_.x_largest2; with `kick`, the half kick made first in the same pass.
+  void displaced(const Particles& particles, bool kick = false);
   double start_energy(System& system);
   // Verlet's shadow energy at the step's start, from its H `start` (none where a force term
   // has no pairwise Hessian).
