@@ -18,7 +18,6 @@ class OrderedTerms {
   // count of terms made is kept on a cache line of its own.
   template <class Capacity>
   void reset(std::size_t items, Capacity&& capacity, bool per_thread = false) {
-    items_ = items;
     stride_ = per_thread ? kCountsALine : 1;
     begin_.resize(items + 1);
     made_.assign(items * stride_, 0);
@@ -35,7 +34,7 @@ class OrderedTerms {
   }
   // total += every term, in item order.
   void add_to(double& total) const {
-    for (std::size_t k = 0; k < items_; ++k) {
+    for (std::size_t k = 0; k < made_.size() / stride_; ++k) {
       const std::size_t end = begin_[k] + made_[k * stride_];
       for (std::size_t t = begin_[k]; t < end; ++t) total += terms_[t];
     }
@@ -43,7 +42,7 @@ class OrderedTerms {
 
  private:
   static constexpr std::size_t kCountsALine = kCacheLine / sizeof(std::size_t);
-  std::size_t items_ = 0, stride_ = 1;
+  std::size_t stride_ = 1;
   std::vector<std::size_t> begin_, made_;
   std::vector<double> terms_;
 };

@@ -251,6 +251,18 @@ void copy_in_chunks(const std::vector<T>& from, std::vector<T>& to) {
   });
 }
 
+// join(k) in order for the items each chunk c of `chunks` over [0, n) kept at the start of its
+// own stretch of `passing` (kept[c] of them): the calling thread reads only those.
+template <class Kept, class Join>
+void join_kept(std::size_t n, int chunks, const std::vector<std::uint32_t>& passing, Kept& kept,
+               Join&& join) {
+  for (int c = 0; c < chunks; ++c) {
+    const std::size_t begin = chunk_range(n, c, chunks).begin;
+    const std::size_t end = begin + kept[static_cast<std::size_t>(c)];
+    for (std::size_t m = begin; m < end; ++m) join(passing[m]);
+  }
+}
+
 // The serial loop `for (k < n) if (test(k)) join(k);` with the tests (independent of each
 // other and of the joins) on several threads: each chunk keeps the items that passed at the
 // start of its own stretch of `passing`, then the joins are made in order on the calling
@@ -274,11 +286,7 @@ void filter_in_order(std::size_t n, int chunks, std::vector<std::uint32_t>& pass
     }
     kept[static_cast<std::size_t>(c)] = at - begin;
   });
-  for (int c = 0; c < chunks; ++c) {
-    const std::size_t begin = chunk_range(n, c, chunks).begin;
-    const std::size_t end = begin + kept[static_cast<std::size_t>(c)];
-    for (std::size_t m = begin; m < end; ++m) join(passing[m]);
-  }
+  join_kept(n, chunks, passing, kept, join);
 }
 // The tests split as cheap items.
 template <class Test, class Join>

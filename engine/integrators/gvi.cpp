@@ -836,8 +836,8 @@ void Gvi::update_positions(System& system) {
       std::vector<std::uint32_t>& passing = ws_.candidate_passing;
       passing.resize(count);
       const auto slots = static_cast<std::size_t>(chunks);
-      ws_.chunk_smallest.assign(slots, std::numeric_limits<double>::infinity());
-      ws_.chunk_kept.assign(slots, 0);
+      ChunkSlots<double> chunk_smallest(slots, std::numeric_limits<double>::infinity());
+      ChunkSlots<std::size_t> kept(slots);
       for_each_chunk(
           count, chunks, [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
             double smallest = std::numeric_limits<double>::infinity();
@@ -848,19 +848,14 @@ void Gvi::update_positions(System& system) {
               smallest = std::min(smallest, gap);
               if (gap < -gap_tolerance) passing[at++] = static_cast<std::uint32_t>(k);
             }
-            ws_.chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
-            ws_.chunk_kept[static_cast<std::size_t>(chunk)] = at - begin;
+            chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
+            kept[static_cast<std::size_t>(chunk)] = at - begin;
           });
       double smallest = std::numeric_limits<double>::infinity();
-      for (const double s : ws_.chunk_smallest) smallest = std::min(smallest, s);
-      for (int c = 0; c < chunks; ++c) {
-        const std::size_t begin = chunk_range(count, c, chunks).begin;
-        const std::size_t end = begin + ws_.chunk_kept[static_cast<std::size_t>(c)];
-        for (std::size_t m = begin; m < end; ++m) {
-          const Constraint& row = candidates[passing[m]];
-          if (!contains(ws_.held, row)) ws_.violated.push_back(row);
-        }
-      }
+      for (const double s : chunk_smallest) smallest = std::min(smallest, s);
+      join_kept(count, chunks, passing, kept, [&](std::size_t k) {
+        if (!contains(ws_.held, candidates[k])) ws_.violated.push_back(candidates[k]);
+      });
       ws_.x_smallest_gap = smallest;
       ws_.x_smallest_gap_known = true;
     }

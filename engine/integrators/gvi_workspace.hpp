@@ -70,10 +70,6 @@ struct GviWorkspace {
   std::vector<std::size_t> chunk_unlisted;  // displaced()'s per chunk
   std::vector<double> chunk_largest2;       // displaced()'s per chunk
   std::vector<std::size_t> chunk_outgrown;  // displaced()'s and start_step()'s, per chunk
-  // The feasibility guard's, per chunk: its smallest gap and its rows kept in
-  // candidate_passing.
-  std::vector<double> chunk_smallest;
-  std::vector<std::size_t> chunk_kept;
   std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
   double x_smallest_gap = 0.0;        // smallest candidate gap at x (feasibility guard's pass)
   bool x_smallest_gap_known = false;  // for the x of the last position update
