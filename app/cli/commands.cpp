@@ -22,6 +22,7 @@
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
+#include "integrators/reordering_integrator.hpp"
 #include "integrators/velocity_verlet.hpp"
 #include "simulation/interrupt.hpp"
 #include "simulation/run_loop.hpp"
@@ -112,7 +113,7 @@ int command_run(const std::vector<std::string>& args) {
       }
     }
     checkpoint = read_checkpoint(restart);
-    apply_checkpoint(checkpoint, input.system, restart, fingerprint);
+    restore_run_input(input, checkpoint, restart, fingerprint);
     if (checkpoint.step >= input.steps) {
       throw InputError(restart + ": the checkpoint is at step " + std::to_string(checkpoint.step) +
                        ", already at the input's " + std::to_string(input.steps) +
@@ -172,6 +173,7 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
 
   if (restart.empty()) minimize_if_asked(input, out);
   const std::unique_ptr<Integrator> integrator = make_integrator(input);
+  const auto* sorting = dynamic_cast<const ReorderingIntegrator*>(integrator.get());
   // A restart appends to the run's outputs, cut back to what precedes the checkpoint.
   const std::int64_t continue_from = restart.empty() ? -1 : checkpoint.step;
   ThermoTable table(stdout);
@@ -270,7 +272,7 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
   }
   if (!input.final_data.empty()) {
     write_lammps_data(
-        input.system, input.final_data, style_for(input.system),
+        in_input_order(input.system), input.final_data, style_for(input.system),
         "deli " DELI_VERSION " from " + path + " at step " + std::to_string(input.system.step));
     out.print("final state written to %s (LAMMPS data file)\n", input.final_data.c_str());
   }
@@ -279,6 +281,10 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
       "list builds\n",
       stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
       stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
+  if (sorting) {
+    out.print("particles sorted in space %lld times (every %lld steps)\n",
+              static_cast<long long>(sorting->sorts()), static_cast<long long>(input.sort_every));
+  }
   out.print("%s", timing_table(stats).c_str());
   return 0;
 }

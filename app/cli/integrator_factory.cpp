@@ -3,6 +3,7 @@
 #include "integrators/collision_integrator.hpp"
 #include "integrators/direct_substitution.hpp"
 #include "integrators/gvi.hpp"
+#include "integrators/reordering_integrator.hpp"
 #include "integrators/thermostatted_integrator.hpp"
 #include "integrators/velocity_verlet.hpp"
 
@@ -28,11 +29,23 @@ std::unique_ptr<Integrator> make_constant_energy_integrator(const RunInput& inpu
 }
 }  // namespace
 
-std::unique_ptr<Integrator> make_integrator(const RunInput& input) {
+std::unique_ptr<Integrator> make_unsorted_integrator(const RunInput& input) {
   std::unique_ptr<Integrator> integrator = make_constant_energy_integrator(input);
   if (!input.thermostat) return integrator;
   return std::make_unique<ThermostattedIntegrator>(std::move(integrator), *input.thermostat,
                                                    input.degrees_of_freedom);
+}
+
+std::unique_ptr<Integrator> make_integrator(RunInput& input) {
+  std::unique_ptr<Integrator> integrator = make_unsorted_integrator(input);
+  if (input.sort_every == 0) return integrator;
+  return std::make_unique<ReorderingIntegrator>(
+      std::move(integrator),
+      [&input](const ParticleOrder& order) {
+        reorder_run_input(input, order);
+        return make_unsorted_integrator(input);
+      },
+      input.sort_every);
 }
 
 }  // namespace deli

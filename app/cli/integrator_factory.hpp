@@ -8,7 +8,11 @@
 namespace deli {
 
 // The integrator the input's [integrator] table names, for its system, inside the
-// [thermostat] when there is one. It keeps references to input's force field.
-std::unique_ptr<Integrator> make_integrator(const RunInput& input);
+// [thermostat] when there is one, and putting the particles in spatial order every
+// [neighbor] sort_every steps (ReorderingIntegrator: it reorders `input`'s system,
+// constraints and force field). It keeps references to input's force field.
+std::unique_ptr<Integrator> make_integrator(RunInput& input);
+// The same without the sorting: the particles stay in the order they are in.
+std::unique_ptr<Integrator> make_unsorted_integrator(const RunInput& input);
 
 }  // namespace deli

@@ -34,6 +34,22 @@ Constraint ConstraintSet::wall_row(const Wall& wall, std::int32_t i, double radi
   return c;
 }
 
+void ConstraintSet::renumber(const std::vector<std::int32_t>& now) {
+  for (Constraint& c : equalities) {
+    if (c.i >= 0) c.i = now[static_cast<std::size_t>(c.i)];
+    if (c.j >= 0) c.j = now[static_cast<std::size_t>(c.j)];
+    if (c.kind == ConstraintKind::rod && c.i > c.j) std::swap(c.i, c.j);
+  }
+  for (auto* pairs : {&unconstrained_pairs, &always_checked_pairs}) {
+    for (auto& [a, b] : *pairs) {
+      a = now[static_cast<std::size_t>(a)];
+      b = now[static_cast<std::size_t>(b)];
+      if (a > b) std::swap(a, b);
+    }
+    std::sort(pairs->begin(), pairs->end());
+  }
+}
+
 Constraint sphere_pair(std::int32_t a, std::int32_t b, const Particles& particles) {
   Constraint c;
   c.kind = ConstraintKind::sphere_pair;

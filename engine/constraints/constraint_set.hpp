@@ -101,6 +101,10 @@ struct ConstraintSet {
                      const Box& box) const;
 
   Constraint wall_row(const Wall& wall, std::int32_t i, double radius) const;
+
+  // The same constraints once particle i has become particle now[i] (system/particle_order):
+  // pairs as i < j again, the lists of pairs sorted again; the equalities keep their order.
+  void renumber(const std::vector<std::int32_t>& now);
 };
 
 // The hard-sphere row of particles a < b: |x_a - x_b| - (r_a + r_b) >= 0.

@@ -1014,6 +1014,14 @@ std::vector<double> ConstrainedIntegrator::saved_state() const {
   return out;
 }
 
+std::vector<double> ConstrainedIntegrator::state_in_order(
+    const std::vector<double>& state, const std::vector<std::int32_t>& order) const {
+  // The statistics and virial sums, then (linearised rows) each particle's previous position.
+  const std::size_t head = 2 * ConstraintStatistics::saved_size + 2;
+  if (state.size() != head + 3 * order.size()) return state;
+  return triples_in_order(state, head, order);
+}
+
 void ConstrainedIntegrator::restore_state(const std::vector<double>& state, const System& system) {
   const std::size_t n = system.particles.size();
   // The current layout, or that of a checkpoint written by an earlier deli.

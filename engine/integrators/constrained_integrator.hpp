@@ -69,6 +69,8 @@ class ConstrainedIntegrator : public Integrator {
                                                               bool keep = false) override;
   double take_constraint_virial(Sampler sampler = Sampler::thermo, bool keep = false) override;
   std::vector<double> saved_state() const override;
+  std::vector<double> state_in_order(const std::vector<double>& state,
+                                     const std::vector<std::int32_t>& order) const override;
   void restore_state(const std::vector<double>& state, const System& system) override;
   // RATTLE's velocity projection onto the equality rows; its impulses count in no virial.
   void project_velocities(System& system) override;

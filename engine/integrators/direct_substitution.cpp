@@ -180,6 +180,17 @@ std::vector<double> DirectSubstitution::saved_state() const {
   return out;
 }
 
+std::vector<double> DirectSubstitution::state_in_order(
+    const std::vector<double>& state, const std::vector<std::int32_t>& order) const {
+  // The base state, then the constraint force on each atom (as restore_state reads them).
+  const std::size_t base = state.size() - 3 * order.size();
+  std::vector<double> out = ConstrainedIntegrator::state_in_order(
+      std::vector<double>(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(base)), order);
+  const std::vector<double> forces = triples_in_order(state, base, order);
+  out.insert(out.end(), forces.begin() + static_cast<std::ptrdiff_t>(base), forces.end());
+  return out;
+}
+
 void DirectSubstitution::restore_state(const std::vector<double>& state, const System& system) {
   // The base state, then the constraint force on each atom.
   const std::size_t n = system.particles.size();

@@ -32,6 +32,8 @@ class DirectSubstitution final : public ConstrainedIntegrator {
   std::string name() const override { return "direct"; }
   void step(System& system, bool tally = true) override;
   std::vector<double> saved_state() const override;
+  std::vector<double> state_in_order(const std::vector<double>& state,
+                                     const std::vector<std::int32_t>& order) const override;
   void restore_state(const std::vector<double>& state, const System& system) override;
 
  private:

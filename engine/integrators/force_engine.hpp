@@ -34,6 +34,8 @@ class ForceEngine {
   bool ensure_neighbors(System& system, bool force = false);
   // Rebuilds the list from `build_positions` (a checkpoint's), leaving the system's own.
   void restore_neighbors(System& system, const std::vector<Vec3>& build_positions);
+  // Counts builds on from `builds` (an engine that takes over from another's).
+  void continue_build_count(std::int64_t builds) { neighbors_.continue_build_count(builds); }
   // Whether the current list also holds every pair within reach at positions x.
   bool neighbors_cover(const std::vector<Vec3>& x) const { return !neighbors_.needs_rebuild(x); }
 

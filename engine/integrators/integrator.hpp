@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -9,6 +10,18 @@
 #include "integrators/force_engine.hpp"
 
 namespace deli {
+
+// `state` with its three numbers a particle from `first` on put in `order` (order[k]: the
+// particle put k-th); the numbers before `first` as they were.
+inline std::vector<double> triples_in_order(const std::vector<double>& state, std::size_t first,
+                                            const std::vector<std::int32_t>& order) {
+  std::vector<double> out(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(first));
+  for (const std::int32_t i : order) {
+    const auto* x = state.data() + first + 3 * static_cast<std::size_t>(i);
+    out.insert(out.end(), x, x + 3);
+  }
+  return out;
+}
 
 // Who samples the integrator's accumulated figures: the thermo output and the trajectory
 // frames each get their own tally, since they sample at different intervals.
@@ -33,6 +46,12 @@ class Integrator {
   }
   // What a checkpoint must carry beyond the particles to continue bit for bit.
   virtual std::vector<double> saved_state() const { return {}; }
+  // A saved_state() of this integrator with its per-particle parts put in `order`
+  // (order[k]: the particle put k-th), for the system so reordered.
+  virtual std::vector<double> state_in_order(const std::vector<double>& state,
+                                             const std::vector<std::int32_t>& /*order*/) const {
+    return state;
+  }
   virtual ForceEngine& engine() = 0;
   // Takes back saved_state(); refuses one that is not this integrator's for this system.
   virtual void restore_state(const std::vector<double>& state, const System&) {

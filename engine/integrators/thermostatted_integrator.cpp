@@ -56,6 +56,15 @@ std::vector<double> ThermostattedIntegrator::saved_state() const {
   return state;
 }
 
+std::vector<double> ThermostattedIntegrator::state_in_order(
+    const std::vector<double>& state, const std::vector<std::int32_t>& order) const {
+  const auto inner_end = state.end() - static_cast<std::ptrdiff_t>(thermostat_state_size);
+  std::vector<double> out =
+      inner_->state_in_order(std::vector<double>(state.begin(), inner_end), order);
+  out.insert(out.end(), inner_end, state.end());
+  return out;
+}
+
 void ThermostattedIntegrator::restore_state(const std::vector<double>& state,
                                             const System& system) {
   if (state.size() < thermostat_state_size ||

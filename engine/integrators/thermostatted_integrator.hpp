@@ -37,6 +37,8 @@ class ThermostattedIntegrator final : public Integrator {
   std::optional<double> bath_energy() const override { return bath_energy_; }
   // The inner integrator's state, then the thermostat's: a tag, seed, kind, bath energy.
   std::vector<double> saved_state() const override;
+  std::vector<double> state_in_order(const std::vector<double>& state,
+                                     const std::vector<std::int32_t>& order) const override;
   void restore_state(const std::vector<double>& state, const System& system) override;
 
  private:

@@ -72,6 +72,7 @@ class NeighborList {
   // built_order() where there is one, else the list by particle (end = offsets() + 1).
   PartnerRanges partner_ranges() const;
   std::int64_t builds() const { return builds_; }
+  void continue_build_count(std::int64_t builds) { builds_ = builds; }
 
   // When the box is at least three reaches wide along every periodic axis, each listed pair
   // also has a fixed periodic shift, valid until the next rebuild: x_i - x_j - shift is its

@@ -19,6 +19,10 @@ struct Particles {
   std::vector<std::int64_t> id;
   std::vector<std::int64_t> molecule;  // 0 when the particle belongs to no molecule
   std::vector<std::array<int, 3>> image;
+  // The index each particle had in the input (data file or builder), once the particles have
+  // been put in another order (system/particle_order.hpp); empty while they are in the
+  // input's order. Outputs list the particles in the input's order.
+  std::vector<std::int32_t> origin;
 
   std::size_t size() const { return position.size(); }
   void resize(std::size_t n);

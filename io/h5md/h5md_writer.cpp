@@ -4,6 +4,7 @@
 #include <array>
 
 #include "core/error.hpp"
+#include "system/particle_order.hpp"
 
 namespace deli {
 
@@ -131,16 +132,18 @@ void H5mdWriter::create(const System& system, const std::string& input_text,
     H5Handle particles = group(file_, "particles", f);
     H5Handle all = group(particles, "all", f);
     const hsize_t n = p.size();
-    std::vector<int> species(p.type.begin(), p.type.end());
+    // Rows in the input's order, whatever order the run has put the particles in.
+    const Particles listed = in_input_order(system).particles;
+    std::vector<int> species(listed.type.begin(), listed.type.end());
     for (int& t : species) t += 1;  // LAMMPS type numbers
     fixed_dataset(all, "species", H5T_NATIVE_INT, {n}, species, f);
-    fixed_dataset(all, "mass", H5T_NATIVE_DOUBLE, {n}, p.mass, f);
-    fixed_dataset(all, "id", H5T_NATIVE_INT64, {n}, p.id, f);
+    fixed_dataset(all, "mass", H5T_NATIVE_DOUBLE, {n}, listed.mass, f);
+    fixed_dataset(all, "id", H5T_NATIVE_INT64, {n}, listed.id, f);
     // Hard-sphere diameters (not an H5MD 1.1 element: the specification allows others; the
     // name is GSD's and HOOMD's). Point particles have none.
     if (hard_spheres) {
-      std::vector<double> diameter(p.radius.size());
-      for (std::size_t i = 0; i < p.size(); ++i) diameter[i] = 2 * p.radius[i];
+      std::vector<double> diameter(listed.radius.size());
+      for (std::size_t i = 0; i < listed.size(); ++i) diameter[i] = 2 * listed.radius[i];
       fixed_dataset(all, "diameter", H5T_NATIVE_DOUBLE, {n}, diameter, f);
     }
     H5Handle box = group(all, "box", f);
@@ -372,17 +375,23 @@ void H5mdWriter::append(Series& s, std::int64_t step, double time, const void* d
 
 void H5mdWriter::on_frame(const System& system, const ThermoSample& sample,
                           const std::vector<Vec3>& forces) {
+  // Rows in the input's order (the `id` element's), whatever order the run has reached.
   const Particles& p = system.particles;
   const hsize_t n = atoms_;
-  append(position_, system.step, system.time, p.position.data(), H5T_NATIVE_DOUBLE, {n, 3});
+  auto listed = [&](const std::vector<Vec3>& values) {
+    return in_input_order(values, p, listed_vectors_).data();
+  };
+  append(position_, system.step, system.time, listed(p.position), H5T_NATIVE_DOUBLE, {n, 3});
   if (spec_.velocities) {
-    append(velocity_, system.step, system.time, p.velocity.data(), H5T_NATIVE_DOUBLE, {n, 3});
+    append(velocity_, system.step, system.time, listed(p.velocity), H5T_NATIVE_DOUBLE, {n, 3});
   }
   if (spec_.forces) {
-    append(force_, system.step, system.time, forces.data(), H5T_NATIVE_DOUBLE, {n, 3});
+    append(force_, system.step, system.time, listed(forces), H5T_NATIVE_DOUBLE, {n, 3});
   }
-  if (spec_.images)
-    append(image_, system.step, system.time, p.image.data(), H5T_NATIVE_INT, {n, 3});
+  if (spec_.images) {
+    append(image_, system.step, system.time, in_input_order(p.image, p, listed_images_).data(),
+           H5T_NATIVE_INT, {n, 3});
+  }
   const Vec3 l = system.box.length();
   const std::array<double, 9> edges{l.x, 0, 0, 0, l.y, 0, 0, 0, l.z};
   append(edges_, system.step, system.time, edges.data(), H5T_NATIVE_DOUBLE, {3, 3});

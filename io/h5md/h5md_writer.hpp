@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -70,6 +71,9 @@ class H5mdWriter final : public Observer {
   H5Handle observables_group_;
   std::int64_t frames_ = 0;
   std::size_t atoms_ = 0;
+  // A frame's rows in the input's order (system/particle_order.hpp), once the run has sorted.
+  std::vector<Vec3> listed_vectors_;
+  std::vector<std::array<int, 3>> listed_images_;
 };
 
 }  // namespace deli

@@ -97,6 +97,8 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     input.skin = n->number("skin", 0.3);
     if (input.skin < 0) n->fail("must not be negative", "skin");
     input.force_field->cell_order = n->boolean("cell_order", input.force_field->cell_order);
+    input.sort_every = n->integer("sort_every", input.sort_every);
+    if (input.sort_every < 0) n->fail("must not be negative (0: never sort)", "sort_every");
     n->finish();
   }
   if (auto m = root.table("minimize")) {
@@ -140,6 +142,22 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
   input.gvi.skin = input.skin;
   add_excluded_contacts(input);
   return input;
+}
+
+void restore_run_input(RunInput& input, const Checkpoint& checkpoint, const std::string& path,
+                       std::optional<std::uint64_t> fingerprint) {
+  if (std::optional<ParticleOrder> order = order_of_ids(checkpoint.id, input.system.particles)) {
+    reorder_run_input(input, *order);
+  }
+  apply_checkpoint(checkpoint, input.system, path, fingerprint);
+}
+
+void reorder_run_input(RunInput& input, const ParticleOrder& order) {
+  reorder(input.system, order);
+  input.constraints.renumber(inverse(order));
+  const bool cell_order = input.force_field->cell_order;
+  input.force_field = build_force_field(input.force_field_spec, input.system);
+  input.force_field->cell_order = cell_order;
 }
 
 }  // namespace deli

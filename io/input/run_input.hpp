@@ -7,13 +7,14 @@
 #include "constraints/constraint_set.hpp"
 #include "force_field_spec.hpp"
 #include "forces/force_field.hpp"
+#include "h5md/checkpoint.hpp"
 #include "h5md/trajectory_spec.hpp"
 #include "integrators/collision_integrator.hpp"
 #include "integrators/direct_substitution.hpp"
 #include "integrators/gvi.hpp"
 #include "integrators/quickmin.hpp"
 #include "simulation/degrees_of_freedom.hpp"
-#include "system/system.hpp"
+#include "system/particle_order.hpp"
 #include "thermostats/thermostat.hpp"
 
 namespace deli {
@@ -40,6 +41,9 @@ struct RunInput {
   double timestep = 0.005;
   double skin = 0.3;
   std::int64_t steps = 0;
+  // [neighbor] sort_every: the particles put in spatial order at the start and every so many
+  // steps (system/particle_order.hpp); 0: never.
+  std::int64_t sort_every = 1000;
   int threads = 0;  // [run] threads; 0: OpenMP's default (OMP_NUM_THREADS, else all cores)
   // [run] split_small_loops: the per-particle passes split over the threads in chunks of at
   // least 512 items and the rod-cluster loops in chunks of 256 rows (false: 8192 and 1024;
@@ -74,5 +78,13 @@ struct RunInput {
 RunInput load_run_input(const std::string& path);
 // The same from TOML text; `path` names it in messages and anchors relative file names.
 RunInput parse_run_input(const std::string& text, const std::string& path);
+// Puts the system in `order` with everything built on its indices: the constraints and the
+// force field (made anew from its spec).
+void reorder_run_input(RunInput& input, const ParticleOrder& order);
+// Puts a checkpoint's state into the input that wrote it (read afresh): its particles first
+// put in the checkpoint's order (a run that sorts them writes them in the order it has
+// reached), then apply_checkpoint.
+void restore_run_input(RunInput& input, const Checkpoint& checkpoint, const std::string& path,
+                       std::optional<std::uint64_t> fingerprint = std::nullopt);
 
 }  // namespace deli

@@ -3,6 +3,7 @@
 #include <array>
 
 #include "core/error.hpp"
+#include "system/particle_order.hpp"
 #include "text/continuation.hpp"
 #include "text/write_failure.hpp"
 
@@ -70,6 +71,11 @@ DumpWriter::DumpWriter(const std::string& path, Format format, std::int64_t ever
 void DumpWriter::on_frame(const System& system, const ThermoSample&, const std::vector<Vec3>&) {
   const Particles& p = system.particles;
   const Box& box = system.box;
+  // Lines in the input's order, whatever order the run has put the particles in.
+  const ParticleOrder listed = p.origin.empty() ? ParticleOrder{} : inverse(p.origin);
+  auto index_of_line = [&](std::size_t line) {
+    return listed.empty() ? line : static_cast<std::size_t>(listed[line]);
+  };
   if (format_ == Format::xyz) {
     // Extended XYZ (ASE, OVITO): the cell's edge vectors as rows (Lattice), its corner
     // (Origin, OVITO's key), the periodic axes (pbc), then species, position, id, and the
@@ -83,7 +89,8 @@ void DumpWriter::on_frame(const System& system, const ThermoSample&, const std::
          << (box.periodic(0) ? 'T' : 'F') << ' ' << (box.periodic(1) ? 'T' : 'F') << ' '
          << (box.periodic(2) ? 'T' : 'F') << "\" Time=" << system.time << " Step=" << system.step
          << '\n';
-    for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t line = 0; line < p.size(); ++line) {
+      const std::size_t i = index_of_line(line);
       out_ << xyz_species(p.type[i]) << ' ' << p.position[i].x << ' ' << p.position[i].y << ' '
            << p.position[i].z << ' ' << p.id[i];
       if (radii) out_ << ' ' << p.radius[i];
@@ -96,7 +103,8 @@ void DumpWriter::on_frame(const System& system, const ThermoSample&, const std::
          << (box.periodic(1) ? "pp" : "ff") << ' ' << (box.periodic(2) ? "pp" : "ff") << '\n';
     for (int a = 0; a < 3; ++a) out_ << box.lo()[a] << ' ' << box.hi()[a] << '\n';
     out_ << "ITEM: ATOMS id type x y z ix iy iz vx vy vz\n";
-    for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t line = 0; line < p.size(); ++line) {
+      const std::size_t i = index_of_line(line);
       const Vec3& x = p.position[i];
       const Vec3& v = p.velocity[i];
       out_ << p.id[i] << ' ' << p.type[i] + 1 << ' ' << x.x << ' ' << x.y << ' ' << x.z << ' '

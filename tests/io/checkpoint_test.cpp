@@ -26,7 +26,7 @@
 namespace deli {
 namespace {
 
-std::unique_ptr<Integrator> integrator_for(const RunInput& input) {
+std::unique_ptr<Integrator> integrator_for(RunInput& input) {
   return make_integrator(input);
 }
 
@@ -48,7 +48,7 @@ void expect_restart_identical(const std::string& input_path, int first, int seco
 
   RunInput resumed = load_run_input(input_path);
   const Checkpoint checkpoint = read_checkpoint(file);
-  apply_checkpoint(checkpoint, resumed.system, file);
+  restore_run_input(resumed, checkpoint, file);
   auto c = integrator_for(resumed);
   c->resume(resumed.system, checkpoint.build_positions, checkpoint.integrator_state);
   run(resumed.system, *c, second, 0, {}, false);

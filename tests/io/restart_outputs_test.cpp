@@ -105,10 +105,21 @@ namespace {
 // An input of the repository with its data file made absolute and its [run] and [output]
 // replaced: thermo rows every 20 steps, H5MD frames every 25, dump frames every 30 and a
 // checkpoint every 37 and at the end (a run of 91 steps ends with one at 91, a multiple of
-// none of them).
-std::string with_outputs(const std::string& source, const std::string& dir, int steps) {
+// none of them). With `sort_every`, the particles sorted in space that often (else as the
+// input says: by default every 1000 steps, here at the start only).
+std::string with_outputs(const std::string& source, const std::string& dir, int steps,
+                         int sort_every = 0) {
   std::string text = testing::file_contents(std::string(DELI_SOURCE_DIR) + "/" + source);
   text = text.substr(0, text.find("[run]"));
+  if (sort_every > 0) {
+    const std::string key = "sort_every = " + std::to_string(sort_every) + "\n";
+    const auto neighbor = text.find("[neighbor]\n");
+    if (neighbor == std::string::npos) {
+      text += "[neighbor]\n" + key;
+    } else {
+      text.insert(neighbor + 11, key);
+    }
+  }
   const std::string source_dir =
       std::string(DELI_SOURCE_DIR) + "/" + source.substr(0, source.rfind('/') + 1);
   const auto data = text.find("data = \"");
@@ -126,26 +137,33 @@ std::string with_outputs(const std::string& source, const std::string& dir, int 
 // stopped run) writes the rows and frames of the uninterrupted run, for every integrator:
 // rows at absolute multiples of `every` (and the last step), not counted from the restart,
 // and the stopped run's last row (at 91) dropped.
-class RestartFromAnyStep : public ::testing::TestWithParam<std::string> {};
+// With the particles sorted in space every 40 steps, the stopped run's checkpoint holds them
+// in the order of step 80, and the restart sorts them again at 120.
+class RestartFromAnyStep : public ::testing::TestWithParam<std::tuple<std::string, int>> {};
 
 TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
-  const std::string name = GetParam().substr(GetParam().rfind('/') + 1);
+  const auto& [input, sort_every] = GetParam();
+  const std::string name = input.substr(input.rfind('/') + 1) + std::to_string(sort_every);
   const std::string root = deli::testing::process_temp_dir() + "/restart_any_" + name;
   std::string log;
   ASSERT_EQ(
       shell("rm -rf " + root + " && mkdir -p " + root + "/straight " + root + "/stopped", log), 0);
   const std::string deli = DELI_BINARY;
-  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), root + "/straight", 150), log), 0)
+  ASSERT_EQ(shell(deli + " run " + with_outputs(input, root + "/straight", 150, sort_every), log),
+            0)
       << log;
   const std::string stopped = root + "/stopped";
-  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 91), log), 0) << log;
+  ASSERT_EQ(shell(deli + " run " + with_outputs(input, stopped, 91, sort_every), log), 0) << log;
   EXPECT_NE(testing::file_contents(stopped + "/out.csv").find("\n91,"), std::string::npos);
-  ASSERT_EQ(shell(deli + " run " + with_outputs(GetParam(), stopped, 150) + " --restart " +
+  ASSERT_EQ(shell(deli + " run " + with_outputs(input, stopped, 150, sort_every) + " --restart " +
                       stopped + "/out.chk",
                   log),
             0)
       << log;
   EXPECT_NE(log.find("for 59 steps"), std::string::npos) << log;  // from 91 to 150
+  if (sort_every > 0) {
+    EXPECT_NE(log.find("particles sorted in space"), std::string::npos) << log;
+  }
   const std::string csv = testing::file_contents(root + "/straight/out.csv");
   EXPECT_NE(csv.find("\n140,"), std::string::npos);  // rows at multiples of 20, and 150
   EXPECT_NE(csv.find("\n150,"), std::string::npos);
@@ -166,12 +184,17 @@ TEST_P(RestartFromAnyStep, OutputsEqualTheUninterruptedRun) {
 
 INSTANTIATE_TEST_SUITE_P(
     EveryIntegrator, RestartFromAnyStep,
-    ::testing::Values("inputs/lj_chains/melt.toml", "inputs/lj_chains/rigid_slit.toml",
-                      "inputs/paper/baselines/newtons_cradle_direct_endpoint.toml",
-                      "inputs/paper/baselines/pogo_stick_collision.toml"),
-    [](const ::testing::TestParamInfo<std::string>& info) {
-      const std::string file = info.param.substr(info.param.rfind('/') + 1);
-      return file.substr(0, file.find('.'));
+    ::testing::Combine(
+        ::testing::Values("inputs/lj_chains/melt.toml", "inputs/lj_chains/rigid_slit.toml",
+                          "inputs/paper/baselines/newtons_cradle_direct_endpoint.toml",
+                          "inputs/paper/baselines/pogo_stick_collision.toml"),
+        ::testing::Values(0, 40)),
+    [](const ::testing::TestParamInfo<std::tuple<std::string, int>>& info) {
+      const std::string& path = std::get<0>(info.param);
+      const std::string file = path.substr(path.rfind('/') + 1);
+      const int sort_every = std::get<1>(info.param);
+      return file.substr(0, file.find('.')) +
+             (sort_every > 0 ? "_sorted_every_" + std::to_string(sort_every) : "");
     });
 
 }  // namespace

@@ -19,6 +19,8 @@ std::string gas(const std::string& integrator) {
   return "[system]\n[system.lattice]\ntype = \"fcc\"\ndensity = 0.5\ncells = [3, 3, 3]\n"
          "[velocities]\ntemperature = 1.0\nseed = 3\n[forcefield.pair]\nstyle = \"none\"\n"
          "[constraints]\nhard_spheres = { diameter = 1.0 }\n[neighbor]\nskin = 0.5\n"
+         // Atoms are followed by index from step to step: not sorted in space.
+         "sort_every = 0\n"
          "[integrator]\n" +
          integrator + "\ntimestep = 0.005\n[run]\nsteps = 0\n";
 }

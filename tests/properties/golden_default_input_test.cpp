@@ -17,6 +17,7 @@
 // and the commit says why the numbers moved.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -47,8 +48,16 @@ class Record final : public Observer {
                            s.kinetic, s.potential, s.total));
   }
   void on_step(const System& system) override {
+    // The atoms listed first, in the middle and last in the input, wherever the run's sorts
+    // have put them.
     const Particles& p = system.particles;
-    for (std::size_t i : {std::size_t{0}, p.size() / 2, p.size() - 1}) {
+    for (std::size_t listed : {std::size_t{0}, p.size() / 2, p.size() - 1}) {
+      std::size_t i = listed;
+      if (!p.origin.empty()) {
+        i = static_cast<std::size_t>(
+            std::find(p.origin.begin(), p.origin.end(), static_cast<std::int32_t>(listed)) -
+            p.origin.begin());
+      }
       lines.push_back(format("atom %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g",
                              static_cast<long long>(system.step), static_cast<long long>(p.id[i]),
                              p.position[i].x, p.position[i].y, p.position[i].z, p.velocity[i].x,

@@ -1,0 +1,42 @@
+#include "integrators/reordering_integrator.hpp"
+
+namespace deli {
+
+ReorderingIntegrator::ReorderingIntegrator(std::unique_ptr<Integrator> inner, Remake remake,
+                                           std::int64_t every)
+    : inner_(std::move(inner)), remake_(std::move(remake)), every_(every) {
+  if (every_ < 1) throw InputError("particles sorted every " + std::to_string(every_) + " steps");
+}
+
+ParticleOrder ReorderingIntegrator::order_for(const System& system) const {
+  const NeighborList& list = inner_->forces().neighbors();
+  return spatial_order(system.particles, system.box, 0.5 * (list.cutoff() + list.skin()));
+}
+
+void ReorderingIntegrator::setup(System& system) {
+  const ParticleOrder order = order_for(system);
+  if (!is_identity(order)) {
+    inner_.reset();
+    inner_ = remake_(order);
+    ++sorts_;
+  }
+  inner_->setup(system);
+}
+
+void ReorderingIntegrator::step(System& system, bool tally) {
+  inner_->step(system, tally);
+  if (system.step % every_ != 0) return;
+  const ParticleOrder order = order_for(system);
+  if (is_identity(order)) return;
+  const std::vector<double> state = inner_->state_in_order(inner_->saved_state(), order);
+  const NeighborList& list = inner_->forces().neighbors();
+  const std::vector<Vec3> build_positions = permuted(list.positions_at_build(), order);
+  const std::int64_t builds = list.builds();
+  inner_.reset();
+  inner_ = remake_(order);
+  inner_->engine().continue_build_count(builds);
+  inner_->resume(system, build_positions, state);
+  ++sorts_;
+}
+
+}  // namespace deli
