@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Particles sorted in space ([neighbor] sort_every): deli's loop time with sorting off
 # (sort_every = 0) and on (every 1000 steps, the default, and at the start), alternated in
-# one run, on one thread (pinned to CPU 0) and on two, for the hard-sphere fluids hs_4000
-# and hs_32000 and the LJ liquid 32000: from their lattice order (neighbours near in index
+# one run, on one thread (pinned to CPU 0) and on two: the hard-sphere fluids hs_4000 and
+# hs_32000 and the LJ liquid 32000 from their lattice order (neighbours near in index
 # already) and with their atoms' indices shuffled (the same fluid after long mixing, as
-# bench/cell_order.sh shuffles them). Prints the medians of each and on/off.
+# bench/cell_order.sh shuffles them); the rigid chain melt (chains_4000_rigid) and the
+# default input (rigid_slit, 11000 steps) as their data files list them (chain by chain).
+# Prints the medians of each and on/off.
 #   bench/sort_every.sh              3 rounds
 #   ROUNDS=5 DELI=path/to/deli bench/sort_every.sh
 set -euo pipefail
@@ -31,16 +33,23 @@ open(sys.argv[2], "w").write("\n".join(out) + "\n")
 PY
 )
 cases=()
-for spec in hard_spheres/hs_4000:3000 hard_spheres/hs_32000:300 lj_liquid/lj_32000:150; do
+for spec in hard_spheres/hs_4000:3000 hard_spheres/hs_32000:300 lj_liquid/lj_32000:150 \
+  lj_chains/chains_4000_rigid:1000 lj_chains/rigid_slit:11000; do
   source=${spec%%:*} steps=${spec#*:} name=$(basename "${spec%%:*}")
+  orders=(lattice shuffled)
   # The lattice's data file (the hard spheres' is written from their [system.lattice]).
   if [[ $name == hs_* ]]; then
     (cd "$work" && "$deli" write-data "$top/inputs/$source.toml" "${name}_lattice.data" > /dev/null)
-  else
+  elif [[ $name == lj_* ]]; then
     cp "$top/inputs/$source.data" "$work/${name}_lattice.data"
+  else
+    orders=(as_built)
+    data=$(awk -F'"' '/^data *=/ { print $2 }' "$top/inputs/$source.toml")
+    cp "$top/inputs/lj_chains/$data" "$work/${name}_as_built.data"
   fi
-  /usr/bin/python3 -c "$shuffle" "$work/${name}_lattice.data" "$work/${name}_shuffled.data"
-  for order in lattice shuffled; do
+  [[ ${orders[0]} == lattice ]] &&
+    /usr/bin/python3 -c "$shuffle" "$work/${name}_lattice.data" "$work/${name}_shuffled.data"
+  for order in "${orders[@]}"; do
     for every in 0 1000; do
       awk -v data="${name}_$order.data" -v cap="$steps" -v every="$every" '
         /^\[/ { section = $0 }

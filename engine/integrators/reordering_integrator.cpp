@@ -10,7 +10,7 @@ ReorderingIntegrator::ReorderingIntegrator(std::unique_ptr<Integrator> inner, Re
 
 ParticleOrder ReorderingIntegrator::order_for(const System& system) const {
   const NeighborList& list = inner_->forces().neighbors();
-  return spatial_order(system.particles, system.box, 0.5 * (list.cutoff() + list.skin()));
+  return spatial_order(system, 0.5 * (list.cutoff() + list.skin()));
 }
 
 void ReorderingIntegrator::setup(System& system) {

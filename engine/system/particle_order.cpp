@@ -5,10 +5,15 @@
 #include <cmath>
 #include <numeric>
 #include <unordered_map>
+#include <utility>
+
+#include "constraints/union_find.hpp"
 
 namespace deli {
 
-ParticleOrder spatial_order(const Particles& particles, const Box& box, double bin) {
+ParticleOrder spatial_order(const System& system, double bin) {
+  const Particles& particles = system.particles;
+  const Box& box = system.box;
   const std::size_t n = particles.size();
   // Bins across the box, or across the particles along an axis without a period (they may
   // stand beyond a wall-free box's faces).
@@ -39,8 +44,19 @@ ParticleOrder spatial_order(const Particles& particles, const Box& box, double b
     }
     return key;
   };
-  std::vector<std::int64_t> key(n);
-  for (std::size_t i = 0; i < n; ++i) key[i] = bin_of(particles.position[i]);
+  // Each particle's first partner by bonds (the smallest index of its molecule: the roots
+  // always the smaller of two joined), whose bin the molecule takes.
+  std::vector<std::int32_t> first(n);
+  std::iota(first.begin(), first.end(), 0);
+  for (const Bond& b : system.topology.bonds) {
+    const std::int32_t x = union_find_root(first, b.i), y = union_find_root(first, b.j);
+    first[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
+  }
+  std::vector<std::pair<std::int64_t, std::int32_t>> key(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t head = union_find_root(first, static_cast<std::int32_t>(i));
+    key[i] = {bin_of(particles.position[static_cast<std::size_t>(head)]), head};
+  }
   ParticleOrder order(n);
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),

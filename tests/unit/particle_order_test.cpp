@@ -60,20 +60,26 @@ System five_atom_chain() {
 }
 
 TEST(ParticleOrder, SpatialOrderListsTheBinsAlongTheAxesXFirst) {
-  // Particles on a line along x (y 1.0-1.4, one bin), listed from its far end: the order
-  // reverses them, but for two in one bin, which keep the order they had.
+  // Lone particles on a line along x (y 1.0-1.4, one bin), listed from its far end: the
+  // order reverses them, but for two in one bin, which keep the order they had.
   System s = five_atom_chain();
+  s.topology = Topology{};
   s.particles.position[3] = {1.2, 1.3, 2.0};
   s.particles.position[4] = {1.1, 1.4, 2.0};
-  EXPECT_EQ(spatial_order(s.particles, s.box, 1.0), (ParticleOrder{3, 4, 2, 1, 0}))
-      << "x bins 9, 7, 5, 1, 1";
+  EXPECT_EQ(spatial_order(s, 1.0), (ParticleOrder{3, 4, 2, 1, 0})) << "x bins 9, 7, 5, 1, 1";
   // Bins along y outrank x: a particle one bin up in y comes after every one below it.
   s.particles.position[4].y = 5.5;
-  EXPECT_EQ(spatial_order(s.particles, s.box, 1.0), (ParticleOrder{3, 2, 1, 0, 4}));
+  EXPECT_EQ(spatial_order(s, 1.0), (ParticleOrder{3, 2, 1, 0, 4}));
   // and z outranks y.
   s.particles.position[1].z = 7.0;
-  EXPECT_EQ(spatial_order(s.particles, s.box, 1.0), (ParticleOrder{3, 2, 0, 4, 1}));
-  EXPECT_TRUE(is_identity(spatial_order(five_atom_chain().particles, s.box, 100.0)));
+  EXPECT_EQ(spatial_order(s, 1.0), (ParticleOrder{3, 2, 0, 4, 1}));
+  EXPECT_TRUE(is_identity(spatial_order(s, 100.0)));
+  // Bonded particles stay together, in their order, in the bin of the first of them.
+  s.topology.bonds = {{4, 1, 0}};
+  EXPECT_EQ(spatial_order(s, 1.0), (ParticleOrder{3, 2, 0, 1, 4}));
+  s.topology.bonds = {{4, 1, 0}, {1, 3, 0}};
+  EXPECT_EQ(spatial_order(s, 1.0), (ParticleOrder{2, 0, 1, 3, 4})) << "in the bin of 1";
+  EXPECT_TRUE(is_identity(spatial_order(five_atom_chain(), 1.0))) << "one chain";
 }
 
 TEST(ParticleOrder, ReorderMovesEveryArrayAndRenamesTheTopologyAndBackIsTheSameBits) {
