@@ -5,7 +5,11 @@ namespace deli {
 ReorderingIntegrator::ReorderingIntegrator(std::unique_ptr<Integrator> inner, Remake remake,
                                            std::int64_t every)
     : inner_(std::move(inner)), remake_(std::move(remake)), every_(every) {
-  if (every_ < 1) throw InputError("particles sorted every " + std::to_string(every_) + " steps");
+  if (every_ < 1) {
+    throw InputError("sort_every = " + std::to_string(every_) +
+                     ": the particles are sorted every 1 step or more (0: never, without this "
+                     "integrator)");
+  }
 }
 
 ParticleOrder ReorderingIntegrator::order_for(const System& system) const {
