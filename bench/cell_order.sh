@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Cache order ([neighbor] cell_order): CPU seconds of deli on one thread with the option
-# off and on, alternated in one run, on the LJ liquid 4000 and 32000 as built (fcc lattice
+# off and on, alternated in one run, the particles themselves never sorted (sort_every = 0;
+# bench/sort_every.sh measures that), on the LJ liquid 4000 and 32000 as built (fcc lattice
 # order: neighbours are near in index already) and with the atoms' indices shuffled (a
 # liquid after long mixing: neighbours anywhere in memory). Prints each run's user CPU
 # seconds and the medians' ratios.
@@ -28,27 +29,15 @@ for spec in lj_4000:1000 lj_32000:150; do
   # The data file as built, and with atom k given the position and velocity of atom p(k)
   # for a fixed random permutation p (the same liquid, its indices scrambled).
   cp "$top/inputs/lj_liquid/$name.data" "$work/${name}_lattice.data"
-  /usr/bin/python3 - "$work/${name}_lattice.data" "$work/${name}_shuffled.data" <<'PY'
-import random, sys
-lines = open(sys.argv[1]).read().split("\n")
-a, v = lines.index("Atoms # atomic"), lines.index("Velocities")
-atoms = [l for l in lines[a + 1:v] if l.strip()]
-vel = [l for l in lines[v + 1:] if l.strip()]
-p = list(range(len(atoms)))
-random.Random(7).shuffle(p)
-out = lines[:a + 1] + [""]
-out += [" ".join([str(k + 1)] + atoms[p[k]].split()[1:]) for k in range(len(atoms))]
-out += ["", "Velocities", ""]
-out += [" ".join([str(k + 1)] + vel[p[k]].split()[1:]) for k in range(len(vel))]
-open(sys.argv[2], "w").write("\n".join(out) + "\n")
-PY
+  /usr/bin/python3 "$top/bench/shuffle_atoms.py" "$work/${name}_lattice.data" \
+    "$work/${name}_shuffled.data"
   for order in lattice shuffled; do
     for option in false true; do
       awk -v data="${name}_$order.data" -v cap="$steps" -v option="$option" '
         /^\[/ { section = $0 }
         section == "[output]" { next }
         /^data *=/ { $0 = "data = \"" data "\"" }
-        section == "[neighbor]" && /^skin/ { $0 = $0 "\ncell_order = " option }
+        section == "[neighbor]" && /^skin/ { $0 = $0 "\ncell_order = " option "\nsort_every = 0" }
         section == "[run]" && /^steps *=/ { $0 = "steps = " cap }
         { print }' "$top/inputs/lj_liquid/$name.toml" > "$work/${name}_${order}_$option.toml"
     done

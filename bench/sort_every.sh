@@ -16,22 +16,6 @@ rounds=${ROUNDS:-3}
 work=$(mktemp -d /tmp/deli-bench-sort-every.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores"
-# Atom k given the position and velocity of atom p(k), for a fixed random permutation p.
-shuffle=$(cat <<'PY'
-import random, sys
-lines = open(sys.argv[1]).read().split("\n")
-a, v = lines.index("Atoms # atomic"), lines.index("Velocities")
-atoms = [l for l in lines[a + 1:v] if l.strip()]
-vel = [l for l in lines[v + 1:] if l.strip()]
-p = list(range(len(atoms)))
-random.Random(7).shuffle(p)
-out = lines[:a + 1] + [""]
-out += [" ".join([str(k + 1)] + atoms[p[k]].split()[1:]) for k in range(len(atoms))]
-out += ["", "Velocities", ""]
-out += [" ".join([str(k + 1)] + vel[p[k]].split()[1:]) for k in range(len(vel))]
-open(sys.argv[2], "w").write("\n".join(out) + "\n")
-PY
-)
 cases=()
 for spec in hard_spheres/hs_4000:3000 hard_spheres/hs_32000:300 lj_liquid/lj_32000:150 \
   lj_chains/chains_4000_rigid:1000 lj_chains/rigid_slit:11000; do
@@ -48,7 +32,8 @@ for spec in hard_spheres/hs_4000:3000 hard_spheres/hs_32000:300 lj_liquid/lj_320
     cp "$top/inputs/lj_chains/$data" "$work/${name}_as_built.data"
   fi
   [[ ${orders[0]} == lattice ]] &&
-    /usr/bin/python3 -c "$shuffle" "$work/${name}_lattice.data" "$work/${name}_shuffled.data"
+    /usr/bin/python3 "$top/bench/shuffle_atoms.py" "$work/${name}_lattice.data" \
+      "$work/${name}_shuffled.data"
   for order in "${orders[@]}"; do
     for every in 0 1000; do
       awk -v data="${name}_$order.data" -v cap="$steps" -v every="$every" '

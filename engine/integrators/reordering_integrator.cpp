@@ -4,7 +4,7 @@ namespace deli {
 
 ReorderingIntegrator::ReorderingIntegrator(std::unique_ptr<Integrator> inner, Remake remake,
                                            std::int64_t every)
-    : inner_(std::move(inner)), remake_(std::move(remake)), every_(every) {
+    : ForwardingIntegrator(std::move(inner)), remake_(std::move(remake)), every_(every) {
   if (every_ < 1) {
     throw InputError("sort_every = " + std::to_string(every_) +
                      ": the particles are sorted every 1 step or more (0: never, without this "

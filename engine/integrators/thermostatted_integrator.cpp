@@ -14,7 +14,7 @@ constexpr std::size_t thermostat_state_size = 5;
 ThermostattedIntegrator::ThermostattedIntegrator(std::unique_ptr<Integrator> inner,
                                                  const ThermostatSettings& settings,
                                                  const DegreesOfFreedom& dof)
-    : inner_(std::move(inner)),
+    : ForwardingIntegrator(std::move(inner)),
       settings_(settings),
       dof_(dof),
       thermostat_(make_thermostat(settings, dof)) {}

@@ -2,7 +2,7 @@
 
 #include <memory>
 
-#include "integrators/integrator.hpp"
+#include "integrators/forwarding_integrator.hpp"
 #include "thermostats/thermostat.hpp"
 
 namespace deli {
@@ -13,27 +13,13 @@ namespace deli {
 // impulses stay out of the bath: no virial, no bath energy). Contacts and walls act as
 // always, through the integrator's step. The energy the bath puts in is accumulated, so
 // that total energy minus it is conserved up to the integrator's error.
-class ThermostattedIntegrator final : public Integrator {
+class ThermostattedIntegrator final : public ForwardingIntegrator {
  public:
   ThermostattedIntegrator(std::unique_ptr<Integrator> inner, const ThermostatSettings& settings,
                           const DegreesOfFreedom& dof);
 
   std::string name() const override;
-  double timestep() const override { return inner_->timestep(); }
-  void setup(System& system) override { inner_->setup(system); }
-  ForceEngine& engine() override { return inner_->engine(); }
-  const ForceEngine& forces() const override { return inner_->forces(); }
   void step(System& system, bool tally = true) override;
-  std::vector<std::pair<std::string, double>> take_statistics(Sampler sampler, bool keep) override {
-    return inner_->take_statistics(sampler, keep);
-  }
-  double take_constraint_virial(Sampler sampler, bool keep) override {
-    return inner_->take_constraint_virial(sampler, keep);
-  }
-  std::optional<double> shadow_energy(const System& system) const override {
-    return inner_->shadow_energy(system);
-  }
-  void project_velocities(System& system) override { inner_->project_velocities(system); }
   std::optional<double> bath_energy() const override { return bath_energy_; }
   // The inner integrator's state, then the thermostat's: a tag, seed, kind, bath energy.
   std::vector<double> saved_state() const override;
@@ -44,7 +30,6 @@ class ThermostattedIntegrator final : public Integrator {
  private:
   void act(System& system, std::int64_t step, int half);
 
-  std::unique_ptr<Integrator> inner_;
   ThermostatSettings settings_;
   DegreesOfFreedom dof_;
   std::unique_ptr<Thermostat> thermostat_;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "support/csv_numbers.hpp"
 #include "support/file_contents.hpp"
 #include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
@@ -40,20 +41,6 @@ std::string sorted_input(const std::string& source, const std::string& dir, int 
                       << "/out.h5\", every = 20, velocities = true }\n"
                       << "dump = { file = \"" << dir << "/out.dump\", every = 30 }\n";
   return path;
-}
-
-std::vector<std::vector<double>> csv_numbers(const std::string& csv) {
-  std::vector<std::vector<double>> rows;
-  std::istringstream lines(csv);
-  std::string line;
-  std::getline(lines, line);  // header
-  while (std::getline(lines, line)) {
-    std::vector<double> row;
-    std::istringstream fields(line);
-    for (std::string field; std::getline(fields, field, ',');) row.push_back(std::stod(field));
-    rows.push_back(row);
-  }
-  return rows;
 }
 
 // The atom ids of a LAMMPS dump's lines, frame after frame.
@@ -91,8 +78,8 @@ void expect_sorted_run_follows_unsorted(const std::string& name, const std::stri
 
   // Thermo rows (kinetic, potential, total, pressure): to rounding, grown by the dynamics
   // over 60 steps.
-  const auto a = csv_numbers(testing::file_contents(root + "/unsorted/out.csv"));
-  const auto b = csv_numbers(testing::file_contents(root + "/sorted/out.csv"));
+  const auto a = testing::csv_numbers(testing::file_contents(root + "/unsorted/out.csv"));
+  const auto b = testing::csv_numbers(testing::file_contents(root + "/sorted/out.csv"));
   ASSERT_EQ(a.size(), 13u);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t r = 0; r < a.size(); ++r) {

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "support/csv_numbers.hpp"
 #include "support/file_contents.hpp"
 #include "support/process_temp_dir.hpp"
 #include "support/shell.hpp"
@@ -58,21 +59,6 @@ std::string run_melt(const std::string& dir, int steps, const std::string& extra
   return testing::file_contents(dir + "/out.csv");
 }
 
-std::vector<std::vector<double>> numbers(const std::string& csv) {
-  std::vector<std::vector<double>> rows;
-  std::istringstream lines(csv);
-  std::string line;
-  std::getline(lines, line);  // header
-  while (std::getline(lines, line)) {
-    std::vector<double> row;
-    std::istringstream fields(line);
-    std::string field;
-    while (std::getline(fields, field, ',')) row.push_back(std::stod(field));
-    rows.push_back(row);
-  }
-  return rows;
-}
-
 void expect_repeat_and_restart_bit_for_bit(const std::string& name, const std::string& run_extra) {
   const std::string root =
       deli::testing::process_temp_dir() + "/" + name + "_" + std::to_string(getpid());
@@ -88,8 +74,8 @@ void expect_repeat_and_restart_bit_for_bit(const std::string& name, const std::s
 
   // One thread: every column within 1e-8 relative of its scale after 120 steps (round-off
   // of the regrouped sums, grown by the dynamics' chaos).
-  const auto a = numbers(straight),
-             b = numbers(run_melt(root + "/one", steps, "--threads 1", run_extra));
+  const auto a = testing::csv_numbers(straight),
+             b = testing::csv_numbers(run_melt(root + "/one", steps, "--threads 1", run_extra));
   ASSERT_EQ(a.size(), b.size());
   ASSERT_EQ(a.size(), static_cast<std::size_t>(steps / 10 + 1));
   for (std::size_t r = 0; r < a.size(); ++r) {

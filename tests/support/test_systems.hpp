@@ -55,6 +55,41 @@ coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
 )");
 }
 
+// `count` chains of `length` beads (density 0.6) with harmonic bonds, angles and dihedrals
+// and LJ (cutoff 2.5) between beads (the cross-check input
+// tests/crosscheck/inputs/chains_dihedrals.toml's force field), and the TOML `more`.
+inline RunInput dihedral_chains(int count, int length, const std::string& more = "") {
+  return input_from(R"(
+[system]
+[system.chains]
+count = )" + std::to_string(count) +
+                    "\nlength = " + std::to_string(length) + R"(
+density = 0.6
+bond_length = 0.97
+min_distance = 0.85
+angles = true
+dihedrals = true
+seed = 21
+[forcefield.pair]
+style = "lj/cut"
+cutoff = 2.5
+coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
+[forcefield.bond]
+style = "harmonic"
+coeffs = [{ type = 1, k = 100.0, r0 = 0.97 }]
+[forcefield.angle]
+style = "harmonic"
+coeffs = [{ type = 1, k = 5.0, theta0 = 110.0 }]
+[forcefield.dihedral]
+style = "harmonic"
+coeffs = [{ type = 1, k = 3.0, d = -1, n = 3 }]
+[integrator]
+timestep = 0.005
+[run]
+steps = 0
+)" + more);
+}
+
 // Energies and forces of `input` at its current positions through a fresh neighbour list.
 struct Evaluated {
   ForceEvaluation evaluation;

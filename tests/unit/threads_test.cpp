@@ -56,35 +56,7 @@ bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 // input tests/crosscheck/inputs/chains_dihedrals.toml, larger): 1050 dihedrals, past the
 // length from which loops are cut into chunks.
 RunInput dihedral_chains() {
-  RunInput input = testing::input_from(R"(
-[system]
-[system.chains]
-count = 150
-length = 10
-density = 0.6
-bond_length = 0.97
-min_distance = 0.85
-angles = true
-dihedrals = true
-seed = 21
-[forcefield.pair]
-style = "lj/cut"
-cutoff = 2.5
-coeffs = [{ types = [1, 1], epsilon = 1.0, sigma = 1.0 }]
-[forcefield.bond]
-style = "harmonic"
-coeffs = [{ type = 1, k = 100.0, r0 = 0.97 }]
-[forcefield.angle]
-style = "harmonic"
-coeffs = [{ type = 1, k = 5.0, theta0 = 110.0 }]
-[forcefield.dihedral]
-style = "harmonic"
-coeffs = [{ type = 1, k = 3.0, d = -1, n = 3 }]
-[integrator]
-timestep = 0.005
-[run]
-steps = 0
-)");
+  RunInput input = testing::dihedral_chains(150, 10);
   testing::jiggle(input.system.particles, 0.05, 12);
   return input;
 }
