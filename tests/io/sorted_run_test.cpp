@@ -20,8 +20,8 @@ namespace deli {
 namespace {
 
 // An input of the repository with its data file made absolute, sorted every `sort_every`
-// steps, run for 60 steps with thermo rows every 5, H5MD frames (velocities too) every 20
-// and LAMMPS dump frames every 30.
+// steps, run for 60 steps with thermo rows every 5, H5MD frames (velocities too) every 20,
+// LAMMPS dump frames every 30 and the final state as a data file.
 std::string sorted_input(const std::string& source, const std::string& dir, int sort_every,
                          const std::string& replace = "", const std::string& by = "") {
   std::string text = testing::file_contents(std::string(DELI_SOURCE_DIR) + "/" + source);
@@ -39,8 +39,27 @@ std::string sorted_input(const std::string& source, const std::string& dir, int 
                       << "thermo = { every = 5, file = \"" << dir << "/out.csv\" }\n"
                       << "trajectory = { file = \"" << dir
                       << "/out.h5\", every = 20, velocities = true }\n"
-                      << "dump = { file = \"" << dir << "/out.dump\", every = 30 }\n";
+                      << "dump = { file = \"" << dir << "/out.dump\", every = 30 }\n"
+                      << "final_data = \"" << dir << "/final.data\"\n";
   return path;
+}
+
+// A data file's atom ids in the order of its Atoms section, then its Bonds section's lines.
+std::vector<std::string> ids_and_bonds(const std::string& data) {
+  std::vector<std::string> out;
+  std::istringstream lines(data);
+  std::string section;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("Atoms", 0) == 0 || line.rfind("Bonds", 0) == 0 ||
+        line.rfind("Velocities", 0) == 0 || line.rfind("Masses", 0) == 0) {
+      section = line.substr(0, 5);
+      continue;
+    }
+    if (line.empty()) continue;
+    if (section == "Atoms") out.push_back(line.substr(0, line.find(' ')));
+    if (section == "Bonds") out.push_back(line);
+  }
+  return out;
 }
 
 // The atom ids of a LAMMPS dump's lines, frame after frame.
@@ -105,6 +124,11 @@ void expect_sorted_run_follows_unsorted(const std::string& name, const std::stri
   const std::vector<long long> ids = dump_ids(testing::file_contents(root + "/unsorted/out.dump"));
   EXPECT_FALSE(ids.empty());
   EXPECT_EQ(ids, dump_ids(testing::file_contents(root + "/sorted/out.dump")));
+  // The final data file: the atoms in the input's order, the same bonds between the same ids.
+  const std::vector<std::string> final_atoms =
+      ids_and_bonds(testing::file_contents(root + "/unsorted/final.data"));
+  EXPECT_GT(final_atoms.size(), 100u);
+  EXPECT_EQ(final_atoms, ids_and_bonds(testing::file_contents(root + "/sorted/final.data")));
   testing::run_shell("rm -rf " + root);
 }
 
