@@ -44,17 +44,18 @@ ParticleOrder spatial_order(const System& system, double bin) {
     }
     return key;
   };
-  // Each particle's first partner by bonds (the smallest index of its molecule: the roots
-  // always the smaller of two joined), whose bin the molecule takes.
-  std::vector<std::int32_t> first(n);
-  std::iota(first.begin(), first.end(), 0);
+  // The molecules (particles joined by bonds) as a union-find forest whose roots are their
+  // smallest indices (of two roots joined, the larger points at the smaller); a molecule
+  // takes its root's bin.
+  std::vector<std::int32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
   for (const Bond& b : system.topology.bonds) {
-    const std::int32_t x = union_find_root(first, b.i), y = union_find_root(first, b.j);
-    first[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
+    const std::int32_t x = union_find_root(parent, b.i), y = union_find_root(parent, b.j);
+    parent[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
   }
   std::vector<std::pair<std::int64_t, std::int32_t>> key(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t head = union_find_root(first, static_cast<std::int32_t>(i));
+    const std::int32_t head = union_find_root(parent, static_cast<std::int32_t>(i));
     key[i] = {bin_of(particles.position[static_cast<std::size_t>(head)]), head};
   }
   ParticleOrder order(n);

@@ -842,6 +842,11 @@ void message_cases(std::vector<Case>& cases) {
                    "",
                    1,
                    {"in.toml:", "'thermostat.type'", "berendsen"}});
+  cases.push_back({"negative_sort_every",
+                   with(kLj, "skin = 0.3", "skin = 0.3\nsort_every = -5"),
+                   "",
+                   1,
+                   {"in.toml:", "'neighbor.sort_every'", "must not be negative", "0: never"}});
   cases.push_back({"thermostat_negative_seed",
                    kLj + "\n[thermostat]\ntype = \"csvr\"\ntemperature = 1.0\ndamping = 1.0\n"
                          "seed = -4\n",
