@@ -13,6 +13,7 @@
 #include "core/cpu_quota.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
+#include "core/thread_team.hpp"
 #include "h5md/checkpoint.hpp"
 #include "h5md/fingerprint.hpp"
 #include "h5md/h5md_info.hpp"
@@ -281,6 +282,13 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
       "list builds\n",
       stats.loop_seconds, static_cast<long long>(stats.steps), stats.atoms,
       stats.atom_steps_per_second(), static_cast<long long>(stats.neighbor_builds));
+  if (const long long spells = crowded_spells(); spells > 0) {
+    out.print(
+        "note: other processes' threads held this run's CPUs (%lld time%s); its threads then "
+        "waited without spinning, a second each time (where runs share the cores, one thread "
+        "a run is faster: --threads 1)\n",
+        spells, spells == 1 ? "" : "s");
+  }
   if (sorting) {
     out.print("particles sorted in space %lld times (every %lld steps)\n",
               static_cast<long long>(sorting->sorts()), static_cast<long long>(input.sort_every));

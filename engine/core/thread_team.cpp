@@ -67,6 +67,7 @@ constexpr std::int64_t kCrowdedWait = 200'000;         // ns
 constexpr std::int64_t kCrowdedSpell = 1'000'000'000;  // ns
 std::atomic<bool> crowded_by_others{false};
 std::atomic<std::int64_t> crowded_until{0};
+std::atomic<long long> crowded_spell_count{0};
 
 // Whether threads of this system waited for a CPU (Linux's pressure stall information,
 // /proc/pressure/cpu, "some" total) for more than a tenth of the time since the last look:
@@ -140,7 +141,9 @@ void spin_until(int threads, Done&& done) {
         since = now;
       } else if (now - since > kCrowdedWait && cpu_pressure_high(now)) {
         crowded_until.store(now + kCrowdedSpell, std::memory_order_relaxed);
-        crowded_by_others.store(true, std::memory_order_relaxed);
+        if (!crowded_by_others.exchange(true, std::memory_order_relaxed)) {
+          crowded_spell_count.fetch_add(1, std::memory_order_relaxed);
+        }
       }
     }
     if (looks < before_yield && !crowded_by_others.load(std::memory_order_relaxed)) {
@@ -316,6 +319,10 @@ void team_barrier() {
 
 int team_thread() {
   return job_thread;
+}
+
+long long crowded_spells() {
+  return crowded_spell_count.load(std::memory_order_relaxed);
 }
 
 int cpus_available() {

@@ -28,6 +28,9 @@ int team_thread();
 // The CPUs this process may run on (its affinity mask, which OpenMP's default thread count
 // counts too), taken once. A job of more threads waits without spinning.
 int cpus_available();
+// How many times the team found other processes' threads holding its CPUs and waited
+// without spinning for a second (thread_team.cpp), since the process started.
+long long crowded_spells();
 
 // run_on_team() with a callable: job(thread, threads).
 template <class Job>
