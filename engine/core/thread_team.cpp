@@ -7,14 +7,15 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "core/cpu_pressure.hpp"
 
 namespace deli {
 
@@ -58,56 +59,65 @@ std::int64_t steady_ns() {
 }
 
 // Other processes' threads on this process's CPUs: a thread that has waited within a job
-// for longer than kCrowdedWait (the imbalance of a job's chunks is microseconds) has waited
-// for a thread of its job that lost its CPU, and then the process waits as `passive` for
-// kCrowdedSpell before it spins again. Two 2-thread runs of the 4000-sphere fluid at once on
-// this 2-core machine took 0.7-25 s each (0.29 s alone), every job's wait a time slice of the
-// scheduler while the other process's threads spun or yielded; as `passive`, 1.1-1.6 s.
-constexpr std::int64_t kCrowdedWait = 200'000;         // ns
-constexpr std::int64_t kCrowdedSpell = 1'000'000'000;  // ns
-std::atomic<bool> crowded_by_others{false};
-std::atomic<std::int64_t> crowded_until{0};
-std::atomic<long long> crowded_spell_count{0};
+// for longer than kWait (the imbalance of a job's chunks is microseconds) while the system's
+// threads waited for a CPU more than a tenth of the time (cpu_stall_total_us) has waited for
+// a thread of its job that lost its CPU to another process, and then the process waits as
+// `passive` for kSpell before it spins again. Two 2-thread runs of the 4000-sphere fluid at
+// once on this 2-core machine took 0.7-25 s each (0.29 s alone), every job's wait a time
+// slice of the scheduler while the other process's threads spun or yielded; as `passive`,
+// 1.1-1.6 s. Without the stall test, a virtual machine whose host takes the CPU away makes
+// long waits too (2 % stall in the fluid's run with the cores far apart, against 75 % beside
+// a second run), where sleeping hands the CPU to no one and adds each job's wake-up (that
+// fluid on two threads 1.8x slower). The stall is read at most every kCheck, and compared
+// only with a reading less than a second old.
+class CrowdWatch {
+ public:
+  static constexpr std::int64_t kWait = 200'000;            // ns
+  static constexpr std::int64_t kSpell = 1'000'000'000;     // ns
+  static constexpr std::int64_t kCheck = 50'000'000;        // ns
+  static constexpr std::int64_t kStallAge = 1'000'000'000;  // ns
 
-// Whether threads of this system waited for a CPU (Linux's pressure stall information,
-// /proc/pressure/cpu, "some" total) for more than a tenth of the time since the last look:
-// a long wait is then another process holding the CPU the thread waited for. Where they did
-// not (a virtual machine whose host took the CPU away: 2 % of the 4000-sphere fluid's run
-// with the cores far apart, against 75 % beside a second such run), sleeping would hand the
-// CPU to no one and add each job's wake-up (that fluid on two threads 1.8x slower). Looked at
-// most every kCrowdedCheck, and compared only with a look less than a second old; without
-// the file (kernels before 4.20, or without PSI), never.
-constexpr std::int64_t kCrowdedCheck = 50'000'000;  // ns
-std::mutex pressure_mutex;
-std::int64_t pressure_seen_at = 0;   // ns
-long long pressure_seen_total = -1;  // us
-
-bool cpu_pressure_high(std::int64_t now) {
-  std::unique_lock<std::mutex> lock(pressure_mutex, std::try_to_lock);
-  if (!lock || now - pressure_seen_at < kCrowdedCheck) return false;
-  long long total = -1;
-  if (std::FILE* file = std::fopen("/proc/pressure/cpu", "r")) {
-    char line[256];
-    while (total < 0 && std::fgets(line, sizeof line, file)) {
-      if (const char* at = std::strstr(line, "total="); at && std::strncmp(line, "some", 4) == 0) {
-        total = std::atoll(at + 6);
-      }
-    }
-    std::fclose(file);
+  bool crowded() {
+    if (!crowded_.load(std::memory_order_relaxed)) return false;
+    if (steady_ns() < until_.load(std::memory_order_relaxed)) return true;
+    crowded_.store(false, std::memory_order_relaxed);
+    return false;
   }
-  const bool recent = pressure_seen_total >= 0 && now - pressure_seen_at < 1'000'000'000;
-  const bool high =
-      recent && total >= 0 && (total - pressure_seen_total) * 1000 * 10 > now - pressure_seen_at;
-  pressure_seen_at = now;
-  pressure_seen_total = total;
-  return high;
-}
+  // Whether a spell is on now, without ending one that is over.
+  bool in_spell() const { return crowded_.load(std::memory_order_relaxed); }
+  // A wait within a job that began at `since` goes on at `now`.
+  void waited(std::int64_t since, std::int64_t now) {
+    if (now - since <= kWait || !stall_high(now)) return;
+    until_.store(now + kSpell, std::memory_order_relaxed);
+    if (!crowded_.exchange(true, std::memory_order_relaxed)) {
+      spells_.fetch_add(1, std::memory_order_relaxed);
+    }
+  }
+  long long spells() const { return spells_.load(std::memory_order_relaxed); }
 
-bool crowded_now() {
-  if (!crowded_by_others.load(std::memory_order_relaxed)) return false;
-  if (steady_ns() < crowded_until.load(std::memory_order_relaxed)) return true;
-  crowded_by_others.store(false, std::memory_order_relaxed);
-  return false;
+ private:
+  bool stall_high(std::int64_t now) {
+    std::unique_lock<std::mutex> lock(stall_mutex_, std::try_to_lock);
+    if (!lock || now - stall_seen_at_ < kCheck) return false;
+    const std::optional<long long> total = cpu_stall_total_us();
+    const bool high = stall_seen_ && total && now - stall_seen_at_ < kStallAge &&
+                      (*total - *stall_seen_) * 1000 * 10 > now - stall_seen_at_;
+    stall_seen_at_ = now;
+    stall_seen_ = total;
+    return high;
+  }
+
+  std::atomic<bool> crowded_{false};
+  std::atomic<std::int64_t> until_{0};
+  std::atomic<long long> spells_{0};
+  std::mutex stall_mutex_;
+  std::int64_t stall_seen_at_ = 0;       // ns
+  std::optional<long long> stall_seen_;  // us
+};
+
+CrowdWatch& crowd_watch() {
+  static CrowdWatch watch;
+  return watch;
 }
 
 // The policy for a job of `threads` threads. With more threads than CPUs to run them, a
@@ -116,37 +126,34 @@ bool crowded_now() {
 // 382 s for 3000 steps, against 1.8 s on 2. There nothing spins: workers sleep at once and
 // waiters yield, as `passive` (libgomp likewise throttles its spinning past the CPU count);
 // `active` still keeps workers awake, as asked. The same while other processes crowd the
-// CPUs (crowded_now).
+// CPUs (CrowdWatch).
 const WaitPolicy& wait_policy(int threads) {
   static const WaitPolicy asked = wait_policy_from_environment();
   static const WaitPolicy crowded{asked.spins_before_sleep < 0 ? -1 : 0, 0};
-  return threads > cpus_available() || crowded_now() ? crowded : asked;
+  return threads > cpus_available() || crowd_watch().crowded() ? crowded : asked;
 }
 
 // Waits until done(), within a job of `threads` threads: spins, then yields its core between
 // looks. A wait still going after kSpinsBeforeClock spins (tens of microseconds) is timed
-// from there, and past kCrowdedWait starts a crowded spell.
+// from there (CrowdWatch).
 template <class Done>
 void spin_until(int threads, Done&& done) {
   constexpr int kSpinsBeforeClock = 1024, kLooksBetweenClocks = 256;
   const int before_yield = wait_policy(threads).spins_before_yield;
+  CrowdWatch& watch = crowd_watch();
   std::int64_t looks = 0;
   std::int64_t since = 0;
   while (!done()) {
     ++looks;
-    if (looks >= kSpinsBeforeClock && looks % kLooksBetweenClocks == 0 &&
-        !crowded_by_others.load(std::memory_order_relaxed)) {
+    if (looks >= kSpinsBeforeClock && looks % kLooksBetweenClocks == 0 && !watch.in_spell()) {
       const std::int64_t now = steady_ns();
       if (since == 0) {
         since = now;
-      } else if (now - since > kCrowdedWait && cpu_pressure_high(now)) {
-        crowded_until.store(now + kCrowdedSpell, std::memory_order_relaxed);
-        if (!crowded_by_others.exchange(true, std::memory_order_relaxed)) {
-          crowded_spell_count.fetch_add(1, std::memory_order_relaxed);
-        }
+      } else {
+        watch.waited(since, now);
       }
     }
-    if (looks < before_yield && !crowded_by_others.load(std::memory_order_relaxed)) {
+    if (looks < before_yield && !watch.in_spell()) {
       spin_pause();
     } else {
       std::this_thread::yield();
@@ -322,7 +329,7 @@ int team_thread() {
 }
 
 long long crowded_spells() {
-  return crowded_spell_count.load(std::memory_order_relaxed);
+  return crowd_watch().spells();
 }
 
 int cpus_available() {

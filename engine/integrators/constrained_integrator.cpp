@@ -1019,7 +1019,9 @@ std::vector<double> ConstrainedIntegrator::state_in_order(
   // The statistics and virial sums, then (linearised rows) each particle's previous position.
   const std::size_t head = 2 * ConstraintStatistics::saved_size + 2;
   if (state.size() != head + 3 * order.size()) return state;
-  return triples_in_order(state, head, order);
+  std::vector<double> out(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(head));
+  append_triples_in_order(state.data() + head, order, out);
+  return out;
 }
 
 void ConstrainedIntegrator::restore_state(const std::vector<double>& state, const System& system) {

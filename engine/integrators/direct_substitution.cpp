@@ -186,8 +186,7 @@ std::vector<double> DirectSubstitution::state_in_order(
   const std::size_t base = state.size() - 3 * order.size();
   std::vector<double> out = ConstrainedIntegrator::state_in_order(
       std::vector<double>(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(base)), order);
-  const std::vector<double> forces = triples_in_order(state, base, order);
-  out.insert(out.end(), forces.begin() + static_cast<std::ptrdiff_t>(base), forces.end());
+  append_triples_in_order(state.data() + base, order, out);
   return out;
 }
 

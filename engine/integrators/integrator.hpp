@@ -11,16 +11,14 @@
 
 namespace deli {
 
-// `state` with its three numbers a particle from `first` on put in `order` (order[k]: the
-// particle put k-th); the numbers before `first` as they were.
-inline std::vector<double> triples_in_order(const std::vector<double>& state, std::size_t first,
-                                            const std::vector<std::int32_t>& order) {
-  std::vector<double> out(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(first));
+// Appends to `out` the three numbers a particle from `triples` on (particle i's at
+// triples + 3 i) in `order` (order[k]: the particle put k-th).
+inline void append_triples_in_order(const double* triples, const std::vector<std::int32_t>& order,
+                                    std::vector<double>& out) {
   for (const std::int32_t i : order) {
-    const auto* x = state.data() + first + 3 * static_cast<std::size_t>(i);
+    const double* x = triples + 3 * static_cast<std::size_t>(i);
     out.insert(out.end(), x, x + 3);
   }
-  return out;
 }
 
 // Who samples the integrator's accumulated figures: the thermo output and the trajectory
