@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/cpu_pressure.hpp"
+#include "core/team_profile.hpp"
 
 namespace deli {
 
@@ -182,6 +183,7 @@ struct alignas(64) Worker {
   std::atomic<bool> asleep{false};
   std::atomic<std::uint64_t> posted{0};            // jobs posted to this worker
   alignas(64) std::atomic<std::uint64_t> done{0};  // jobs it has finished
+  std::int64_t job_ns = 0;  // its last job's time, with the team profile on (before `done`)
   alignas(64) std::mutex sleep_mutex;
   std::condition_variable wake;
   std::thread thread;
@@ -212,13 +214,22 @@ class Team {
       w.threads = threads;
       post(w);
     }
+    const bool profiled = team_profile_on();
+    const std::int64_t start = profiled ? team_profile_clock_ns() : 0;
     enter(0, threads);
     job(context, 0, threads);
     leave();
+    const std::int64_t own_done = profiled ? team_profile_clock_ns() : 0;
+    std::int64_t slowest_worker = 0;
     for (int t = 1; t < threads; ++t) {
       const Worker& w = *workers_[static_cast<std::size_t>(t - 1)];
       const std::uint64_t posted = w.posted.load(std::memory_order_relaxed);
       spin_until(threads, [&] { return w.done.load(std::memory_order_acquire) == posted; });
+      slowest_worker = std::max(slowest_worker, w.job_ns);
+    }
+    if (profiled) {
+      team_profile_record(reinterpret_cast<const void*>(job), start, own_done,
+                          team_profile_clock_ns(), slowest_worker);
     }
   }
 
@@ -280,9 +291,12 @@ class Team {
       seen = w.posted.load(std::memory_order_acquire);
       if (stop_.load(std::memory_order_acquire)) return;
       last_threads = w.threads;
+      const bool profiled = team_profile_on();
+      const std::int64_t start = profiled ? team_profile_clock_ns() : 0;
       enter(index, last_threads);
       w.job(w.context, index, last_threads);
       leave();
+      w.job_ns = profiled ? team_profile_clock_ns() - start : 0;
       w.done.store(seen, std::memory_order_release);
     }
   }
