@@ -59,6 +59,8 @@ def short(name):
         name = name[m.end():]
     name = re.split(r"[(]", name, maxsplit=1)[0]
     return name + (" [" + ", ".join(through) + "]" if through else "")
+if not entries:
+    sys.exit("no loop ran on the team (on one thread every loop runs on the calling thread)")
 print(f"{'calls':>7} {'own ms':>9} {'wait ms':>9} {'worker ms':>9} {'serial ms':>9}  loop")
 total = [0.0] * 4
 for calls, own, wait, worker, serial, obj, offset in entries:
