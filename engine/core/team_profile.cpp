@@ -3,7 +3,6 @@
 #include <dlfcn.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -47,12 +46,6 @@ void set_team_profile(bool on) {
   p.on = on;
   p.totals.clear();
   p.last_done_ns = -1;
-}
-
-std::int64_t team_profile_clock_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 void team_profile_record(const void* job, std::int64_t start_ns, std::int64_t own_done_ns,

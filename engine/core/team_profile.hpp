@@ -26,9 +26,8 @@ struct JobTotals {
 bool team_profile_on();
 // For tests: turns the profile on or off and clears it (the file is still the environment's).
 void set_team_profile(bool on);
-std::int64_t team_profile_clock_ns();
-// One job's times on the calling thread's clock: started, its own chunks done, every worker
-// done; the slowest worker's chunks. Called by the calling thread, one job at a time.
+// One job's times in nanoseconds of the steady clock: started, its own chunks done, every
+// worker done; the slowest worker's chunks. Called by the calling thread, one job at a time.
 void team_profile_record(const void* job, std::int64_t start_ns, std::int64_t own_done_ns,
                          std::int64_t done_ns, std::int64_t slowest_worker_ns);
 // The totals so far, the kinds in order of their calling thread's time (own + wait), largest

@@ -215,11 +215,11 @@ class Team {
       post(w);
     }
     const bool profiled = team_profile_on();
-    const std::int64_t start = profiled ? team_profile_clock_ns() : 0;
+    const std::int64_t start = profiled ? steady_ns() : 0;
     enter(0, threads);
     job(context, 0, threads);
     leave();
-    const std::int64_t own_done = profiled ? team_profile_clock_ns() : 0;
+    const std::int64_t own_done = profiled ? steady_ns() : 0;
     std::int64_t slowest_worker = 0;
     for (int t = 1; t < threads; ++t) {
       const Worker& w = *workers_[static_cast<std::size_t>(t - 1)];
@@ -228,8 +228,8 @@ class Team {
       slowest_worker = std::max(slowest_worker, w.job_ns);
     }
     if (profiled) {
-      team_profile_record(reinterpret_cast<const void*>(job), start, own_done,
-                          team_profile_clock_ns(), slowest_worker);
+      team_profile_record(reinterpret_cast<const void*>(job), start, own_done, steady_ns(),
+                          slowest_worker);
     }
   }
 
@@ -292,11 +292,11 @@ class Team {
       if (stop_.load(std::memory_order_acquire)) return;
       last_threads = w.threads;
       const bool profiled = team_profile_on();
-      const std::int64_t start = profiled ? team_profile_clock_ns() : 0;
+      const std::int64_t start = profiled ? steady_ns() : 0;
       enter(index, last_threads);
       w.job(w.context, index, last_threads);
       leave();
-      w.job_ns = profiled ? team_profile_clock_ns() - start : 0;
+      w.job_ns = profiled ? steady_ns() - start : 0;
       w.done.store(seen, std::memory_order_release);
     }
   }
