@@ -7,7 +7,8 @@
 // second thread only where the split saves more than a region costs. And what moving data
 // between the threads' cores costs: a cache line handed back and forth, and the chunked
 // kick with the chunks' owners swapped every pass (each pass reads the lines the other
-// core wrote last), against the same kick with the chunks kept.
+// core wrote last), against the same kick with the chunks kept; and per line, reads of many
+// lines the other core wrote last (in order and shuffled) and stores to lines it read.
 //   cmake --build build --target deli-parallel-overhead
 //   OMP_NUM_THREADS=2 build/bench/parallel_overhead/deli-parallel-overhead
 #include <benchmark/benchmark.h>
@@ -15,6 +16,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <numeric>
+#include <random>
 #include <vector>
 
 #include "core/parallel.hpp"
@@ -166,6 +171,77 @@ void KickInSwappedChunks(benchmark::State& state) {
   }
 }
 BENCHMARK(KickInSwappedChunks)->UseRealTime();
+
+// Lines another core touched last, in bulk rather than one round trip at a time: in one job
+// of the team, thread 1 writes every line of kLines lines, then (after the job's barrier)
+// thread 0 reads them in order (argument 0) or in a shuffled order (1); the time of thread
+// 0's reads per line. With the cores 400 ns apart (a round trip), a read of the line the
+// other wrote costs a few nanoseconds in either order (bench/README.md, "Stop 56"): the cores
+// fetch many lines at once.
+constexpr std::size_t kLines = 500;
+constexpr std::size_t kDoublesALine = 8;
+
+std::vector<std::uint32_t> line_order(bool shuffled) {
+  std::vector<std::uint32_t> order(kLines);
+  std::iota(order.begin(), order.end(), 0u);
+  if (shuffled) std::shuffle(order.begin(), order.end(), std::mt19937(1));
+  return order;
+}
+
+void ReadLinesTheOtherCoreWrote(benchmark::State& state) {
+  const std::vector<std::uint32_t> order = line_order(state.range(0) != 0);
+  std::vector<double> value(kLines * kDoublesALine, 1.0);
+  double sum = 0.0;
+  for (auto _ : state) {
+    double seconds = 0.0;
+    auto job = [&](int thread, int) {
+      if (thread == 1) {
+        for (std::size_t k = 0; k < kLines; ++k) value[k * kDoublesALine] += 1.0;
+      }
+      team_barrier();
+      if (thread != 0) return;
+      const auto start = std::chrono::steady_clock::now();
+      for (const std::uint32_t k : order) sum += value[k * kDoublesALine];
+      seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    run_on_team(2, job);
+    state.SetIterationTime(seconds);
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["per_line"] = benchmark::Counter(
+      static_cast<double>(kLines),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(ReadLinesTheOtherCoreWrote)->Arg(0)->Arg(1)->UseManualTime();
+
+// The other way: thread 1 reads every line, then thread 0 stores to each (its copies
+// invalidated in the other core's cache); the time of thread 0's stores per line.
+void StoreToLinesTheOtherCoreRead(benchmark::State& state) {
+  std::vector<double> value(kLines * kDoublesALine, 1.0);
+  double sum = 0.0;
+  double stored = 0.0;
+  for (auto _ : state) {
+    double seconds = 0.0;
+    auto job = [&](int thread, int) {
+      if (thread == 1) {
+        for (std::size_t k = 0; k < kLines; ++k) sum += value[k * kDoublesALine];
+      }
+      team_barrier();
+      if (thread != 0) return;
+      stored += 1.0;
+      const auto start = std::chrono::steady_clock::now();
+      for (std::size_t k = 0; k < kLines; ++k) value[k * kDoublesALine] = stored;
+      seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    run_on_team(2, job);
+    state.SetIterationTime(seconds);
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["per_line"] = benchmark::Counter(
+      static_cast<double>(kLines),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(StoreToLinesTheOtherCoreRead)->UseManualTime();
 
 }  // namespace
 }  // namespace deli
