@@ -587,69 +587,53 @@ double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec
 }
 
 // The Hessian blocks of the potential touching the clusters to reflect, at the current
-// positions (the reflection's q): one scan of the neighbour list for all of them. Block k of
-// the scan goes to the clusters of its two particles, so each cluster's blocks come in the
-// order a scan masked by that cluster alone would give.
+// positions (the reflection's q): one scan of the neighbour list for all of them; then each
+// cluster's shadow pairs, in one job over the blocks (the default input: 2400 blocks and two
+// clusters a call, made on the calling thread alone they took 8 % of its loop on two threads,
+// bench/README.md, "Stop 56").
 void ConstrainedIntegrator::gather_hessian_blocks(const System& system,
                                                   const std::vector<Cluster>& clusters,
                                                   const std::vector<bool>& reflected) {
   const std::size_t n = system.particles.size();
   cluster_of_particle_.assign(n, -1);
   local_index_of_particle_.resize(n);
-  std::vector<char> mask(n, 0);
+  hessian_mask_.assign(n, 0);
+  reflected_number_.assign(clusters.size(), -1);
+  std::int32_t count = 0;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!reflected[c]) continue;
+    reflected_number_[c] = count;
     const std::vector<std::int32_t>& members = clusters[c].particles;
     for (std::size_t k = 0; k < members.size(); ++k) {
-      cluster_of_particle_[members[k]] = static_cast<std::int32_t>(c);
+      cluster_of_particle_[members[k]] = count;
       local_index_of_particle_[members[k]] = static_cast<std::int32_t>(k);
-      mask[members[k]] = 1;
+      hessian_mask_[members[k]] = 1;
     }
+    ++count;
   }
   hessian_blocks_.clear();
-  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), mask, hessian_blocks_)) {
+  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), hessian_mask_,
+                                           hessian_blocks_)) {
     throw SimulationError(
         "shadow-Hamiltonian reflections need a pairwise Hessian, which "
         "harmonic angles lack: use energy = \"hamiltonian\"");
   }
-  blocks_of_cluster_.assign(clusters.size(), {});
-  for (std::size_t k = 0; k < hessian_blocks_.size(); ++k) {
-    const std::int32_t a = cluster_of_particle_[hessian_blocks_[k].a];
-    const std::int32_t b = cluster_of_particle_[hessian_blocks_[k].b];
-    if (a >= 0) blocks_of_cluster_[a].push_back(k);
-    if (b >= 0 && b != a) blocks_of_cluster_[b].push_back(k);
-  }
+  shadow_pairs_.make(hessian_blocks_, cluster_of_particle_.data(), local_index_of_particle_.data(),
+                     static_cast<std::size_t>(count));
 }
 
-// Cluster c's Hessian blocks in the cluster's numbering, with the velocities of the
-// particles outside it that its blocks reach.
+// Cluster c's Hessian blocks in the cluster's numbering (gather_hessian_blocks' pairs), with
+// the momenta of the particles outside it that its blocks reach.
 ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std::size_t c,
                                                       const std::vector<Vec3>& p) const {
-  const Particles& P = system.particles;
+  const auto r = static_cast<std::size_t>(reflected_number_[c]);
   ShadowOperator shadow;
   shadow.h = dt_;
-  // Local index of a particle in this cluster (its rank among the sorted particles), -1
-  // outside it: recorded by gather_hessian_blocks for every cluster it gathered.
-  const auto self = static_cast<std::int32_t>(c);
-  auto local = [&](std::int32_t g) {
-    return cluster_of_particle_[g] == self ? local_index_of_particle_[g] : std::int32_t{-1};
-  };
   shadow.hessian = &hessian_blocks_;
-  shadow.pairs.reserve(blocks_of_cluster_[c].size());
-  shadow.outside_velocity.reserve(blocks_of_cluster_[c].size());
-  for (std::size_t k : blocks_of_cluster_[c]) {
-    const PairHessian& b = hessian_blocks_[k];
-    std::int32_t a = local(b.a), other = local(b.b);
-    Vec3 outside_velocity;
-    if (a < 0) {  // keep the cluster's particle first: the block is symmetric in a, b
-      std::swap(a, other);
-      outside_velocity = p[b.a] * (1.0 / P.mass[b.a]);
-    } else if (other < 0) {
-      outside_velocity = p[b.b] * (1.0 / P.mass[b.b]);
-    }
-    shadow.pairs.push_back({a, other, k});
-    shadow.outside_velocity.push_back(outside_velocity);
-  }
+  shadow.pairs = shadow_pairs_.pairs(r);
+  shadow.pair_count = shadow_pairs_.count(r);
+  shadow.momenta = p.data();
+  shadow.mass = system.particles.mass.data();
   return shadow;
 }
 

@@ -13,6 +13,7 @@
 #include "core/ordered_terms.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/reflection.hpp"
+#include "integrators/shadow_pairs.hpp"
 #include "solvers/prepared_clusters.hpp"
 
 namespace deli {
@@ -254,9 +255,14 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<double> equality_chain_virial_;
   std::vector<char> equality_chain_solved_;
   std::vector<PairHessian> hessian_blocks_;
-  std::vector<std::vector<std::size_t>> blocks_of_cluster_;
+  // gather_hessian_blocks' scratch and results: each reflected cluster's number among them
+  // (-1 for the others), its particles' (-1 elsewhere) and their index within it; the mask;
+  // the reflected clusters' shadow pairs by number.
+  std::vector<std::int32_t> reflected_number_;
   std::vector<std::int32_t> cluster_of_particle_;
-  std::vector<std::int32_t> local_index_of_particle_;  // within its cluster, where gathered
+  std::vector<std::int32_t> local_index_of_particle_;
+  std::vector<char> hessian_mask_;
+  ShadowPairs shadow_pairs_;
   // reflect_inequalities' scratch: rows per particle (zero between calls), the rows sharing
   // no particle, the others.
   std::vector<std::int32_t> rows_at_particle_;

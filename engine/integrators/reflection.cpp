@@ -1,5 +1,6 @@
 #include "integrators/reflection.hpp"
 
+#include "core/parallel.hpp"
 #include "solvers/chain_projection.hpp"
 #include "solvers/cluster_matrices.hpp"
 #include "solvers/least_norm.hpp"
@@ -29,13 +30,14 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
 
 Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool with_outside) const {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
+  for (std::size_t k = 0; k < pair_count; ++k) {
     const LocalPair& b = pairs[k];
     Eigen::Vector3d dv = v.segment<3>(3 * b.a);
     if (b.b >= 0) {
       dv -= v.segment<3>(3 * b.b);
     } else if (with_outside) {
-      dv -= Eigen::Vector3d(outside_velocity[k].x, outside_velocity[k].y, outside_velocity[k].z);
+      const Vec3 velocity = momenta[b.outside] * (1.0 / mass[b.outside]);
+      dv -= Eigen::Vector3d(velocity.x, velocity.y, velocity.z);
     }
     const Eigen::Vector3d f = (*hessian)[b.block].block * dv;
     out.segment<3>(3 * b.a) += f;
@@ -168,12 +170,28 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       // K~ = K + h^2/12 W d2V W (W = M^-1): the Hessian acts on velocities.
       const double s12 = shadow->h * shadow->h / 12.0;
       const Eigen::MatrixXd WN = w.asDiagonal() * NV;
+      const Eigen::VectorXd velocity = w.asDiagonal() * flat;
       Eigen::MatrixXd HWN(WN.rows(), WN.cols());
-      for (Eigen::Index k = 0; k < WN.cols(); ++k) {
-        HWN.col(k) = shadow->hessian_times(WN.col(k), false);
-      }
+      Eigen::VectorXd Hv;
+      // The Hessian on each column of W N and on the velocities: products of their own, each
+      // the serial loop whichever thread makes it, on as many threads as there are products
+      // where each passes enough blocks (the default input's clusters: 1300 blocks, two
+      // products, 5.6 us each, 9 % of its loop on two threads when made in turn).
+      const std::size_t products = static_cast<std::size_t>(WN.cols()) + 1;
+      auto product = [&](std::size_t k) {
+        if (k + 1 < products) {
+          HWN.col(static_cast<Eigen::Index>(k)) =
+              shadow->hessian_times(WN.col(static_cast<Eigen::Index>(k)), false);
+        } else {
+          Hv = shadow->hessian_times(velocity, true);
+        }
+      };
+      constexpr std::size_t kBlocksToSplit = 256;
+      const int chunks = shadow->pair_count < kBlocksToSplit ? 1 : static_cast<int>(products);
+      for_each_chunk(products, chunks, [&](int, std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) product(k);
+      });
       const Eigen::MatrixXd Qs = Q + s12 * (WN.transpose() * HWN);
-      const Eigen::VectorXd Hv = shadow->hessian_times(w.asDiagonal() * flat, true);
       const Eigen::VectorXd cs = c + 2.0 * s12 * (WN.transpose() * Hv);
       const Eigen::LDLT<Eigen::MatrixXd> check(Qs);
       const bool positive =

@@ -14,19 +14,24 @@ enum class ReflectionEnergy { hamiltonian, shadow };
 
 // Verlet's second-order shadow Hamiltonian restricted to one cluster:
 // H~ = H - h^2/24 dV^T M^-1 dV + h^2/12 v^T d2V v, quadratic in p with
-// K = M^-1/2 + h^2/12 M^-1 d2V M^-1. `pairs` are the pair Hessian blocks touching the
-// cluster in local indices (b = -1: a particle outside it, whose velocity is in
-// `outside_velocity` at the same position), each naming its block in `hessian` (the
-// gathered blocks of every reflected cluster: referred to, not copied).
+// K = M^-1/2 + h^2/12 M^-1 d2V M^-1. `pairs` (pair_count of them) are the pair Hessian
+// blocks touching the cluster in local indices (b = -1: the particle `outside` the cluster,
+// whose velocity is its momentum in `momenta` over its mass), each naming its block in
+// `hessian` (the gathered blocks of every reflected cluster). All referred to, not copied:
+// the outside particles' momenta are read while the cluster is reflected, which changes
+// only its own.
 struct ShadowOperator {
   struct LocalPair {
     std::int32_t a, b;
+    std::int32_t outside;  // the particle outside the cluster where b = -1, else -1
     std::size_t block;
   };
   double h = 0;
   const std::vector<PairHessian>* hessian = nullptr;
-  std::vector<LocalPair> pairs;
-  std::vector<Vec3> outside_velocity;
+  const LocalPair* pairs = nullptr;
+  std::size_t pair_count = 0;
+  const Vec3* momenta = nullptr;
+  const double* mass = nullptr;
   // d2V v over the cluster's coordinates (3n); outside particles move with their own
   // velocities when `with_outside`, else stand still.
   Eigen::VectorXd hessian_times(const Eigen::VectorXd& v, bool with_outside) const;
