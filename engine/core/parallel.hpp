@@ -179,6 +179,25 @@ void for_each_chunk(std::size_t n, int chunks, Body&& body) {
   }
 }
 
+// for_each_chunk with chunks of the caller's choosing: chunk c is the items [starts[c],
+// starts[c + 1]) (ascending).
+template <class Body>
+void for_each_range(const std::vector<std::size_t>& starts, Body&& body) {
+  const int chunks = static_cast<int>(starts.size()) - 1;
+  if (chunks <= 1) {
+    body(0, starts.front(), starts.back());
+    return;
+  }
+  ChunkSlots<std::exception_ptr> failed(static_cast<std::size_t>(chunks));
+  auto job = [&](int thread, int threads) {
+    detail::ranges_of_thread(starts.data(), chunks, thread, threads, body, failed.begin());
+  };
+  run_on_team(std::min(chunks, thread_count()), job);
+  for (const std::exception_ptr& e : failed) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
 // for_each_chunk_then with chunks of the caller's choosing: chunk c of the first pass is the
 // items [first_starts[c], first_starts[c + 1]), of the second [second_starts[c],
 // second_starts[c + 1]) (each ascending, as many chunks in both), chunk c of both on one thread.

@@ -57,7 +57,24 @@ class PairForce final : public ForceTerm {
     const std::size_t n = ranges.particles;
     const int chunks = chunks_for(n);
     chunk_hessians_.resize(static_cast<std::size_t>(chunks));
-    for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    // Chunks of particles holding equal numbers of listed pairs, where the list is by particle
+    // in order (its ranges follow each other): each pair is tested against the mask. In
+    // equal numbers of particles, the default input's lower half (its z axis open, the pairs
+    // across the middle listed from below) took 1.28x the upper's time.
+    hessian_chunk_starts_.assign(static_cast<std::size_t>(chunks) + 1, n);
+    hessian_chunk_starts_[0] = 0;
+    const bool in_order = n > 0 && ranges.end == ranges.begin + 1;
+    for (std::size_t c = 1; c < static_cast<std::size_t>(chunks); ++c) {
+      if (!in_order) {
+        hessian_chunk_starts_[c] = chunk_range(n, static_cast<int>(c), chunks).begin;
+        continue;
+      }
+      const std::size_t share = ranges.begin[0] + (ranges.begin[n] - ranges.begin[0]) * c /
+                                                      static_cast<std::size_t>(chunks);
+      hessian_chunk_starts_[c] = static_cast<std::size_t>(
+          std::lower_bound(ranges.begin, ranges.begin + n, share) - ranges.begin);
+    }
+    for_each_range(hessian_chunk_starts_, [&](int c, std::size_t begin, std::size_t end) {
       std::vector<PairHessian>& to = c == 0 ? out : chunk_hessians_[static_cast<std::size_t>(c)];
       if (c > 0) to.clear();
       append_listed_hessians(system, ranges, neighbors.image_shifts().data(), mask, begin, end, to);
@@ -631,6 +648,7 @@ class PairForce final : public ForceTerm {
   mutable std::vector<SymTensor> chunk_virials_;
   mutable std::vector<double> chunk_energies_;
   mutable std::vector<std::vector<PairHessian>> chunk_hessians_;  // pair_hessians()' chunks 1...
+  mutable std::vector<std::size_t> hessian_chunk_starts_;         // and where they start
 };
 
 }  // namespace deli

@@ -235,9 +235,14 @@ TEST(Threads, PairCurvatureOnTwoThreadsRepeatsAndAgreesWithOneToRoundOff) {
 // within the cutoff that touch a masked particle, each made here pair by pair from the list
 // by particle by pair_hessian_block (the special bonds 0 1 1 leave no scaled pair outside the
 // list): the pair style's loop runs in vectors, with the same operations on each pair.
-TEST(Threads, MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks) {
+// With cell order on, the list by particle is read in order and split in chunks of equal
+// numbers of pairs; without, in equal numbers of particles.
+class MaskedPairHessians : public ::testing::TestWithParam<bool> {};
+
+TEST_P(MaskedPairHessians, OnTwoThreadsAreTheOneThreadBlocks) {
   const RunInput input = chain_melt();
   NeighborList list(input.force_field->neighbor_cutoff(), 0.3);
+  list.set_cell_order(GetParam());
   list.build(input.system.particles.position, input.system.box);
   // With image codes the style takes each separation as x_i - x_j less the listed pair's
   // shift; here it is made by minimum_image(): the same bits.
@@ -289,6 +294,10 @@ TEST(Threads, MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks) {
     for (int e = 0; e < 9; ++e) ASSERT_EQ(two[k].block(e), one[k].block(e)) << k;
   }
 }
+INSTANTIATE_TEST_SUITE_P(Threads, MaskedPairHessians, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "CellOrder" : "ListOrder";
+                         });
 
 TEST(Threads, OrderedSumOnOneChunkIsTheSerialSum) {
   std::vector<double> terms(5000);
