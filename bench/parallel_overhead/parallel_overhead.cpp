@@ -188,29 +188,41 @@ std::vector<std::uint32_t> line_order(bool shuffled) {
   return order;
 }
 
-void ReadLinesTheOtherCoreWrote(benchmark::State& state) {
-  const std::vector<std::uint32_t> order = line_order(state.range(0) != 0);
-  std::vector<double> value(kLines * kDoublesALine, 1.0);
-  double sum = 0.0;
+// Per iteration, in one job of the team: thread 1's pass over the lines, the job's barrier,
+// then thread 0's pass, timed; the time per line of thread 0's passes.
+template <class OtherPass, class TimedPass>
+void time_per_line(benchmark::State& state, OtherPass&& other, TimedPass&& timed) {
   for (auto _ : state) {
     double seconds = 0.0;
     auto job = [&](int thread, int) {
-      if (thread == 1) {
-        for (std::size_t k = 0; k < kLines; ++k) value[k * kDoublesALine] += 1.0;
-      }
+      if (thread == 1) other();
       team_barrier();
       if (thread != 0) return;
       const auto start = std::chrono::steady_clock::now();
-      for (const std::uint32_t k : order) sum += value[k * kDoublesALine];
+      timed();
       seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     };
     run_on_team(2, job);
     state.SetIterationTime(seconds);
   }
-  benchmark::DoNotOptimize(sum);
   state.counters["per_line"] = benchmark::Counter(
       static_cast<double>(kLines),
       benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+void ReadLinesTheOtherCoreWrote(benchmark::State& state) {
+  const std::vector<std::uint32_t> order = line_order(state.range(0) != 0);
+  std::vector<double> value(kLines * kDoublesALine, 1.0);
+  double sum = 0.0;
+  time_per_line(
+      state,
+      [&] {
+        for (std::size_t k = 0; k < kLines; ++k) value[k * kDoublesALine] += 1.0;
+      },
+      [&] {
+        for (const std::uint32_t k : order) sum += value[k * kDoublesALine];
+      });
+  benchmark::DoNotOptimize(sum);
 }
 BENCHMARK(ReadLinesTheOtherCoreWrote)->Arg(0)->Arg(1)->UseManualTime();
 
@@ -220,26 +232,16 @@ void StoreToLinesTheOtherCoreRead(benchmark::State& state) {
   std::vector<double> value(kLines * kDoublesALine, 1.0);
   double sum = 0.0;
   double stored = 0.0;
-  for (auto _ : state) {
-    double seconds = 0.0;
-    auto job = [&](int thread, int) {
-      if (thread == 1) {
+  time_per_line(
+      state,
+      [&] {
         for (std::size_t k = 0; k < kLines; ++k) sum += value[k * kDoublesALine];
-      }
-      team_barrier();
-      if (thread != 0) return;
-      stored += 1.0;
-      const auto start = std::chrono::steady_clock::now();
-      for (std::size_t k = 0; k < kLines; ++k) value[k * kDoublesALine] = stored;
-      seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    };
-    run_on_team(2, job);
-    state.SetIterationTime(seconds);
-  }
+      },
+      [&] {
+        stored += 1.0;
+        for (std::size_t k = 0; k < kLines; ++k) value[k * kDoublesALine] = stored;
+      });
   benchmark::DoNotOptimize(sum);
-  state.counters["per_line"] = benchmark::Counter(
-      static_cast<double>(kLines),
-      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(StoreToLinesTheOtherCoreRead)->UseManualTime();
 
