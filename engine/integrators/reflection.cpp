@@ -30,18 +30,21 @@ Eigen::MatrixXd projected_normals(const LocalCluster& cluster, const std::vector
 
 Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool with_outside) const {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
+  const double* in = v.data();
+  double* to = out.data();
+  const PairHessian* blocks = hessian->data();
   for (std::size_t k = 0; k < pair_count; ++k) {
     const LocalPair& b = pairs[k];
-    Eigen::Vector3d dv = v.segment<3>(3 * b.a);
+    Eigen::Vector3d dv(in[3 * b.a], in[3 * b.a + 1], in[3 * b.a + 2]);
     if (b.b >= 0) {
-      dv -= v.segment<3>(3 * b.b);
+      dv -= Eigen::Vector3d(in[3 * b.b], in[3 * b.b + 1], in[3 * b.b + 2]);
     } else if (with_outside) {
       const Vec3 velocity = momenta[b.outside] * (1.0 / mass[b.outside]);
       dv -= Eigen::Vector3d(velocity.x, velocity.y, velocity.z);
     }
-    const Eigen::Vector3d f = (*hessian)[b.block].block * dv;
-    out.segment<3>(3 * b.a) += f;
-    if (b.b >= 0) out.segment<3>(3 * b.b) -= f;
+    const Eigen::Vector3d f = blocks[b.block].block * dv;
+    Eigen::Map<Eigen::Vector3d>(to + 3 * b.a) += f;
+    if (b.b >= 0) Eigen::Map<Eigen::Vector3d>(to + 3 * b.b) -= f;
   }
   return out;
 }
