@@ -251,39 +251,39 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     for_each_chunk_then(items, items, chunks, screen, join);
   }
   // Every wall's rows, wall by wall and particle by particle: the particles tested in chunks,
-  // each chunk listing its particles within reach of each wall, the rows then kept wall by
-  // wall, chunk by chunk (every particle each call: the default input's two walls took 3 % of
-  // its loop on two threads when tested on the calling thread alone).
+  // each chunk listing its particles within reach of each wall with their gaps, the rows then
+  // kept wall by wall, chunk by chunk (every particle each call: the default input's two walls
+  // took 3 % of its loop on two threads when tested on the calling thread alone).
   if (set.walls.empty()) return;
   const std::size_t n = particles.size();
   const double* radius = particles.radius.data();
   auto row_reach = [particle_reach, reach](std::size_t i) {
     return particle_reach ? 2.0 * particle_reach[i] : reach;
   };
-  auto within = [&](const Wall& wall, std::size_t i) {
-    if (wall.kind == ConstraintKind::plane) {
-      // evaluate()'s plane gap, without building the row first.
-      if (dot(wall.normal, q[i] - wall.point) - radius[i] > row_reach(i)) return false;
-    }
-    const Constraint row = set.wall_row(wall, static_cast<std::int32_t>(i), radius[i]);
-    return evaluate(row, q, box).gap <= row_reach(i);
-  };
   const int chunks = chunks_for_cheap(n);
   wall_passing_.resize(static_cast<std::size_t>(chunks));
   for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
-    std::vector<std::vector<std::uint32_t>>& passing = wall_passing_[static_cast<std::size_t>(c)];
+    std::vector<std::vector<WallGap>>& passing = wall_passing_[static_cast<std::size_t>(c)];
     passing.resize(set.walls.size());
     for (std::size_t w = 0; w < set.walls.size(); ++w) {
+      const Wall& wall = set.walls[w];
       passing[w].clear();
       for (std::size_t i = begin; i < end; ++i) {
-        if (within(set.walls[w], i)) passing[w].push_back(static_cast<std::uint32_t>(i));
+        if (wall.kind == ConstraintKind::plane) {
+          // evaluate()'s plane gap, without building the row first.
+          if (dot(wall.normal, q[i] - wall.point) - radius[i] > row_reach(i)) continue;
+        }
+        const auto index = static_cast<std::int32_t>(i);
+        const double gap = evaluate(set.wall_row(wall, index, radius[i]), q, box).gap;
+        if (gap <= row_reach(i)) passing[w].push_back({index, gap});
       }
     }
   });
   for (std::size_t w = 0; w < set.walls.size(); ++w) {
-    for (const std::vector<std::vector<std::uint32_t>>& passing : wall_passing_) {
-      for (const std::uint32_t i : passing[w]) {
-        keep(set.wall_row(set.walls[w], static_cast<std::int32_t>(i), radius[i]), row_reach(i));
+    for (const std::vector<std::vector<WallGap>>& passing : wall_passing_) {
+      for (const WallGap& kept : passing[w]) {
+        out.push_back(set.wall_row(set.walls[w], kept.particle, radius[kept.particle]));
+        gap_at_q.push_back(kept.gap);
       }
     }
   }

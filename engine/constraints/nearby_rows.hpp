@@ -82,8 +82,13 @@ class NearbyRows {
   // Screen chunks 1.. of collect() (chunk 0 writes in place).
   std::vector<std::vector<Constraint>> chunk_rows_;
   std::vector<std::vector<double>> chunk_gaps_;
-  // collect()'s particles within reach of each wall, per chunk of particles: [chunk][wall].
-  std::vector<std::vector<std::vector<std::uint32_t>>> wall_passing_;
+  // collect()'s particles within reach of each wall, with their gaps, per chunk of
+  // particles: [chunk][wall].
+  struct WallGap {
+    std::int32_t particle;
+    double gap;
+  };
+  std::vector<std::vector<std::vector<WallGap>>> wall_passing_;
   bool shifted_ = false;
   std::array<Vec3, 27> shifts_{};  // the list's image shifts by code
   bool one_radius_ = false;        // every particle's radius the same:

@@ -105,6 +105,20 @@ inline IndexRange chunk_range(std::size_t n, int c, int chunks) {
   return {n * static_cast<std::size_t>(c) / k, n * static_cast<std::size_t>(c + 1) / k};
 }
 
+// The starts of `chunks` contiguous chunks of [0, n) holding near-equal work, item i's being
+// [offsets[i], offsets[i + 1]) (ascending): chunk c starts at the first item whose work begins
+// at or past c chunks-ths of it all; starts[chunks] = n.
+inline void equal_work_starts(const std::size_t* offsets, std::size_t n, int chunks,
+                              std::vector<std::size_t>& starts) {
+  const auto k = static_cast<std::size_t>(chunks);
+  starts.assign(k + 1, n);
+  starts[0] = 0;
+  for (std::size_t c = 1; c < k; ++c) {
+    const std::size_t share = offsets[0] + (offsets[n] - offsets[0]) * c / k;
+    starts[c] = static_cast<std::size_t>(std::lower_bound(offsets, offsets + n, share) - offsets);
+  }
+}
+
 // One value per chunk, on the stack for up to 16 chunks: a GVI step of the 4000-sphere fluid
 // runs some twenty loops, and their heap blocks (allocated and freed by the calling thread
 // while the others wait) were 2 % of its samples on two threads.

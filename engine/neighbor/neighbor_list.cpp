@@ -617,19 +617,14 @@ const std::vector<std::size_t>& NeighborList::pair_chunk_starts(int chunks) cons
   const auto k = static_cast<std::size_t>(chunks);
   if (chunk_starts_build_ == builds_ && chunk_starts_.size() == k + 1) return chunk_starts_;
   chunk_starts_build_ = builds_;
-  chunk_starts_.assign(k + 1, n);
-  chunk_starts_[0] = 0;
   const std::vector<std::size_t>& offsets = cell_ordered_.offsets;
-  const bool by_pairs = cell_order_ && offsets.size() == n + 1 && offsets[n] > 0;
-  for (std::size_t c = 1; c < k; ++c) {
-    if (!by_pairs) {
-      chunk_starts_[c] = chunk_range(n, static_cast<int>(c), chunks).begin;
-      continue;
-    }
-    // The first slot whose pairs begin at or past c k-ths of them all (the offsets ascend).
-    const std::size_t share = offsets[n] * c / k;
-    chunk_starts_[c] = static_cast<std::size_t>(
-        std::lower_bound(offsets.begin(), offsets.end() - 1, share) - offsets.begin());
+  if (cell_order_ && offsets.size() == n + 1 && offsets[n] > 0) {
+    equal_work_starts(offsets.data(), n, chunks, chunk_starts_);
+    return chunk_starts_;
+  }
+  chunk_starts_.assign(k + 1, n);
+  for (std::size_t c = 0; c < k; ++c) {
+    chunk_starts_[c] = chunk_range(n, static_cast<int>(c), chunks).begin;
   }
   return chunk_starts_;
 }

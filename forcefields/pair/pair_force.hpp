@@ -61,18 +61,13 @@ class PairForce final : public ForceTerm {
     // in order (its ranges follow each other): each pair is tested against the mask. In
     // equal numbers of particles, the default input's lower half (its z axis open, the pairs
     // across the middle listed from below) took 1.28x the upper's time.
-    hessian_chunk_starts_.assign(static_cast<std::size_t>(chunks) + 1, n);
-    hessian_chunk_starts_[0] = 0;
-    const bool in_order = n > 0 && ranges.end == ranges.begin + 1;
-    for (std::size_t c = 1; c < static_cast<std::size_t>(chunks); ++c) {
-      if (!in_order) {
-        hessian_chunk_starts_[c] = chunk_range(n, static_cast<int>(c), chunks).begin;
-        continue;
+    if (n > 0 && ranges.end == ranges.begin + 1) {
+      equal_work_starts(ranges.begin, n, chunks, hessian_chunk_starts_);
+    } else {
+      hessian_chunk_starts_.assign(static_cast<std::size_t>(chunks) + 1, n);
+      for (int c = 0; c < chunks; ++c) {
+        hessian_chunk_starts_[static_cast<std::size_t>(c)] = chunk_range(n, c, chunks).begin;
       }
-      const std::size_t share = ranges.begin[0] + (ranges.begin[n] - ranges.begin[0]) * c /
-                                                      static_cast<std::size_t>(chunks);
-      hessian_chunk_starts_[c] = static_cast<std::size_t>(
-          std::lower_bound(ranges.begin, ranges.begin + n, share) - ranges.begin);
     }
     for_each_range(hessian_chunk_starts_, [&](int c, std::size_t begin, std::size_t end) {
       std::vector<PairHessian>& to = c == 0 ? out : chunk_hessians_[static_cast<std::size_t>(c)];
