@@ -28,4 +28,8 @@ std::optional<long long> cpu_stall_total_us() {
   return cpu_stall_total_us(text.str());
 }
 
+bool stall_means_crowded(long long stall_us, std::int64_t window_ns) {
+  return window_ns > 0 && stall_us * 1000 * 3 > window_ns;
+}
+
 }  // namespace deli

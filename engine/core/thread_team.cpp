@@ -61,16 +61,19 @@ std::int64_t steady_ns() {
 
 // Other processes' threads on this process's CPUs: a thread that has waited within a job
 // for longer than kWait (the imbalance of a job's chunks is microseconds) while the system's
-// threads waited for a CPU more than a tenth of the time (cpu_stall_total_us) has waited for
+// threads waited for a CPU more than a third of the time (stall_means_crowded) has waited for
 // a thread of its job that lost its CPU to another process, and then the process waits as
 // `passive` for kSpell before it spins again. Two 2-thread runs of the 4000-sphere fluid at
 // once on this 2-core machine took 0.7-25 s each (0.29 s alone), every job's wait a time
 // slice of the scheduler while the other process's threads spun or yielded; as `passive`,
 // 1.1-1.6 s. Without the stall test, a virtual machine whose host takes the CPU away makes
-// long waits too (2 % stall in the fluid's run with the cores far apart, against 75 % beside
-// a second run), where sleeping hands the CPU to no one and adds each job's wake-up (that
-// fluid on two threads 1.8x slower). The stall is read at most every kCheck, and compared
-// only with a reading less than a second old.
+// long waits too (2 % stall in the fluid's run with the cores far apart, against 55-99 % in
+// 50 ms windows beside a second run), where sleeping hands the CPU to no one and adds each
+// job's wake-up (that fluid on two threads 1.8x slower). A run alone stalls briefly too, where
+// a kernel thread or a light process wakes while the team spins on every CPU: up to 25 % of a
+// 50 ms window and 12 % of a 100 ms one on this machine, which at a tenth sent 11 of 81
+// 200-step runs of the 32000-sphere fluid alone passive (up to 1.4x their time). The
+// stall is read at most every kCheck, and compared only with a reading less than a second old.
 class CrowdWatch {
  public:
   static constexpr std::int64_t kWait = 200'000;            // ns
@@ -102,7 +105,7 @@ class CrowdWatch {
     if (!lock || now - stall_seen_at_ < kCheck) return false;
     const std::optional<long long> total = cpu_stall_total_us();
     const bool high = stall_seen_ && total && now - stall_seen_at_ < kStallAge &&
-                      (*total - *stall_seen_) * 1000 * 10 > now - stall_seen_at_;
+                      stall_means_crowded(*total - *stall_seen_, now - stall_seen_at_);
     stall_seen_at_ = now;
     stall_seen_ = total;
     return high;
