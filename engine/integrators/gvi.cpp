@@ -301,6 +301,7 @@ void Gvi::start_step(System& system) {
   if (keep_start_momenta && !p_start_made) copy_in_chunks(ws_.p, ws_.p_start);
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
+  ws_.x_in_positions = false;
   ws_.reach = -1.0;
   ws_.x_cover_known = false;
   ws_.nearby.clear();
@@ -322,7 +323,7 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
     // Whether ws_.x is covered was found when it was made (displaced()).
     const bool covered =
         ws_.reach >= 0.0 &&
-        (&x == &ws_.x && ws_.x_cover_known ? ws_.x_covered : reaches_cover(x, moved));
+        (is_x(system, x) && ws_.x_cover_known ? ws_.x_covered : reaches_cover(x, moved));
     if (!covered) collect_by_particle_reach(system, x);
     return ws_.nearby;
   }
@@ -360,6 +361,14 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
     ws_.nearby_refreshed = true;
   }
   return ws_.nearby;
+}
+
+bool Gvi::is_x(const System& system, const std::vector<Vec3>& v) const {
+  return &v == &x_now(system);
+}
+
+const std::vector<Vec3>& Gvi::x_now(const System& system) const {
+  return ws_.x_in_positions ? system.particles.position : ws_.x;
 }
 
 bool Gvi::has_inequalities() const {
@@ -437,7 +446,7 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   const double widest = 2.0 * std::sqrt(largest2) + gap_tolerance;
   ws_.reach = first ? 2.0 * widest : std::max(ws_.reach, 2.0 * widest);
   // The reaches only grow: x stays covered if it was, and is when they were made from it.
-  if (&x == &ws_.x) ws_.x_cover_known = ws_.x_covered = true;
+  if (is_x(system, x)) ws_.x_cover_known = ws_.x_covered = true;
   if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
   nearby_rows_.collect(constraints_, system.particles, q, engine_.neighbors(), system.box,
                        ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
@@ -893,14 +902,10 @@ void Gvi::update_momenta(System& system, bool tally) {
   const bool landed = !ws_.landed.empty();
   const double target_energy =
       feasibility_ == Feasibility::restore && landed ? start_energy(system) : 0.0;
-  // Without inequality rows nothing reads x after this (the checks have no candidates, no
-  // row lands), and the next step makes it anew: its buffer becomes the positions' and the
-  // old positions' buffer the next x, instead of a copy.
-  if (has_inequalities()) {
-    parallel_for(n, [&](std::size_t i) { P.position[i] = ws_.x[i]; });
-  } else {
-    std::swap(P.position, ws_.x);
-  }
+  // x's buffer becomes the positions' and the old positions' buffer the next x (the next
+  // step makes it anew), instead of a copy: the checks after this read x there.
+  std::swap(P.position, ws_.x);
+  ws_.x_in_positions = true;
   system.step += 1;
   system.time += h;
   // The list's test at x may be known from displaced() (no rebuild since x was made).
@@ -980,12 +985,13 @@ void Gvi::update_momenta(System& system, bool tally) {
 // step's displacements): they decide overlaps; the exact minimum over every pair is taken on
 // thermo steps, where it is reported.
 void Gvi::check_constraints(const System& system, bool tally) {
-  // The positions are ws_.x unless the force evaluation rebuilt the neighbour list, which
+  // The positions are x unless the force evaluation rebuilt the neighbour list, which
   // wraps them.
   const bool at_x = engine_.neighbors().builds() == ws_.x_builds;
+  if (!at_x) ws_.x_in_positions = false;
   if (at_x) {
-    // ws_.x: the same positions, whose cover by the reaches is known.
-    candidates_for(system, ws_.x, ws_.x_largest2, true);
+    // x: the same positions, whose cover by the reaches is known.
+    candidates_for(system, x_now(system), ws_.x_largest2, true);
   } else {
     candidates_for(system, system.particles.position);
   }

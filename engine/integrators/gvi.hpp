@@ -127,6 +127,10 @@ class Gvi final : public ConstrainedIntegrator {
   const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
                                                 double largest2_bound = -1.0, bool exact = false,
                                                 const std::vector<std::int32_t>* moved = nullptr);
+  // This step's end positions (ws_.x, or the positions once the momentum update swapped x into
+  // them), and whether v is that vector.
+  const std::vector<Vec3>& x_now(const System& system) const;
+  bool is_x(const System& system, const std::vector<Vec3>& v) const;
   // Whether the system has inequality rows at all (hard spheres or walls).
   bool has_inequalities() const;
   // Candidates by a reach per particle (the paper's contact treatment without linearised

@@ -63,6 +63,9 @@ struct GviWorkspace {
   // half, free (and zeroed impulses) made by start_step from this step's momenta (Verlet,
   // rods alone, not by cluster), as solve_held_positions makes them.
   bool half_kicked = false;
+  // This step's end positions are in the particles' positions, not x: the momentum update
+  // swapped the two, and no list rebuild has wrapped them since.
+  bool x_in_positions = false;
   double x_largest2 = 0.0;                  // max |x - q|^2
   bool x_cover_known = false;               // whether x_covered holds for this step's x
   bool x_covered = false;                   // x within the particles' reaches (by particle reach)
