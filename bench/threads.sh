@@ -4,8 +4,8 @@
 # 32000), the rigid-rod chain melt (GVI), the hard-sphere fluid (GVI, 4000 and 32000) and the
 # default input (`deli run`: the rigid-rod slit, 1200 beads, GVI with contacts, walls and a
 # Langevin start). Prints atom-steps/s per run, the medians, each engine's scaling and deli's
-# ratio to each peer; each input's header, the cores' cache line round trip before and after
-# its runs.
+# ratio to each peer; each input's header, the cores' cache line round trip before its runs and
+# after each round.
 #   bench/threads.sh                       3 rounds, each input's own step count capped
 #   ROUNDS=5 DELI_OLD=/tmp/deli-old bench/threads.sh [input.toml:steps ...]
 #   THREADS="1 2 4" bench/threads.sh       other thread (and rank) counts
@@ -133,6 +133,7 @@ for spec in "${cases[@]}"; do
     done
   fi
   trip_before=$(round_trip)
+  trips=
   for ((r = 0; r < rounds; ++r)); do
     # The one-thread runs of a round share one core, the next round's the next core: the two
     # vCPUs of this project's machine have run at speeds 1.5x apart for minutes at a time
@@ -182,12 +183,14 @@ for spec in "${cases[@]}"; do
         grep -oE '[0-9.]+(e[+-]?[0-9]+)?' | head -1 || true)
       rate[$v]+="$value "
     done
+    trips+="$(round_trip) "
   done
   summary=$(for v in "${variants[@]}"; do echo "$v ${rate[$v]}"; done |
     /usr/bin/python3 -c "$summarise")
-  # The cores' distance around the case's runs: a host that moves the cores apart within a
-  # case (this project's VM: 100 <-> 400 ns every few minutes) changes its ratios.
-  echo "$name ($steps steps${has_peers:+; peers: OpenMM CPU, LAMMPS}; round trip $trip_before -> $(round_trip)):"
+  # The cores' distance before the case's runs and after each round: a host that moves the
+  # cores apart within a case (this project's VM: 100 <-> 400 ns every few minutes) changes
+  # its ratios, and the rounds it moved them in show which runs to discount.
+  echo "$name ($steps steps${has_peers:+; peers: OpenMM CPU, LAMMPS}; round trip $trip_before, then after each round: ${trips% }):"
   echo "$summary"
   unset rate
 done
