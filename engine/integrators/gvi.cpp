@@ -302,6 +302,7 @@ void Gvi::start_step(System& system) {
   if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.x_in_positions = false;
+  ws_.changed_cover_known = false;
   ws_.reach = -1.0;
   ws_.x_cover_known = false;
   ws_.nearby.clear();
@@ -321,9 +322,12 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
   if (!has_inequalities()) return ws_.nearby;
   if (particle_reaches()) {
     // Whether ws_.x is covered was found when it was made (displaced()).
-    const bool covered =
-        ws_.reach >= 0.0 &&
-        (is_x(system, x) && ws_.x_cover_known ? ws_.x_covered : reaches_cover(x, moved));
+    // And whether the reflected particles' new predictions are, by the threads that made them.
+    const bool changed_known =
+        &x == &ws_.predicted && moved == &ws_.changed_particles && ws_.changed_cover_known;
+    const bool covered = ws_.reach >= 0.0 && (is_x(system, x) && ws_.x_cover_known ? ws_.x_covered
+                                              : changed_known ? ws_.changed_covered
+                                                              : reaches_cover(x, moved));
     if (!covered) collect_by_particle_reach(system, x);
     return ws_.nearby;
   }
@@ -445,6 +449,7 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   });
   const double widest = 2.0 * std::sqrt(largest2) + gap_tolerance;
   ws_.reach = first ? 2.0 * widest : std::max(ws_.reach, 2.0 * widest);
+  ws_.changed_cover_known = false;
   // The reaches only grow: x stays covered if it was, and is when they were made from it.
   if (is_x(system, x)) ws_.x_cover_known = ws_.x_covered = true;
   if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
@@ -564,7 +569,13 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
   for (OnItsOwnLine<std::vector<std::int32_t>>& changed : ws_.changed_of_chunk) {
     changed.value.clear();
   }
-  ws_.changed_largest2.assign(shares, OnItsOwnLine<double>{ws_.largest2});
+  ws_.changed_tally.assign(
+      shares, OnItsOwnLine<GviWorkspace::ChangedTally>{{ws_.largest2, std::size_t{0}}});
+  // Each new prediction tested against its particle's reach where it is made, as
+  // reaches_cover tests the moved particles (the reaches stay until the next round's test).
+  const bool reaches_made =
+      particle_reaches() && ws_.reach >= 0.0 && ws_.reach_limit2.size() == P.size();
+  const double* limit2 = reaches_made ? ws_.reach_limit2.data() : nullptr;
   // The arrays by value: behind references they would be loaded again at every particle.
   const Vec3* p = ws_.p.data();
   const Vec3* force = f.data();
@@ -573,7 +584,7 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
   const Vec3* q = ws_.q.data();
   Vec3* predicted = ws_.predicted.data();
   char* changed = ws_.prediction_changed.data();
-  const AfterReflection again = [&, h, p, force, mass, position, q, predicted, changed](
+  const AfterReflection again = [&, h, p, force, mass, position, q, predicted, changed, limit2](
                                     int chunk, const std::int32_t* particles, std::size_t count) {
     const auto c = static_cast<std::size_t>(chunk);
     for (std::size_t k = 0; k < count; ++k) {
@@ -584,17 +595,22 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
         now = next;
         changed[i] = 1;
         ws_.changed_of_chunk[c].value.push_back(i);
-        double& largest2 = ws_.changed_largest2[c].value;
-        largest2 = std::max(largest2, norm2(next - q[i]));
+        GviWorkspace::ChangedTally& tally = ws_.changed_tally[c].value;
+        const double moved2 = norm2(next - q[i]);
+        tally.largest2 = std::max(tally.largest2, moved2);
+        if (limit2) tally.outgrown += !(moved2 <= limit2[i]) ? 1 : 0;
       }
     }
   };
   reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again);
   double largest2_bound = ws_.largest2;
+  ws_.changed_cover_known = limit2 != nullptr;
+  ws_.changed_covered = true;
   for (std::size_t c = 0; c < shares; ++c) {
     const std::vector<std::int32_t>& of_chunk = ws_.changed_of_chunk[c].value;
     ws_.changed_particles.insert(ws_.changed_particles.end(), of_chunk.begin(), of_chunk.end());
-    largest2_bound = std::max(largest2_bound, ws_.changed_largest2[c].value);
+    largest2_bound = std::max(largest2_bound, ws_.changed_tally[c].value.largest2);
+    ws_.changed_covered = ws_.changed_covered && ws_.changed_tally[c].value.outgrown == 0;
   }
   return largest2_bound;
 }

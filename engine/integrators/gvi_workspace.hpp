@@ -45,10 +45,18 @@ struct GviWorkspace {
   // prediction_changed holds zeros alone (local predictions unmark their particles at the
   // end of the search): the next search need not clear it in a pass of its own.
   bool prediction_changed_clear = false;
-  // By share of the reflections: the particles whose prediction changed, and the bound on
-  // their max |prediction - q|^2.
+  // By share of the reflections: the particles whose prediction changed, the bound on their
+  // max |prediction - q|^2, and how many of them left their reach (reach_limit2).
+  struct ChangedTally {
+    double largest2 = 0.0;
+    std::size_t outgrown = 0;
+  };
   std::vector<OnItsOwnLine<std::vector<std::int32_t>>> changed_of_chunk;
-  std::vector<OnItsOwnLine<double>> changed_largest2;
+  std::vector<OnItsOwnLine<ChangedTally>> changed_tally;
+  // Whether changed_particles' predictions all lie within the particles' reaches, found by
+  // the threads that made them (reflect_and_predict), for the search's next round.
+  bool changed_cover_known = false;
+  bool changed_covered = false;
   std::vector<char> candidate_active;  // per candidate row: in the active set
   // The candidate rows that passed a threaded test, at the start of each chunk's stretch.
   std::vector<std::uint32_t> candidate_passing;
