@@ -321,13 +321,16 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
   // (ws_.nearby stays empty), and no displacement need be measured for them.
   if (!has_inequalities()) return ws_.nearby;
   if (particle_reaches()) {
-    // Whether ws_.x is covered was found when it was made (displaced()).
-    // And whether the reflected particles' new predictions are, by the threads that made them.
-    const bool changed_known =
-        &x == &ws_.predicted && moved == &ws_.changed_particles && ws_.changed_cover_known;
-    const bool covered = ws_.reach >= 0.0 && (is_x(system, x) && ws_.x_cover_known ? ws_.x_covered
-                                              : changed_known ? ws_.changed_covered
-                                                              : reaches_cover(x, moved));
+    bool covered = false;
+    if (ws_.reach < 0.0) {
+      // No reaches yet this step.
+    } else if (is_x(system, x) && ws_.x_cover_known) {
+      covered = ws_.x_covered;  // found when x was made (displaced())
+    } else if (&x == &ws_.predicted && moved == &ws_.changed_particles && ws_.changed_cover_known) {
+      covered = ws_.changed_covered;  // found by the threads that reflected them
+    } else {
+      covered = reaches_cover(x, moved);
+    }
     if (!covered) collect_by_particle_reach(system, x);
     return ws_.nearby;
   }
