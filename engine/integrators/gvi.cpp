@@ -471,6 +471,7 @@ void Gvi::find_active_set(System& system) {
   const double gap_tolerance = constraints_.tolerances.gap;
   std::vector<Constraint>& active = ws_.active;
   active.clear();
+  ws_.active_gap_at_q.clear();
   if (!has_inequalities()) return;  // no row can be active
   // Without equality rows a Verlet prediction is the free step, particle by particle: after a
   // reflection only the reflected particles' predictions can change, and only theirs are
@@ -514,6 +515,7 @@ void Gvi::find_active_set(System& system) {
         },
         [&](std::size_t k) {
           active.push_back(candidates[k]), grew = true;
+          ws_.active_gap_at_q.push_back(ws_.nearby_gap_at_q[k]);
           ws_.candidate_active[k] = 1;
         });
     if (!grew || !reflections_) {
@@ -622,7 +624,12 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
 void Gvi::find_smooth_set(const System& system) {
   const ConstraintTolerances& tol = constraints_.tolerances;
   ws_.smooth.clear();
-  for (const Constraint& c : ws_.active) {
+  for (std::size_t k = 0; k < ws_.active.size(); ++k) {
+    // Most rows are active by their overlap at the prediction, their gaps at q known to be
+    // beyond the tolerance (an exact gap, or +infinity for one certainly beyond): those are
+    // not evaluated again.
+    if (std::abs(ws_.active_gap_at_q[k]) > tol.gap) continue;
+    const Constraint& c = ws_.active[k];
     const ConstraintValue v = evaluate(c, ws_.q.data(), system.box);
     if (std::abs(v.gap) > tol.gap) continue;
     if (std::abs(normal_velocity(c, v.u, ws_.p, system.particles)) <= tol.velocity) {

@@ -39,6 +39,7 @@ struct GviWorkspace {
 
   // Active and smooth sets; particles whose prediction changed in the last round.
   std::vector<Constraint> active, smooth;
+  std::vector<double> active_gap_at_q;  // each active row's nearby_gap_at_q
   std::vector<Vec3> previous_prediction;
   std::vector<char> prediction_changed;
   std::vector<std::int32_t> changed_particles;  // those marked in prediction_changed
