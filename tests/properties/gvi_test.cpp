@@ -237,6 +237,44 @@ TEST(Gvi, SphereHitsTwoTouchingSpheres) {
   EXPECT_LE(p.velocity[1].x, p.velocity[2].x + 1e-14);
 }
 
+// A reflection that sends a sphere beyond its reach. The step's candidate rows are the pairs
+// within their two particles' reaches (twice a particle's displacement, at least half the
+// largest, Gvi::kReachFloor). A heavy sphere (mass 10, displacement L = v h) hits a light one
+// at rest, which leaves at 20/11 of its speed (elastic collision, 1-D) towards a third coming
+// at half the heavy one's speed, their gap 2.15 L: beyond the two reaches (L each), inside
+// the 2.32 L the two close in the step. The light sphere's new prediction outgrows its reach, so
+// the search must collect the rows again and reflect that pair too; missed, the pair overlaps
+// at the step's end and the feasibility guard lands it. Elastic reflections keep the energy
+// and the momentum, and the three end separating, each slower than the next along the line.
+TEST(Gvi, ReflectedSphereBeyondItsReachMeetsTheNextOne) {
+  const double h = 0.01, v = 1.0, gap_to_third = 2.15 * v * h;
+  GviRun run(input_with_atoms(
+      "outgrown",
+      {{{-1.0 - 0.5 * v * h, 0, 0}, {v, 0, 0}, 2, 10.0},
+       {{0, 0, 0}, {0, 0, 0}, 1, 1.0},
+       {{1.0 + gap_to_third, 0, 0}, {-0.5 * v, 0, 0}, 1, 1.0}},
+      "fff", {-5, -5, -5}, {5, 5, 5},
+      kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" + with_timestep(h)));
+  run.gvi->take_statistics();  // setup's own
+  const double k0 = kinetic_energy(run.particles());
+  run.step();
+  const auto first = run.gvi->take_statistics();
+  EXPECT_EQ(statistic(first, "landings"), 0) << "the light sphere's second contact was missed";
+  EXPECT_EQ(statistic(first, "penetrating_steps"), 0);
+  EXPECT_GE(statistic(first, "active_per_step"), 2.0) << "both contacts are in the active set";
+  for (int n = 0; n < 100; ++n) run.step();
+  const auto later = run.gvi->take_statistics();
+  EXPECT_EQ(statistic(later, "landings"), 0);
+  EXPECT_GT(statistic(later, "min_gap"), -1e-10);
+  const Particles& p = run.particles();
+  Vec3 momentum;
+  for (std::size_t i = 0; i < p.size(); ++i) momentum += p.velocity[i] * p.mass[i];
+  EXPECT_NEAR(momentum.x, 10.0 * v - 0.5 * v, 1e-13);
+  EXPECT_NEAR(kinetic_energy(p), k0, 1e-13 * k0);
+  EXPECT_LE(p.velocity[0].x, p.velocity[1].x + 1e-14);
+  EXPECT_LE(p.velocity[1].x, p.velocity[2].x + 1e-14);
+}
+
 // The paper's LJ example: six beads joined by rods, hard cores between all pairs not
 // joined by a rod, LJ between all pairs, inside a bounding sphere, 1e5 steps.
 struct LjChainResult {
