@@ -9,6 +9,13 @@ namespace deli {
 
 std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
                                    std::size_t particle_count) {
+  std::vector<Cluster> clusters;
+  find_clusters(rows, particle_count, clusters);
+  return clusters;
+}
+
+void find_clusters(const std::vector<Constraint>& rows, std::size_t particle_count,
+                   std::vector<Cluster>& clusters) {
   // Scratch kept between calls (this runs several times a step, often with a handful of
   // contact rows among thousands of particles): outside a call parent[p] == p and
   // cluster_of_root[p] == -1 for every p; a call touches, and then resets, only the
@@ -55,8 +62,20 @@ std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
     }
     ++member_count[cluster_of_root[top]];
   }
-  std::vector<Cluster> clusters(member_count.size());
-  for (std::size_t k = 0; k < clusters.size(); ++k) clusters[k].particles.reserve(member_count[k]);
+  // Clusters beyond this call's count wait in `spare` with their storage.
+  thread_local std::vector<Cluster> spare;
+  for (; clusters.size() > member_count.size(); clusters.pop_back()) {
+    spare.push_back(std::move(clusters.back()));
+  }
+  for (; clusters.size() < member_count.size() && !spare.empty(); spare.pop_back()) {
+    clusters.push_back(std::move(spare.back()));
+  }
+  clusters.resize(member_count.size());
+  for (std::size_t k = 0; k < clusters.size(); ++k) {
+    clusters[k].particles.clear();
+    clusters[k].rows.clear();
+    clusters[k].particles.reserve(member_count[k]);
+  }
   for (const std::int32_t p : touched) {
     clusters[cluster_of_root[union_find_root(parent, p)]].particles.push_back(p);
   }
@@ -71,13 +90,21 @@ std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows,
     clusters[cluster_of_row[r]].rows.push_back(static_cast<std::int32_t>(r));
   }
   for (const std::int32_t p : touched) parent[p] = p, cluster_of_root[p] = -1;
-  return clusters;
 }
 
 LocalCluster localize(const Cluster& cluster, const std::vector<Constraint>& rows,
                       const std::vector<double>& mass) {
   LocalCluster local;
+  localize(cluster, rows, mass, local);
+  return local;
+}
+
+void localize(const Cluster& cluster, const std::vector<Constraint>& rows,
+              const std::vector<double>& mass, LocalCluster& local) {
   local.particles = cluster.particles;
+  local.inverse_mass.clear();
+  local.rows.clear();
+  local.global_rows.clear();
   local.inverse_mass.reserve(cluster.particles.size());
   local.rows.reserve(cluster.rows.size());
   local.global_rows.reserve(cluster.rows.size());
@@ -95,7 +122,6 @@ LocalCluster localize(const Cluster& cluster, const std::vector<Constraint>& row
     local.rows.push_back(c);
     local.global_rows.push_back(r);
   }
-  return local;
 }
 
 }  // namespace deli

@@ -16,6 +16,10 @@ struct Cluster {
   std::vector<std::int32_t> rows;       // indices into the row list
 };
 std::vector<Cluster> find_clusters(const std::vector<Constraint>& rows, std::size_t particle_count);
+// The same clusters into `out`, whose lists keep their storage between calls (a hard-sphere
+// fluid clusters its shared contacts several times a step).
+void find_clusters(const std::vector<Constraint>& rows, std::size_t particle_count,
+                   std::vector<Cluster>& out);
 
 // A cluster in its own numbering: particles 0..n-1, rows with local i, j.
 struct LocalCluster {
@@ -27,5 +31,8 @@ struct LocalCluster {
 };
 LocalCluster localize(const Cluster& cluster, const std::vector<Constraint>& rows,
                       const std::vector<double>& mass);
+// The same into `out`, its lists keeping their storage.
+void localize(const Cluster& cluster, const std::vector<Constraint>& rows,
+              const std::vector<double>& mass, LocalCluster& out);
 
 }  // namespace deli

@@ -56,9 +56,15 @@ const PreparedCluster* ConstrainedIntegrator::prepared_cluster(const std::vector
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which) {
   std::vector<Vec3> out;
+  gather(all, which, out);
+  return out;
+}
+
+void gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which,
+            std::vector<Vec3>& out) {
+  out.clear();
   out.reserve(which.size());
   for (std::int32_t i : which) out.push_back(all[i]);
-  return out;
 }
 
 void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& which,
@@ -753,8 +759,8 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     rows_at_particle_[c.i] = 0;
     if (c.j >= 0) rows_at_particle_[c.j] = 0;
   }
-  const std::vector<Cluster> shared =
-      shared_rows_.empty() ? std::vector<Cluster>{} : find_clusters(shared_rows_, n);
+  std::vector<Cluster>& shared = shared_clusters_;
+  find_clusters(shared_rows_, n, shared);
   // Each row makes one virial term at most.
   reflection_terms_.reset(
       slots, [&](std::size_t) { return rows.size(); }, true);
@@ -813,12 +819,24 @@ void ConstrainedIntegrator::reflect_cluster(const System& system,
                                             const ShadowOperator* shadow,
                                             const ReflectionTally& tally) const {
   const Particles& P = system.particles;
-  const LocalCluster local = localize(cluster, rows, P.mass);
-  std::vector<bool> equality;
+  // Kept by each thread between calls (a hard-sphere fluid reflects a few small clusters a
+  // step, on every thread): their storage, not their values.
+  struct Scratch {
+    LocalCluster local;
+    std::vector<bool> equality;
+    std::vector<Vec3> p_local, x_local;
+  };
+  thread_local Scratch scratch;
+  LocalCluster& local = scratch.local;
+  localize(cluster, rows, P.mass, local);
+  std::vector<bool>& equality = scratch.equality;
+  equality.clear();
   for (std::int32_t r : cluster.rows)
     equality.push_back(r < static_cast<std::int32_t>(first_inequality));
-  std::vector<Vec3> p_local = gather(p, cluster.particles);
-  const std::vector<Vec3> x_local = gather(x, cluster.particles);
+  std::vector<Vec3>& p_local = scratch.p_local;
+  gather(p, cluster.particles, p_local);
+  const std::vector<Vec3>& x_local = scratch.x_local;
+  gather(x, cluster.particles, scratch.x_local);
   const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
                                     constraints_.tolerances.velocity, constraints_.limits, shadow);
   for (std::size_t k = 0; k < local.rows.size(); ++k) {

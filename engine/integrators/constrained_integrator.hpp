@@ -268,12 +268,15 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<std::int32_t> rows_at_particle_;
   std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
   std::vector<Constraint> shared_rows_;
+  std::vector<Cluster> shared_clusters_;  // their clusters, the lists' storage kept
   // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
   OrderedTerms reflection_terms_;
   std::vector<OnItsOwnLine<ConstraintStatistics>> reflection_stats_;
 };
 
 std::vector<Vec3> gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which);
+void gather(const std::vector<Vec3>& all, const std::vector<std::int32_t>& which,
+            std::vector<Vec3>& out);
 void scatter(const std::vector<Vec3>& local, const std::vector<std::int32_t>& which,
              std::vector<Vec3>& all);
 bool contains(const std::vector<Constraint>& rows, const Constraint& c);
