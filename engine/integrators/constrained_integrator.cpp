@@ -648,14 +648,15 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
 void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<Constraint>& rows,
                                              std::size_t first_inequality,
                                              const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                                             const AfterReflection* after) {
+                                             const AfterReflection* after,
+                                             std::size_t first_new_row) {
   const Particles& P = system.particles;
   // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
   // the same single-row problem with H as its energy.
   const bool lone_rows_closed =
       energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
   if (lone_rows_closed && first_inequality == 0) {
-    return reflect_inequalities(system, rows, x, p, after);
+    return reflect_inequalities(system, rows, x, p, after, first_new_row);
   }
   // Only the clusters holding an inequality are reflected: with the equality rows first (the
   // rods, prepared), found from the inequality rows alone. Clustering every row took the
@@ -719,7 +720,8 @@ bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Cons
 void ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const std::vector<Constraint>& rows,
                                                  const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                                                 const AfterReflection* after) {
+                                                 const AfterReflection* after,
+                                                 std::size_t first_new_row) {
   const std::size_t n = system.particles.size();
   // Below this many rows a job's start (about a microsecond) costs more than the rows'
   // lines fetched from the other cores.
@@ -746,13 +748,23 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   lone_rows_of_chunk_.resize(slots);
   for (std::vector<std::int32_t>& lone : lone_rows_of_chunk_) lone.clear();
   shared_rows_.clear();
+  shared_row_of_.clear();
+  // A cluster of the last call's rows alone is a cluster of the last call (rows are only
+  // added). If that call left it with no row approaching, its momenta are as it left them,
+  // and reflecting it again would change nothing: it is passed over.
+  std::vector<char>& settled = row_settled_;
+  const std::size_t carried = std::min(first_new_row, settled.size());
+  settled.resize(rows.size());
+  std::fill(settled.begin() + static_cast<std::ptrdiff_t>(carried), settled.end(), 0);
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Constraint& c = rows[r];
     if (rows_at_particle_[c.i] == 1 && (c.j < 0 || rows_at_particle_[c.j] == 1)) {
+      if (settled[r]) continue;
       const auto row = static_cast<std::int32_t>(r);
       lone_rows_of_chunk_[chunk_of(first(row))].push_back(row);
     } else {
       shared_rows_.push_back(c);
+      shared_row_of_.push_back(static_cast<std::int32_t>(r));
     }
   }
   for (const Constraint& c : rows) {
@@ -761,6 +773,12 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   }
   std::vector<Cluster>& shared = shared_clusters_;
   find_clusters(shared_rows_, n, shared);
+  cluster_unchanged_.assign(shared.size(), 0);
+  for (std::size_t k = 0; k < shared.size(); ++k) {
+    cluster_unchanged_[k] = std::all_of(
+        shared[k].rows.begin(), shared[k].rows.end(),
+        [&](std::int32_t s) { return settled[static_cast<std::size_t>(shared_row_of_[s])] != 0; });
+  }
   // Each row makes one virial term at most.
   reflection_terms_.reset(
       slots, [&](std::size_t) { return rows.size(); }, true);
@@ -781,7 +799,12 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     auto reflect_shared_before = [&](std::int32_t particle) {
       for (; next_shared < shared.size() && shared[next_shared].particles.front() < particle;
            ++next_shared) {
-        reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr, tally);
+        if (cluster_unchanged_[next_shared]) continue;
+        const bool left_settled =
+            reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr, tally);
+        for (const std::int32_t s : shared[next_shared].rows) {
+          settled[static_cast<std::size_t>(shared_row_of_[s])] = left_settled ? 1 : 0;
+        }
         if (after) {
           const std::vector<std::int32_t>& particles = shared[next_shared].particles;
           (*after)(chunk, particles.data(), particles.size());
@@ -791,14 +814,19 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     for (const std::int32_t r : lone) {
       reflect_shared_before(first(r));
       const Constraint& row = rows[r];
-      if (!reflect_closed_form(system, row, x, p, tally)) {
+      bool left_settled = reflect_closed_form(system, row, x, p, tally);
+      if (left_settled) {
+        left_settled = !lone_row_approaching(row, x.data(), system.box, system.particles.mass,
+                                             constraints_.tolerances.velocity, p.data());
+      } else {
         Cluster cluster;  // a row without a closed form (no direction): the general reflection
         cluster.particles.push_back(row.i);
         if (row.j >= 0) cluster.particles.push_back(row.j);
         std::sort(cluster.particles.begin(), cluster.particles.end());
         cluster.rows.push_back(r);
-        reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally);
+        left_settled = reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally);
       }
+      settled[static_cast<std::size_t>(r)] = left_settled ? 1 : 0;
       if (after) {
         const std::int32_t particles[2] = {row.i, row.j};
         (*after)(chunk, particles, row.j >= 0 ? 2 : 1);
@@ -812,7 +840,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   }
 }
 
-void ConstrainedIntegrator::reflect_cluster(const System& system,
+bool ConstrainedIntegrator::reflect_cluster(const System& system,
                                             const std::vector<Constraint>& rows,
                                             std::size_t first_inequality, const Cluster& cluster,
                                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
@@ -849,6 +877,7 @@ void ConstrainedIntegrator::reflect_cluster(const System& system,
   tally.stats.cycled += r.cycled ? 1 : 0;
   tally.stats.qp_caps += r.qp_caps;
   scatter(p_local, cluster.particles, p);
+  return r.settled;
 }
 
 void ConstrainedIntegrator::finish_step() {

@@ -147,10 +147,14 @@ class ConstrainedIntegrator : public Integrator {
   using AfterReflection =
       std::function<void(int chunk, const std::int32_t* particles, std::size_t count)>;
   // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
-  // index `first_inequality`) that holds an inequality, at positions x.
+  // index `first_inequality`) that holds an inequality, at positions x. Rows before
+  // `first_new_row` are the last call's rows, the momenta changed since by that call alone: a
+  // cluster of those rows alone that it left with no row approaching would not change, and
+  // is passed over (in reflect_inequalities).
   void reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
-                        std::vector<Vec3>& p, const AfterReflection* after = nullptr);
+                        std::vector<Vec3>& p, const AfterReflection* after = nullptr,
+                        std::size_t first_new_row = 0);
   // Where reflections leave their figures: the virial's terms (as item `item` of `terms`,
   // added to the step's virial in item order) and the counters. One per thread where
   // reflections run on several.
@@ -161,7 +165,8 @@ class ConstrainedIntegrator : public Integrator {
   };
   // Parts of reflect_clusters: one cluster through reflect(); one row in closed form (false,
   // with nothing done, where it has none); rows without equalities, with closed forms.
-  void reflect_cluster(const System& system, const std::vector<Constraint>& rows,
+  // reflect_cluster returns ReflectionStats::settled.
+  bool reflect_cluster(const System& system, const std::vector<Constraint>& rows,
                        std::size_t first_inequality, const Cluster& cluster,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p,
                        const ShadowOperator* shadow, const ReflectionTally& tally) const;
@@ -169,7 +174,7 @@ class ConstrainedIntegrator : public Integrator {
                            std::vector<Vec3>& p, const ReflectionTally& tally) const;
   void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                            const AfterReflection* after);
+                            const AfterReflection* after, std::size_t first_new_row);
   // Projects the momenta p onto the rows' tangent space at x, cluster by cluster (`passes`
   // as for solve_positions); returns the projection's virial.
   double project_momenta(System& system, const std::vector<Constraint>& rows,
@@ -268,7 +273,12 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<std::int32_t> rows_at_particle_;
   std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
   std::vector<Constraint> shared_rows_;
-  std::vector<Cluster> shared_clusters_;  // their clusters, the lists' storage kept
+  std::vector<std::int32_t> shared_row_of_;  // each shared row's index in the call's rows
+  std::vector<Cluster> shared_clusters_;     // their clusters, the lists' storage kept
+  std::vector<char> cluster_unchanged_;      // per cluster: passed over (see reflect_clusters)
+  // Per row of the last call: in a cluster (of one row or more) that it left with no row
+  // approaching (1), else 0.
+  std::vector<char> row_settled_;
   // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
   OrderedTerms reflection_terms_;
   std::vector<OnItsOwnLine<ConstraintStatistics>> reflection_stats_;

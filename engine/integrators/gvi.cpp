@@ -489,6 +489,7 @@ void Gvi::find_active_set(System& system) {
   // After the first round: a bound on max |prediction - q|^2, from the last round's and the
   // particles whose prediction changed.
   double largest2_bound = -1.0;
+  std::size_t reflected_rows = 0;  // the rows the last round reflected (the first of `active`)
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
     const std::vector<Constraint>& candidates =
         candidates_for(system, ws_.predicted, largest2_bound, false,
@@ -531,7 +532,8 @@ void Gvi::find_active_set(System& system) {
       // Each reflected particle's prediction made again on the thread that reflected it,
       // which holds its lines (timed as the reflections).
       const TimedPhase reflecting(Phase::reflections);
-      largest2_bound = reflect_and_predict(system, *rows);
+      largest2_bound = reflect_and_predict(system, *rows, reflected_rows);
+      reflected_rows = rows->size();
       continue;
     }
     {
@@ -562,7 +564,8 @@ void Gvi::find_active_set(System& system) {
 // The active rows reflected, and the free Verlet prediction made again for their particles
 // (the only ones reflections move), as free_displacement and predict make it: marks those
 // whose prediction changed and returns the bound on max |prediction - q|^2.
-double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& rows) {
+double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& rows,
+                                std::size_t first_new_row) {
   const Particles& P = system.particles;
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
@@ -607,7 +610,7 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
       }
     }
   };
-  reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again);
+  reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again, first_new_row);
   double largest2_bound = ws_.largest2;
   ws_.changed_cover_known = limit2 != nullptr;
   ws_.changed_covered = true;

@@ -139,9 +139,11 @@ class Gvi final : public ConstrainedIntegrator {
   bool reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const;
   void collect_by_particle_reach(const System& system, const std::vector<Vec3>& x);
   static constexpr double kReachFloor = 0.5;
-  // Without equality rows and with Verlet: the rows reflected, and the free prediction made
-  // again for the reflected particles alone.
-  double reflect_and_predict(System& system, const std::vector<Constraint>& rows);
+  // Without equality rows and with Verlet: the rows reflected (those before `first_new_row`
+  // the last round's, see reflect_clusters), and the free prediction made again for the
+  // reflected particles alone.
+  double reflect_and_predict(System& system, const std::vector<Constraint>& rows,
+                             std::size_t first_new_row);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   // Returns true where it left the half kick to displaced() (Verlet, no row held: nothing
   // reads it before the end positions).

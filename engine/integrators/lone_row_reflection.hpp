@@ -17,5 +17,9 @@ namespace deli {
 // value when the row has no direction (coincident particles): the caller takes reflect().
 double reflect_lone_row(const Constraint& row, const Vec3* x, const Box& box,
                         const std::vector<double>& mass, double tolerance, Vec3* p);
+// Whether reflect_lone_row would change p (the row has a direction and approaches beyond the
+// tolerance), by its own arithmetic.
+bool lone_row_approaching(const Constraint& row, const Vec3* x, const Box& box,
+                          const std::vector<double>& mass, double tolerance, const Vec3* p);
 
 }  // namespace deli

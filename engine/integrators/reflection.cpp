@@ -110,7 +110,10 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     (equality[k] ? eq_rows : in_rows).push_back(static_cast<int>(k));
   }
   ReflectionStats stats;
-  if (in_rows.empty()) return stats;
+  if (in_rows.empty()) {
+    stats.settled = true;
+    return stats;
+  }
   const Eigen::VectorXd& w = s.w;
   inverse_mass_diagonal(cluster, s.w);
   // N = G - F Y, Y = (F^T W F)^+ F^T W G: projected_normals' N, with Y (the equality rows'
@@ -155,7 +158,10 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
       const bool approaching = normal_velocity(static_cast<Eigen::Index>(k)) < -tolerance;
       if (op == ReflectionOperator::moreau ? true : approaching) set.push_back(static_cast<int>(k));
     }
-    if (op == ReflectionOperator::generalized && set.empty()) break;
+    if (op == ReflectionOperator::generalized && set.empty()) {
+      stats.settled = true;
+      break;
+    }
     if (op == ReflectionOperator::moreau && iteration == 1) break;
     for (int k : set) ever_in_set[k] = 1;
     if (iteration >= limits.reflection_solves) {

@@ -38,10 +38,12 @@ struct ShadowOperator {
 };
 
 struct ReflectionStats {
-  int iterations = 0;        // solves (Algorithm 2 loops; 1 for Moreau)
-  int reflected = 0;         // rows that received an impulse
-  bool capped = false;       // Algorithm 2 hit its iteration cap or stalled
-  bool cycled = false;       // Algorithm 2 returned to momenta it had already produced
+  int iterations = 0;   // solves (Algorithm 2 loops; 1 for Moreau)
+  int reflected = 0;    // rows that received an impulse
+  bool capped = false;  // Algorithm 2 hit its iteration cap or stalled
+  bool cycled = false;  // Algorithm 2 returned to momenta it had already produced
+  // Algorithm 2 ended with no row approaching: reflected again, the cluster would not change.
+  bool settled = false;
   int shadow_fallbacks = 0;  // solves where the shadow energy had no reflection: H used
   int qp_caps = 0;           // QP solves that hit their iteration cap (see reflect())
   // The impulse each local row applied, along its own gradient (equality rows carry the
