@@ -440,5 +440,53 @@ TEST(Clusters, HoldingOtherRowsAreFindClustersWithoutTheRodsAlone) {
   EXPECT_THROW(prepared.clusters_holding({rod(0, 1, 1.0), floor_at(2, 0.0)}, 0), std::logic_error);
 }
 
+// find_clusters and localize into storage kept from earlier calls (the reflections' scratch)
+// against the same calls into fresh objects: the same clusters and local clusters whatever
+// the kept objects held, over random contact sets of 1-40 rows among 60 particles, whose
+// cluster counts and sizes rise and fall from one call to the next.
+TEST(Clusters, IntoKeptStorageAreTheClustersOfFreshOnes) {
+  const std::size_t n = 60;
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<std::int32_t> particle(0, static_cast<std::int32_t>(n) - 1);
+  std::uniform_int_distribution<int> row_count(1, 40);
+  std::vector<double> mass(n);
+  for (std::size_t i = 0; i < n; ++i) mass[i] = 1.0 + static_cast<double>(i % 7);
+  std::vector<Cluster> kept;
+  LocalCluster kept_local;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<Constraint> rows;
+    for (int k = row_count(rng); k > 0; --k) {
+      if (k % 6 == 0) {
+        rows.push_back(floor_at(particle(rng), 0.0));
+        continue;
+      }
+      Constraint contact;
+      contact.kind = ConstraintKind::sphere_pair;
+      contact.i = particle(rng);
+      contact.j = particle(rng);
+      if (contact.j == contact.i) continue;
+      contact.length = 1.0;
+      rows.push_back(contact);
+    }
+    const std::vector<Cluster> fresh = find_clusters(rows, n);
+    find_clusters(rows, n, kept);
+    ASSERT_EQ(kept.size(), fresh.size()) << "trial " << trial;
+    for (std::size_t c = 0; c < fresh.size(); ++c) {
+      EXPECT_EQ(kept[c].particles, fresh[c].particles) << "trial " << trial << " cluster " << c;
+      EXPECT_EQ(kept[c].rows, fresh[c].rows) << "trial " << trial << " cluster " << c;
+      const LocalCluster local = localize(fresh[c], rows, mass);
+      localize(kept[c], rows, mass, kept_local);
+      EXPECT_EQ(kept_local.particles, local.particles) << "trial " << trial;
+      EXPECT_EQ(kept_local.global_rows, local.global_rows) << "trial " << trial;
+      EXPECT_EQ(kept_local.inverse_mass, local.inverse_mass) << "trial " << trial;
+      ASSERT_EQ(kept_local.rows.size(), local.rows.size()) << "trial " << trial;
+      for (std::size_t r = 0; r < local.rows.size(); ++r) {
+        EXPECT_EQ(kept_local.rows[r].i, local.rows[r].i) << "trial " << trial;
+        EXPECT_EQ(kept_local.rows[r].j, local.rows[r].j) << "trial " << trial;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace deli
