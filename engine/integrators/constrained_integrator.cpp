@@ -698,10 +698,12 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
 
 bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Constraint& row,
                                                 const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                                                const ReflectionTally& tally) const {
+                                                const ReflectionTally& tally, bool* settled) const {
+  bool approaching = false;
   const double lambda = reflect_lone_row(row, x.data(), system.box, system.particles.mass,
-                                         constraints_.tolerances.velocity, p.data());
+                                         constraints_.tolerances.velocity, p.data(), &approaching);
   if (lambda < 0.0) return false;
+  if (settled) *settled = !approaching;
   tally.terms.add(tally.item, pair_virial(row, lambda, x.data(), system.box));
   tally.stats.reflected += lambda > 0.0 ? 1 : 0;
   return true;
@@ -814,11 +816,8 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     for (const std::int32_t r : lone) {
       reflect_shared_before(first(r));
       const Constraint& row = rows[r];
-      bool left_settled = reflect_closed_form(system, row, x, p, tally);
-      if (left_settled) {
-        left_settled = !lone_row_approaching(row, x.data(), system.box, system.particles.mass,
-                                             constraints_.tolerances.velocity, p.data());
-      } else {
+      bool left_settled = false;
+      if (!reflect_closed_form(system, row, x, p, tally, &left_settled)) {
         Cluster cluster;  // a row without a closed form (no direction): the general reflection
         cluster.particles.push_back(row.i);
         if (row.j >= 0) cluster.particles.push_back(row.j);

@@ -170,8 +170,10 @@ class ConstrainedIntegrator : public Integrator {
                        std::size_t first_inequality, const Cluster& cluster,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p,
                        const ShadowOperator* shadow, const ReflectionTally& tally) const;
+  // reflect_closed_form's `settled`: the row left not approaching.
   bool reflect_closed_form(const System& system, const Constraint& row, const std::vector<Vec3>& x,
-                           std::vector<Vec3>& p, const ReflectionTally& tally) const;
+                           std::vector<Vec3>& p, const ReflectionTally& tally,
+                           bool* settled = nullptr) const;
   void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
                             const AfterReflection* after, std::size_t first_new_row);

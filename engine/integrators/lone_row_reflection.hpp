@@ -15,11 +15,10 @@ namespace deli {
 // `inverse_mass` is per particle (global numbering); p is updated in place. Returns the
 // impulse along the row's gradient (0 when the row was not approaching), or a negative
 // value when the row has no direction (coincident particles): the caller takes reflect().
+// With `left_approaching` (where the row has a direction): whether the row still approaches
+// after it, i.e. whether a second call would change p again.
 double reflect_lone_row(const Constraint& row, const Vec3* x, const Box& box,
-                        const std::vector<double>& mass, double tolerance, Vec3* p);
-// Whether reflect_lone_row would change p (the row has a direction and approaches beyond the
-// tolerance), by its own arithmetic.
-bool lone_row_approaching(const Constraint& row, const Vec3* x, const Box& box,
-                          const std::vector<double>& mass, double tolerance, const Vec3* p);
+                        const std::vector<double>& mass, double tolerance, Vec3* p,
+                        bool* left_approaching = nullptr);
 
 }  // namespace deli

@@ -44,6 +44,28 @@ Constraint floor_at(std::int32_t i, double height) {
   return c;
 }
 
+// `count` tries at a random row among n particles, draw k = count..1: a floor under a random
+// particle where k is a multiple of `wall_every`, else a sphere pair of two random particles
+// (of particles i and i + 2 where k is a multiple of `near_every`, if not 0), dropped where
+// it would join a particle to itself or reach past n.
+void append_random_contacts(std::vector<Constraint>& rows, std::mt19937_64& rng, std::size_t n,
+                            int count, int wall_every, int near_every) {
+  std::uniform_int_distribution<std::int32_t> particle(0, static_cast<std::int32_t>(n) - 1);
+  for (int k = count; k > 0; --k) {
+    if (k % wall_every == 0) {
+      rows.push_back(floor_at(particle(rng), 0.0));
+      continue;
+    }
+    Constraint contact;
+    contact.kind = ConstraintKind::sphere_pair;
+    contact.i = particle(rng);
+    contact.j = near_every > 0 && k % near_every == 0 ? contact.i + 2 : particle(rng);
+    if (contact.j >= static_cast<std::int32_t>(n) || contact.j == contact.i) continue;
+    contact.length = 1.0;
+    rows.push_back(contact);
+  }
+}
+
 LocalCluster cluster_of(const std::vector<double>& masses, const std::vector<Constraint>& rows) {
   LocalCluster cluster;
   for (std::size_t k = 0; k < masses.size(); ++k) {
@@ -406,21 +428,9 @@ TEST(Clusters, HoldingOtherRowsAreFindClustersWithoutTheRodsAlone) {
     EqualityClusters prepared;
     prepared.prepare(rods, std::vector<double>(n, 1.0));
     std::vector<Constraint> rows = rods;
-    std::uniform_int_distribution<std::int32_t> particle(0, static_cast<std::int32_t>(n) - 1);
     std::uniform_int_distribution<int> others(0, 12);
-    for (int k = others(rng); k > 0; --k) {
-      if (k % 4 == 0) {
-        rows.push_back(floor_at(particle(rng), 0.0));
-        continue;
-      }
-      Constraint contact;
-      contact.kind = ConstraintKind::sphere_pair;
-      contact.i = particle(rng);
-      contact.j = k % 5 == 0 ? contact.i + 2 : particle(rng);  // often within a chain
-      if (contact.j >= static_cast<std::int32_t>(n) || contact.j == contact.i) continue;
-      contact.length = 1.0;
-      rows.push_back(contact);
-    }
+    // Every fifth pair within two indices: often within a chain.
+    append_random_contacts(rows, rng, n, others(rng), 4, 5);
     std::vector<Cluster> expected;
     for (Cluster& cluster : find_clusters(rows, n)) {
       if (cluster.rows.back() >= static_cast<std::int32_t>(rods.size())) {
@@ -447,7 +457,6 @@ TEST(Clusters, HoldingOtherRowsAreFindClustersWithoutTheRodsAlone) {
 TEST(Clusters, IntoKeptStorageAreTheClustersOfFreshOnes) {
   const std::size_t n = 60;
   std::mt19937_64 rng(7);
-  std::uniform_int_distribution<std::int32_t> particle(0, static_cast<std::int32_t>(n) - 1);
   std::uniform_int_distribution<int> row_count(1, 40);
   std::vector<double> mass(n);
   for (std::size_t i = 0; i < n; ++i) mass[i] = 1.0 + static_cast<double>(i % 7);
@@ -455,19 +464,7 @@ TEST(Clusters, IntoKeptStorageAreTheClustersOfFreshOnes) {
   LocalCluster kept_local;
   for (int trial = 0; trial < 300; ++trial) {
     std::vector<Constraint> rows;
-    for (int k = row_count(rng); k > 0; --k) {
-      if (k % 6 == 0) {
-        rows.push_back(floor_at(particle(rng), 0.0));
-        continue;
-      }
-      Constraint contact;
-      contact.kind = ConstraintKind::sphere_pair;
-      contact.i = particle(rng);
-      contact.j = particle(rng);
-      if (contact.j == contact.i) continue;
-      contact.length = 1.0;
-      rows.push_back(contact);
-    }
+    append_random_contacts(rows, rng, n, row_count(rng), 6, 0);
     const std::vector<Cluster> fresh = find_clusters(rows, n);
     find_clusters(rows, n, kept);
     ASSERT_EQ(kept.size(), fresh.size()) << "trial " << trial;
