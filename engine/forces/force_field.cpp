@@ -33,6 +33,14 @@ bool ForceField::pair_hessians(const System& system, const NeighborList& neighbo
   return true;
 }
 
+bool ForceField::pair_hessian_pieces(const System& system, const NeighborList& neighbors,
+                                     const std::vector<char>& mask, PairHessianPieces& out) const {
+  for (const auto& term : terms_) {
+    if (!term->pair_hessian_pieces(system, neighbors, mask, out)) return false;
+  }
+  return true;
+}
+
 bool ForceField::pair_curvature(const System& system, const NeighborList& neighbors,
                                 const std::vector<Vec3>& velocity, double& sum) const {
   for (const auto& term : terms_) {

@@ -33,6 +33,9 @@ class ForceField {
   // false when some term has no pairwise Hessian (angles).
   bool pair_hessians(const System& system, const NeighborList& neighbors,
                      const std::vector<char>& mask, std::vector<PairHessian>& out) const;
+  // The same blocks as pieces (ForceTerm::pair_hessian_pieces), appended to `out`.
+  bool pair_hessian_pieces(const System& system, const NeighborList& neighbors,
+                           const std::vector<char>& mask, PairHessianPieces& out) const;
   // v^T H v over every term (false as pair_hessians), without storing the blocks.
   bool pair_curvature(const System& system, const NeighborList& neighbors,
                       const std::vector<Vec3>& velocity, double& sum) const;

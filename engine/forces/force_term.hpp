@@ -18,6 +18,39 @@ struct PairHessian {
   Eigen::Matrix3d block;
 };
 
+// Pair Hessian blocks kept in the pieces the threads made them in, read as one sequence: the
+// first piece's blocks, then the next piece's. Joined into one vector, the blocks of the
+// default input's second thread (some 1200 a call, 96 KB) were copied by the calling thread
+// at every shadow-H reflection while the other thread waited. Pieces past the used ones keep
+// their storage for the next call.
+struct PairHessianPieces {
+  std::vector<std::vector<PairHessian>> pieces;
+  std::size_t used = 0;
+
+  // No blocks; the pieces' storage kept.
+  void clear() {
+    for (std::size_t k = 0; k < used; ++k) pieces[k].clear();
+    used = 0;
+  }
+  // The last piece in use (a first one if none), for blocks that follow every block so far.
+  std::vector<PairHessian>& last() {
+    if (used == 0) return add();
+    return pieces[used - 1];
+  }
+  // A new, empty last piece. It moves the pieces (not their blocks): take references to
+  // pieces only once every piece is added.
+  std::vector<PairHessian>& add() {
+    if (pieces.size() == used) pieces.emplace_back();
+    pieces[used].clear();
+    return pieces[used++];
+  }
+  std::size_t size() const {
+    std::size_t total = 0;
+    for (std::size_t k = 0; k < used; ++k) total += pieces[k].size();
+    return total;
+  }
+};
+
 // The Hessian block of phi(|d|) for d = x_a - x_b, from phi'' and f_over_r = -phi'(r)/r:
 // phi'' d^ d^T - f_over_r (I - d^ d^T).
 inline Eigen::Matrix3d pair_hessian_block(const Vec3& d, double r2, double f_over_r,
@@ -70,6 +103,13 @@ class ForceTerm {
   virtual bool pair_hessians(const System&, const NeighborList&, const std::vector<char>& /*mask*/,
                              std::vector<PairHessian>& /*out*/) const {
     return false;
+  }
+  // The same blocks in the same order, appended to `out` as pieces: a term that makes its
+  // blocks in chunks on several threads keeps each chunk's as a piece; this default appends
+  // pair_hessians' to the last piece.
+  virtual bool pair_hessian_pieces(const System& system, const NeighborList& neighbors,
+                                   const std::vector<char>& mask, PairHessianPieces& out) const {
+    return pair_hessians(system, neighbors, mask, out.last());
   }
   // Adds v^T H v = sum over blocks of (v_a - v_b)^T B (v_a - v_b) to `sum`, in
   // pair_hessians' order. This default goes through pair_hessians (the same sum as from its

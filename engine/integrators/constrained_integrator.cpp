@@ -618,8 +618,8 @@ void ConstrainedIntegrator::gather_hessian_blocks(const System& system,
     ++count;
   }
   hessian_blocks_.clear();
-  if (!engine_.force_field().pair_hessians(system, engine_.neighbors(), hessian_mask_,
-                                           hessian_blocks_)) {
+  if (!engine_.force_field().pair_hessian_pieces(system, engine_.neighbors(), hessian_mask_,
+                                                 hessian_blocks_)) {
     throw SimulationError(
         "shadow-Hamiltonian reflections need a pairwise Hessian, which "
         "harmonic angles lack: use energy = \"hamiltonian\"");
@@ -635,7 +635,6 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
   const auto r = static_cast<std::size_t>(reflected_number_[c]);
   ShadowOperator shadow;
   shadow.h = dt_;
-  shadow.hessian = &hessian_blocks_;
   shadow.pairs = shadow_pairs_.pairs(r);
   shadow.pair_count = shadow_pairs_.count(r);
   shadow.momenta = p.data();

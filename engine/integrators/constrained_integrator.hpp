@@ -261,7 +261,7 @@ class ConstrainedIntegrator : public Integrator {
   // made it (else nothing to reuse).
   std::vector<double> equality_chain_virial_;
   std::vector<char> equality_chain_solved_;
-  std::vector<PairHessian> hessian_blocks_;
+  PairHessianPieces hessian_blocks_;  // gather_hessian_blocks' (ShadowPairs point into them)
   // gather_hessian_blocks' scratch and results: each reflected cluster's number among them
   // (-1 for the others), its particles' (-1 elsewhere) and their index within it; the mask;
   // the reflected clusters' shadow pairs by number.

@@ -32,7 +32,6 @@ Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool wit
   Eigen::VectorXd out = Eigen::VectorXd::Zero(v.size());
   const double* in = v.data();
   double* to = out.data();
-  const PairHessian* blocks = hessian->data();
   for (std::size_t k = 0; k < pair_count; ++k) {
     const LocalPair& b = pairs[k];
     Eigen::Vector3d dv(in[3 * b.a], in[3 * b.a + 1], in[3 * b.a + 2]);
@@ -42,7 +41,7 @@ Eigen::VectorXd ShadowOperator::hessian_times(const Eigen::VectorXd& v, bool wit
       const Vec3 velocity = momenta[b.outside] * (1.0 / mass[b.outside]);
       dv -= Eigen::Vector3d(velocity.x, velocity.y, velocity.z);
     }
-    const Eigen::Vector3d f = blocks[b.block].block * dv;
+    const Eigen::Vector3d f = b.block->block * dv;
     Eigen::Map<Eigen::Vector3d>(to + 3 * b.a) += f;
     if (b.b >= 0) Eigen::Map<Eigen::Vector3d>(to + 3 * b.b) -= f;
   }

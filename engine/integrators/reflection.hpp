@@ -16,18 +16,17 @@ enum class ReflectionEnergy { hamiltonian, shadow };
 // H~ = H - h^2/24 dV^T M^-1 dV + h^2/12 v^T d2V v, quadratic in p with
 // K = M^-1/2 + h^2/12 M^-1 d2V M^-1. `pairs` (pair_count of them) are the pair Hessian
 // blocks touching the cluster in local indices (b = -1: the particle `outside` the cluster,
-// whose velocity is its momentum in `momenta` over its mass), each naming its block in
-// `hessian` (the gathered blocks of every reflected cluster). All referred to, not copied:
-// the outside particles' momenta are read while the cluster is reflected, which changes
-// only its own.
+// whose velocity is its momentum in `momenta` over its mass), each pointing to its block
+// (among the gathered blocks of every reflected cluster). All referred to, not copied: the
+// outside particles' momenta are read while the cluster is reflected, which changes only its
+// own.
 struct ShadowOperator {
   struct LocalPair {
     std::int32_t a, b;
     std::int32_t outside;  // the particle outside the cluster where b = -1, else -1
-    std::size_t block;
+    const PairHessian* block;
   };
   double h = 0;
-  const std::vector<PairHessian>* hessian = nullptr;
   const LocalPair* pairs = nullptr;
   std::size_t pair_count = 0;
   const Vec3* momenta = nullptr;

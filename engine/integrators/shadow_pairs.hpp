@@ -19,7 +19,10 @@ namespace deli {
 class ShadowPairs {
  public:
   // cluster_of[p]: particle p's reflected cluster (0 .. clusters - 1), or -1; local_index[p]:
-  // its index within that cluster.
+  // its index within that cluster. The blocks as pieces (the pair terms' chunks, read in
+  // order), or as one vector; the pairs point into them.
+  void make(const PairHessianPieces& blocks, const std::int32_t* cluster_of,
+            const std::int32_t* local_index, std::size_t clusters);
   void make(const std::vector<PairHessian>& blocks, const std::int32_t* cluster_of,
             const std::int32_t* local_index, std::size_t clusters);
   const ShadowOperator::LocalPair* pairs(std::size_t cluster) const {
@@ -28,6 +31,13 @@ class ShadowPairs {
   std::size_t count(std::size_t cluster) const { return count_[cluster]; }
 
  private:
+  struct Span {
+    const PairHessian* blocks;
+    std::size_t count;
+  };
+  void make(const std::int32_t* cluster_of, const std::int32_t* local_index, std::size_t clusters);
+
+  std::vector<Span> spans_;                                // the blocks, piece by piece
   std::vector<std::vector<std::size_t>> counts_of_chunk_;  // [chunk][cluster]
   std::vector<ShadowOperator::LocalPair> pairs_;           // cluster by cluster
   std::vector<std::size_t> begin_, count_;

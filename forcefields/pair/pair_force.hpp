@@ -53,10 +53,23 @@ class PairForce final : public ForceTerm {
   // default input's reflections, which then ran as long on two threads as on one.
   bool pair_hessians(const System& system, const NeighborList& neighbors,
                      const std::vector<char>& mask, std::vector<PairHessian>& out) const override {
+    // As pieces after out's blocks, then joined.
+    flat_pieces_.clear();
+    flat_pieces_.last().swap(out);
+    pair_hessian_pieces(system, neighbors, mask, flat_pieces_);
+    out.swap(flat_pieces_.pieces[0]);
+    for (std::size_t k = 1; k < flat_pieces_.used; ++k) {
+      out.insert(out.end(), flat_pieces_.pieces[k].begin(), flat_pieces_.pieces[k].end());
+    }
+    return true;
+  }
+  // Chunk 0's blocks follow out's last piece's; each later chunk's are a piece of their own,
+  // and the scaled pairs' follow in the last.
+  bool pair_hessian_pieces(const System& system, const NeighborList& neighbors,
+                           const std::vector<char>& mask, PairHessianPieces& out) const override {
     const NeighborList::PartnerRanges ranges = neighbors.partner_ranges();
     const std::size_t n = ranges.particles;
     const int chunks = chunks_for(n);
-    chunk_hessians_.resize(static_cast<std::size_t>(chunks));
     // Chunks of particles holding equal numbers of listed pairs, where the list is by particle
     // in order (its ranges follow each other): each pair is tested against the mask. In
     // equal numbers of particles, the default input's lower half (its z axis open, the pairs
@@ -69,17 +82,21 @@ class PairForce final : public ForceTerm {
         hessian_chunk_starts_[static_cast<std::size_t>(c)] = chunk_range(n, c, chunks).begin;
       }
     }
-    for_each_range(hessian_chunk_starts_, [&](int c, std::size_t begin, std::size_t end) {
-      std::vector<PairHessian>& to = c == 0 ? out : chunk_hessians_[static_cast<std::size_t>(c)];
-      if (c > 0) to.clear();
-      append_listed_hessians(system, ranges, neighbors.image_shifts().data(), mask, begin, end, to);
-    });
-    for (std::size_t c = 1; c < static_cast<std::size_t>(chunks); ++c) {
-      out.insert(out.end(), chunk_hessians_[c].begin(), chunk_hessians_[c].end());
+    chunk_pieces_.resize(static_cast<std::size_t>(chunks));
+    out.last();
+    for (int c = 1; c < chunks; ++c) out.add();
+    const std::size_t first = out.used - static_cast<std::size_t>(chunks);
+    for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
+      chunk_pieces_[c] = &out.pieces[first + c];
     }
+    for_each_range(hessian_chunk_starts_, [&](int c, std::size_t begin, std::size_t end) {
+      append_listed_hessians(system, ranges, neighbors.image_shifts().data(), mask, begin, end,
+                             *chunk_pieces_[static_cast<std::size_t>(c)]);
+    });
+    std::vector<PairHessian>& scaled = out.last();
     for_each_scaled_hessian(system, mask,
                             [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
-                              out.push_back({i, j, block});
+                              scaled.push_back({i, j, block});
                             });
     return true;
   }
@@ -642,8 +659,9 @@ class PairForce final : public ForceTerm {
   mutable std::vector<std::vector<const PaddedVec3*>> chunk_sources_;  // a block's summed chunks
   mutable std::vector<SymTensor> chunk_virials_;
   mutable std::vector<double> chunk_energies_;
-  mutable std::vector<std::vector<PairHessian>> chunk_hessians_;  // pair_hessians()' chunks 1...
-  mutable std::vector<std::size_t> hessian_chunk_starts_;         // and where they start
+  mutable std::vector<std::vector<PairHessian>*> chunk_pieces_;  // pair_hessian_pieces()' chunks'
+  mutable PairHessianPieces flat_pieces_;                        // pair_hessians()' pieces
+  mutable std::vector<std::size_t> hessian_chunk_starts_;        // and where they start
 };
 
 }  // namespace deli

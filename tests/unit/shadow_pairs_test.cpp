@@ -21,24 +21,25 @@ namespace {
 using testing::kThreaded;
 using testing::ThreadCount;
 
-// Cluster r's pairs as a scan of every block for that cluster alone: a block touching it, in
-// its numbering with its particle first, and the particle outside it where there is one.
-std::vector<ShadowOperator::LocalPair> scanned_pairs(const std::vector<PairHessian>& blocks,
+// Cluster r's pairs as a scan of every block (in order) for that cluster alone: a block
+// touching it, in its numbering with its particle first, and the particle outside it where
+// there is one.
+std::vector<ShadowOperator::LocalPair> scanned_pairs(const std::vector<const PairHessian*>& blocks,
                                                      const std::vector<std::int32_t>& cluster_of,
                                                      const std::vector<std::int32_t>& local_index,
                                                      std::int32_t r) {
   auto local = [&](std::int32_t g) { return cluster_of[g] == r ? local_index[g] : -1; };
   std::vector<ShadowOperator::LocalPair> pairs;
-  for (std::size_t k = 0; k < blocks.size(); ++k) {
-    std::int32_t a = local(blocks[k].a), b = local(blocks[k].b), outside = -1;
+  for (const PairHessian* block : blocks) {
+    std::int32_t a = local(block->a), b = local(block->b), outside = -1;
     if (a < 0 && b < 0) continue;
     if (a < 0) {
       std::swap(a, b);
-      outside = blocks[k].a;
+      outside = block->a;
     } else if (b < 0) {
-      outside = blocks[k].b;
+      outside = block->b;
     }
-    pairs.push_back({a, b, outside, k});
+    pairs.push_back({a, b, outside, block});
   }
   return pairs;
 }
@@ -62,15 +63,33 @@ TEST(ShadowPairs, AreEachClustersScanOfTheBlocksOnOneThreadAndOnTwo) {
     const std::int32_t a = particle(rng), b = particle(rng);
     if (a != b) blocks.push_back({a, b, Eigen::Matrix3d::Zero()});
   }
-  auto check = [&](int threads) {
+  // The same blocks as pieces, as the pair terms' chunks leave them: uneven, one empty, the
+  // chunks of ShadowPairs' own split falling inside them.
+  PairHessianPieces pieces;
+  const std::size_t cuts[] = {0, 1300, 1300, 3100, blocks.size()};
+  for (std::size_t k = 0; k + 1 < std::size(cuts); ++k) {
+    pieces.add().assign(blocks.begin() + static_cast<std::ptrdiff_t>(cuts[k]),
+                        blocks.begin() + static_cast<std::ptrdiff_t>(cuts[k + 1]));
+  }
+  auto check = [&](int threads, bool as_pieces) {
     const ThreadCount count(threads);
     if (threads == 2) ASSERT_GE(chunks_for_cheap(blocks.size()), 2);  // the blocks split
     ShadowPairs made;
-    made.make(blocks, cluster_of.data(), local_index.data(), kClusters);
+    std::vector<const PairHessian*> in_order;
+    if (as_pieces) {
+      made.make(pieces, cluster_of.data(), local_index.data(), kClusters);
+      for (std::size_t k = 0; k < pieces.used; ++k) {
+        for (const PairHessian& b : pieces.pieces[k]) in_order.push_back(&b);
+      }
+    } else {
+      made.make(blocks, cluster_of.data(), local_index.data(), kClusters);
+      for (const PairHessian& b : blocks) in_order.push_back(&b);
+    }
+    ASSERT_EQ(in_order.size(), blocks.size());
     std::size_t seen = 0;
     for (std::size_t r = 0; r < kClusters; ++r) {
       const std::vector<ShadowOperator::LocalPair> expected =
-          scanned_pairs(blocks, cluster_of, local_index, static_cast<std::int32_t>(r));
+          scanned_pairs(in_order, cluster_of, local_index, static_cast<std::int32_t>(r));
       ASSERT_EQ(made.count(r), expected.size()) << "cluster " << r;
       for (std::size_t k = 0; k < expected.size(); ++k) {
         const ShadowOperator::LocalPair& got = made.pairs(r)[k];
@@ -84,9 +103,11 @@ TEST(ShadowPairs, AreEachClustersScanOfTheBlocksOnOneThreadAndOnTwo) {
     // Pairs inside a cluster, and of each with outside particles, and with the others.
     EXPECT_GT(seen, 1500u);
   };
-  check(1);
+  check(1, false);
+  check(1, true);
   if (!kThreaded) return;
-  check(2);
+  check(2, false);
+  check(2, true);
 }
 
 // A chain of 40 particles 1.2 apart whose first two approach each other in contact, with
@@ -116,6 +137,7 @@ TEST(ShadowPairs, ShadowReflectionOnTwoThreadsIsTheOneThreadReflection) {
   const std::vector<double> outside_mass(kOutside, 2.0);
   std::vector<PairHessian> hessian;
   std::vector<ShadowOperator::LocalPair> pairs;
+  std::vector<std::size_t> block_of_pair;  // pointed to once every block is made
   std::uniform_int_distribution<std::int32_t> bead(0, kChain - 1), other(0, kOutside - 1);
   while (pairs.size() < 700) {
     Eigen::Matrix3d r;
@@ -128,14 +150,15 @@ TEST(ShadowPairs, ShadowReflectionOnTwoThreadsIsTheOneThreadReflection) {
         hessian.pop_back();
         continue;
       }
-      pairs.push_back({a, b, -1, hessian.size() - 1});
+      pairs.push_back({a, b, -1, nullptr});
     } else {
-      pairs.push_back({a, -1, other(rng), hessian.size() - 1});
+      pairs.push_back({a, -1, other(rng), nullptr});
     }
+    block_of_pair.push_back(hessian.size() - 1);
   }
+  for (std::size_t k = 0; k < pairs.size(); ++k) pairs[k].block = &hessian[block_of_pair[k]];
   ShadowOperator shadow;
   shadow.h = 0.005;
-  shadow.hessian = &hessian;
   shadow.pairs = pairs.data();
   shadow.pair_count = pairs.size();
   shadow.momenta = outside_momenta.data();

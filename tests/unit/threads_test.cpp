@@ -293,6 +293,24 @@ TEST_P(MaskedPairHessians, OnTwoThreadsAreTheOneThreadBlocks) {
     ASSERT_EQ(two[k].b, one[k].b) << k;
     for (int e = 0; e < 9; ++e) ASSERT_EQ(two[k].block(e), one[k].block(e)) << k;
   }
+  // As pieces (shadow-H reflections read them so), after a block already there: that block,
+  // then the same blocks in the same order, each chunk's in a piece of its own.
+  const ThreadCount count(2);
+  PairHessianPieces pieces;
+  pieces.last().push_back({-1, -1, Eigen::Matrix3d::Identity()});
+  ASSERT_TRUE(pair.pair_hessian_pieces(input.system, list, mask, pieces));
+  EXPECT_EQ(pieces.used, 2u);
+  std::vector<const PairHessian*> in_order;
+  for (std::size_t k = 0; k < pieces.used; ++k) {
+    for (const PairHessian& b : pieces.pieces[k]) in_order.push_back(&b);
+  }
+  ASSERT_EQ(in_order.size(), one.size() + 1);
+  EXPECT_EQ(in_order[0]->a, -1);
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    ASSERT_EQ(in_order[k + 1]->a, one[k].a) << k;
+    ASSERT_EQ(in_order[k + 1]->b, one[k].b) << k;
+    for (int e = 0; e < 9; ++e) ASSERT_EQ(in_order[k + 1]->block(e), one[k].block(e)) << k;
+  }
 }
 INSTANTIATE_TEST_SUITE_P(Threads, MaskedPairHessians, ::testing::Values(false, true),
                          [](const ::testing::TestParamInfo<bool>& info) {
