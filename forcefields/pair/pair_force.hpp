@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/cache_line.hpp"
 #include "core/parallel.hpp"
 #include "forces/chunk_forces.hpp"
 #include "forces/force_term.hpp"
@@ -89,10 +90,37 @@ class PairForce final : public ForceTerm {
     for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
       chunk_pieces_[c] = &out.pieces[first + c];
     }
-    for_each_range(hessian_chunk_starts_, [&](int c, std::size_t begin, std::size_t end) {
-      append_listed_hessians(system, ranges, neighbors.image_shifts().data(), mask, begin, end,
-                             *chunk_pieces_[static_cast<std::size_t>(c)]);
-    });
+    // The pairs touching the mask lie where the reflected clusters are, often in one chunk:
+    // each chunk finds its own, then, after the job's barrier, makes the blocks of an equal
+    // share of them all, in order (made by the chunk that found them, the default input's
+    // blocks left the other thread waiting 4.4 us a call).
+    chunk_touching_.resize(static_cast<std::size_t>(chunks));
+    touching_count_.assign(static_cast<std::size_t>(chunks), OnItsOwnLine<std::size_t>{});
+    chunk_ids_.resize(static_cast<std::size_t>(chunks) + 1);
+    for (std::size_t c = 0; c <= static_cast<std::size_t>(chunks); ++c) chunk_ids_[c] = c;
+    const Vec3* shifts = neighbors.image_shifts().data();
+    auto find = [&](int c, std::size_t begin, std::size_t end) {
+      const auto k = static_cast<std::size_t>(c);
+      touching_count_[k].value = collect_touching(ranges, mask, begin, end, chunk_touching_[k]);
+    };
+    auto make_blocks = [&](int c, std::size_t, std::size_t) {
+      std::size_t total = 0;
+      for (const OnItsOwnLine<std::size_t>& count : touching_count_) total += count.value;
+      const IndexRange share = chunk_range(total, c, chunks);
+      std::size_t start = 0;  // the first pair of chunk k's list among all
+      for (std::size_t k = 0; k < static_cast<std::size_t>(chunks) && start < share.end; ++k) {
+        const std::size_t count = touching_count_[k].value;
+        const std::size_t from = std::max(share.begin, start);
+        const std::size_t to = std::min(share.end, start + count);
+        if (from < to) {
+          append_touching_hessians(system, ranges, shifts,
+                                   chunk_touching_[k].data() + (from - start), to - from,
+                                   *chunk_pieces_[static_cast<std::size_t>(c)]);
+        }
+        start += count;
+      }
+    };
+    for_each_range_then(hessian_chunk_starts_, chunk_ids_, find, make_blocks);
     std::vector<PairHessian>& scaled = out.last();
     for_each_scaled_hessian(system, mask,
                             [&](std::int32_t i, std::int32_t j, const Eigen::Matrix3d& block) {
@@ -188,39 +216,23 @@ class PairForce final : public ForceTerm {
   }
 
   // The Hessian block of every listed pair in reach touching a masked particle (all with an
-  // empty mask), of particles begin..end-1 in list order, appended to `to`; pair_hessians()
-  // adds the scaled pairs'. In three passes, as the scalar force loop: the pairs touching the mask,
-  // those of them in reach, then their blocks, each pass without a branch per pair. A mask holds a
-  // few reflected clusters (the default input: 60 of 1200 particles, 2200 of 48000 listed pairs a
-  // call), so a branch on each pair's mask, then on its reach, was mispredicted often enough to
-  // take a third of this loop (stop 50, the default input: reflections phase 0.76 and loop 0.91 on
-  // one thread, 0.72 and 0.80 on two); the blocks' pass then in vectors: 0.95 and 0.98 on one
-  // thread, 0.84 and 0.88 on two. The same operations on each pair: the same blocks
-  // (Threads.MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks).
-  void append_listed_hessians(const System& system, const NeighborList::PartnerRanges& ranges,
-                              const Vec3* shifts, const std::vector<char>& mask, std::size_t begin,
-                              std::size_t end, std::vector<PairHessian>& to) const {
-    struct Touching {
-      std::int32_t i;
-      std::uint32_t k;  // the pair's entry in the list (under 2^32: 16 GB of partners)
-    };
-    // The pairs in reach, by component (so that the blocks' pass runs in vectors).
-    struct InReach {
-      std::vector<std::int32_t> i, j;
-      std::vector<double> dx, dy, dz, r2;
-      std::vector<std::size_t> params;
-      // The blocks' upper triangles (pair_hessian_upper).
-      std::vector<double> xx, xy, xz, yy, yz, zz;
-      void resize(std::size_t n) {
-        for (auto* v : {&i, &j}) v->resize(n);
-        for (auto* v : {&dx, &dy, &dz, &r2, &xx, &xy, &xz, &yy, &yz, &zz}) v->resize(n);
-        params.resize(n);
-      }
-    };
-    thread_local std::vector<Touching> touching;
-    thread_local InReach in_reach;
-    const std::vector<Vec3>& x = system.particles.position;
-    const std::vector<int>& type = system.particles.type;
+  // empty mask), in list order (pair_hessian_pieces; the scaled pairs' follow). In three passes, as
+  // the scalar force loop: the pairs touching the mask, those of them in reach, then their blocks,
+  // each pass without a branch per pair. A mask holds a few reflected clusters (the default input:
+  // 60 of 1200 particles, 2200 of 48000 listed pairs a call), so a branch on each pair's mask, then
+  // on its reach, was mispredicted often enough to take a third of this loop (stop 50, the default
+  // input: reflections phase 0.76 and loop 0.91 on one thread, 0.72 and 0.80 on two); the blocks'
+  // pass then in vectors: 0.95 and 0.98 on one thread, 0.84 and 0.88 on two. The same operations on
+  // each pair: the same blocks (Threads.MaskedPairHessiansOnTwoThreadsAreTheOneThreadBlocks).
+  struct Touching {
+    std::int32_t i;
+    std::uint32_t k;  // the pair's entry in the list (under 2^32: 16 GB of partners)
+  };
+  // The first pass: the listed pairs of particles begin..end-1 touching a masked particle, in
+  // list order, into `touching` (grown, never cut); returns their count.
+  static std::size_t collect_touching(const NeighborList::PartnerRanges& ranges,
+                                      const std::vector<char>& mask, std::size_t begin,
+                                      std::size_t end, std::vector<Touching>& touching) {
     std::size_t count = 0;
     for (std::size_t i = begin; i < end; ++i) {
       const std::size_t first = ranges.begin[i], last = ranges.end[i];
@@ -237,6 +249,29 @@ class PairForce final : public ForceTerm {
         }
       }
     }
+    return count;
+  }
+  // The later passes: of the `count` pairs at `touching`, those in reach, then their blocks,
+  // appended to `to` in order.
+  void append_touching_hessians(const System& system, const NeighborList::PartnerRanges& ranges,
+                                const Vec3* shifts, const Touching* touching, std::size_t count,
+                                std::vector<PairHessian>& to) const {
+    // The pairs in reach, by component (so that the blocks' pass runs in vectors).
+    struct InReach {
+      std::vector<std::int32_t> i, j;
+      std::vector<double> dx, dy, dz, r2;
+      std::vector<std::size_t> params;
+      // The blocks' upper triangles (pair_hessian_upper).
+      std::vector<double> xx, xy, xz, yy, yz, zz;
+      void resize(std::size_t n) {
+        for (auto* v : {&i, &j}) v->resize(n);
+        for (auto* v : {&dx, &dy, &dz, &r2, &xx, &xy, &xz, &yy, &yz, &zz}) v->resize(n);
+        params.resize(n);
+      }
+    };
+    thread_local InReach in_reach;
+    const std::vector<Vec3>& x = system.particles.position;
+    const std::vector<int>& type = system.particles.type;
     InReach& q = in_reach;
     if (q.r2.size() < count) q.resize(count);
     std::size_t kept = 0;
@@ -659,9 +694,12 @@ class PairForce final : public ForceTerm {
   mutable std::vector<std::vector<const PaddedVec3*>> chunk_sources_;  // a block's summed chunks
   mutable std::vector<SymTensor> chunk_virials_;
   mutable std::vector<double> chunk_energies_;
-  mutable std::vector<std::vector<PairHessian>*> chunk_pieces_;  // pair_hessian_pieces()' chunks'
-  mutable PairHessianPieces flat_pieces_;                        // pair_hessians()' pieces
-  mutable std::vector<std::size_t> hessian_chunk_starts_;        // and where they start
+  mutable std::vector<std::vector<PairHessian>*> chunk_pieces_;    // pair_hessian_pieces()' chunks'
+  mutable std::vector<std::vector<Touching>> chunk_touching_;      // and the pairs each found,
+  mutable std::vector<OnItsOwnLine<std::size_t>> touching_count_;  // how many,
+  mutable std::vector<std::size_t> chunk_ids_;                     // and 0, 1, ... chunks
+  mutable PairHessianPieces flat_pieces_;                          // pair_hessians()' pieces
+  mutable std::vector<std::size_t> hessian_chunk_starts_;          // and where they start
 };
 
 }  // namespace deli
