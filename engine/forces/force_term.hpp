@@ -44,11 +44,6 @@ struct PairHessianPieces {
     pieces[used].clear();
     return pieces[used++];
   }
-  std::size_t size() const {
-    std::size_t total = 0;
-    for (std::size_t k = 0; k < used; ++k) total += pieces[k].size();
-    return total;
-  }
 };
 
 // The Hessian block of phi(|d|) for d = x_a - x_b, from phi'' and f_over_r = -phi'(r)/r:
