@@ -774,12 +774,13 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   }
   std::vector<Cluster>& shared = shared_clusters_;
   find_clusters(shared_rows_, n, shared);
-  cluster_unchanged_.assign(shared.size(), 0);
-  for (std::size_t k = 0; k < shared.size(); ++k) {
-    cluster_unchanged_[k] = std::all_of(
-        shared[k].rows.begin(), shared[k].rows.end(),
-        [&](std::int32_t s) { return settled[static_cast<std::size_t>(shared_row_of_[s])] != 0; });
-  }
+  // Whether the last call left every row of a shared cluster settled (its rows are written
+  // only by the thread that reflects it).
+  auto unchanged = [&](const Cluster& cluster) {
+    return std::all_of(cluster.rows.begin(), cluster.rows.end(), [&](std::int32_t s) {
+      return settled[static_cast<std::size_t>(shared_row_of_[s])] != 0;
+    });
+  };
   // Each row makes one virial term at most.
   reflection_terms_.reset(
       slots, [&](std::size_t) { return rows.size(); }, true);
@@ -800,7 +801,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     auto reflect_shared_before = [&](std::int32_t particle) {
       for (; next_shared < shared.size() && shared[next_shared].particles.front() < particle;
            ++next_shared) {
-        if (cluster_unchanged_[next_shared]) continue;
+        if (unchanged(shared[next_shared])) continue;
         const bool left_settled =
             reflect_cluster(system, shared_rows_, 0, shared[next_shared], x, p, nullptr, tally);
         for (const std::int32_t s : shared[next_shared].rows) {
@@ -861,8 +862,8 @@ bool ConstrainedIntegrator::reflect_cluster(const System& system,
     equality.push_back(r < static_cast<std::int32_t>(first_inequality));
   std::vector<Vec3>& p_local = scratch.p_local;
   gather(p, cluster.particles, p_local);
-  const std::vector<Vec3>& x_local = scratch.x_local;
-  gather(x, cluster.particles, scratch.x_local);
+  std::vector<Vec3>& x_local = scratch.x_local;
+  gather(x, cluster.particles, x_local);
   const ReflectionStats r = reflect(local, equality, x_local, p_local, system.box, reflection_,
                                     constraints_.tolerances.velocity, constraints_.limits, shadow);
   for (std::size_t k = 0; k < local.rows.size(); ++k) {

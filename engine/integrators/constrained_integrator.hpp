@@ -277,7 +277,6 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<Constraint> shared_rows_;
   std::vector<std::int32_t> shared_row_of_;  // each shared row's index in the call's rows
   std::vector<Cluster> shared_clusters_;     // their clusters, the lists' storage kept
-  std::vector<char> cluster_unchanged_;      // per cluster: passed over (see reflect_clusters)
   // Per row of the last call: in a cluster (of one row or more) that it left with no row
   // approaching (1), else 0.
   std::vector<char> row_settled_;
