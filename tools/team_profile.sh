@@ -2,9 +2,10 @@
 # Where a run's threads spend their time, loop by loop: runs `deli run INPUT --threads N`
 # with the thread team's profile on (DELI_TEAM_PROFILE, engine/core/team_profile.hpp) and
 # prints, per parallel loop (each job function handed to the team), its calls and, in
-# milliseconds over the run: the calling thread's own chunks, its waits for the workers
-# after them, the slowest worker's chunks, and the calling thread's time alone before the
-# loop since the team's previous job (serial work, while the workers wait). Loops whose own
+# milliseconds over the step loop (not the set-up or the final output: the calling thread's
+# columns add up to the run's loop time): the calling thread's own chunks, its waits for the
+# workers after them, the slowest worker's chunks, and the calling thread's time alone before
+# the loop since the team's previous job (serial work, while the workers wait). Loops whose own
 # and worker times differ are unbalanced; a large serial time before a loop is serial work
 # on the step's path. The results are the run's usual ones (the profile only reads clocks).
 # usage: tools/team_profile.sh INPUT.toml [THREADS (default 2)] [ROWS (default 20)]

@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -17,6 +18,7 @@ struct Profile {
   const char* file = nullptr;
   std::unordered_map<const void*, JobTotals> totals;
   std::int64_t last_done_ns = -1;  // the previous job's end; -1 before the first
+  bool recording = true;           // false after a step loop's end
 
   Profile() {
     file = std::getenv("DELI_TEAM_PROFILE");
@@ -46,11 +48,27 @@ void set_team_profile(bool on) {
   p.on = on;
   p.totals.clear();
   p.last_done_ns = -1;
+  p.recording = true;
+}
+
+void team_profile_loop_started() {
+  Profile& p = profile();
+  if (!p.on) return;
+  p.totals.clear();
+  p.last_done_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                       std::chrono::steady_clock::now().time_since_epoch())
+                       .count();
+  p.recording = true;
+}
+
+void team_profile_loop_ended() {
+  profile().recording = false;
 }
 
 void team_profile_record(const void* job, std::int64_t start_ns, std::int64_t own_done_ns,
                          std::int64_t done_ns, std::int64_t slowest_worker_ns) {
   Profile& p = profile();
+  if (!p.recording) return;
   JobTotals& t = p.totals[job];
   t.job = job;
   ++t.calls;

@@ -26,6 +26,12 @@ struct JobTotals {
 bool team_profile_on();
 // For tests: turns the profile on or off and clears it (the file is still the environment's).
 void set_team_profile(bool on);
+// The profile scoped to a run's step loop, so that its table adds up to the run's loop time:
+// at the loop's start what was recorded before (the set-up's jobs: the first list build, the
+// first forces) is dropped and the serial time before the loop's first job counts from there;
+// after its end (the final output) nothing is recorded. Nothing while the profile is off.
+void team_profile_loop_started();
+void team_profile_loop_ended();
 // One job's times in nanoseconds of the steady clock: started, its own chunks done, every
 // worker done; the slowest worker's chunks. Called by the calling thread, one job at a time.
 void team_profile_record(const void* job, std::int64_t start_ns, std::int64_t own_done_ns,

@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/phase_timer.hpp"
+#include "core/team_profile.hpp"
 #include "simulation/interrupt.hpp"
 #include "system/finite_state.hpp"
 
@@ -111,6 +112,7 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     if (set_up) sample(true, wants_frame(), true);
     start = std::chrono::steady_clock::now();
     timer.start();
+    team_profile_loop_started();
     for (std::int64_t n = 1; n <= steps; ++n) {
       // Rows at absolute multiples of thermo_every, as frames: a restart from any step
       // writes the rows of the uninterrupted run.
@@ -135,10 +137,12 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     }
   } catch (...) {
     timer.stop();
+    team_profile_loop_ended();
     finish_all(observers, system, true);
     throw;
   }
   timer.stop();
+  team_profile_loop_ended();
   stats.loop_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.phase_seconds = timer.seconds();

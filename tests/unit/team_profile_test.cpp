@@ -60,6 +60,24 @@ TEST(TeamProfile, EachJobsTimeGoesWhereItWasSpent) {
   EXPECT_EQ(all.front().job, reinterpret_cast<const void*>(&worker_sleeps));
 }
 
+// Scoped to a step loop (as run() scopes it): the jobs before its start and after its end are
+// not in the totals, and the serial time before the loop's first job counts from its start.
+TEST(TeamProfile, AStepLoopsTotalsHoldItsJobsAlone) {
+  set_team_profile(true);
+  run_on_team(2, worker_sleeps, nullptr);  // the set-up's
+  team_profile_loop_started();
+  sleep_ms(2);
+  run_on_team(2, caller_sleeps, nullptr);
+  team_profile_loop_ended();
+  run_on_team(2, worker_sleeps, nullptr);  // the final output's
+  const std::vector<JobTotals> all = team_profile_totals();
+  set_team_profile(false);
+  ASSERT_EQ(all.size(), 1u);
+  EXPECT_EQ(all.front().job, reinterpret_cast<const void*>(&caller_sleeps));
+  EXPECT_EQ(all.front().calls, 1);
+  EXPECT_GE(all.front().serial_before_ns, 2 * kMs);
+}
+
 TEST(TeamProfile, OffRecordsNothing) {
   set_team_profile(false);
   run_on_team(2, worker_sleeps, nullptr);
