@@ -29,7 +29,8 @@ void set_team_profile(bool on);
 // The profile scoped to a run's step loop, so that its table adds up to the run's loop time:
 // at the loop's start what was recorded before (the set-up's jobs: the first list build, the
 // first forces) is dropped and the serial time before the loop's first job counts from there;
-// after its end (the final output) nothing is recorded. Nothing while the profile is off.
+// after its end (the final output) nothing is recorded. Nothing while the profile is off. A
+// process that runs several loops (a restart chain in one test) writes the last one's.
 void team_profile_loop_started();
 void team_profile_loop_ended();
 // One job's times in nanoseconds of the steady clock: started, its own chunks done, every
