@@ -83,13 +83,10 @@ class PairForce final : public ForceTerm {
         hessian_chunk_starts_[static_cast<std::size_t>(c)] = chunk_range(n, c, chunks).begin;
       }
     }
-    chunk_pieces_.resize(static_cast<std::size_t>(chunks));
     out.last();
     for (int c = 1; c < chunks; ++c) out.add();
+    // Chunk c's piece: out.pieces[first + c] (no piece is added during the job).
     const std::size_t first = out.used - static_cast<std::size_t>(chunks);
-    for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
-      chunk_pieces_[c] = &out.pieces[first + c];
-    }
     // The pairs touching the mask lie where the reflected clusters are, often in one chunk:
     // each chunk finds its own, then, after the job's barrier, makes the blocks of an equal
     // share of them all, in order (made by the chunk that found them, the default input's
@@ -115,7 +112,7 @@ class PairForce final : public ForceTerm {
         if (from < to) {
           append_touching_hessians(system, ranges, shifts,
                                    chunk_touching_[k].data() + (from - start), to - from,
-                                   *chunk_pieces_[static_cast<std::size_t>(c)]);
+                                   out.pieces[first + static_cast<std::size_t>(c)]);
         }
         start += count;
       }
@@ -694,8 +691,8 @@ class PairForce final : public ForceTerm {
   mutable std::vector<std::vector<const PaddedVec3*>> chunk_sources_;  // a block's summed chunks
   mutable std::vector<SymTensor> chunk_virials_;
   mutable std::vector<double> chunk_energies_;
-  mutable std::vector<std::vector<PairHessian>*> chunk_pieces_;    // pair_hessian_pieces()' chunks'
-  mutable std::vector<std::vector<Touching>> chunk_touching_;      // and the pairs each found,
+  // pair_hessian_pieces()' chunks: the pairs each found,
+  mutable std::vector<std::vector<Touching>> chunk_touching_;
   mutable std::vector<OnItsOwnLine<std::size_t>> touching_count_;  // how many,
   mutable std::vector<std::size_t> chunk_ids_;                     // and 0, 1, ... chunks
   mutable PairHessianPieces flat_pieces_;                          // pair_hessians()' pieces
