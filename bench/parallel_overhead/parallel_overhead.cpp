@@ -7,8 +7,9 @@
 // second thread only where the split saves more than a region costs. And what moving data
 // between the threads' cores costs: a cache line handed back and forth, and the chunked
 // kick with the chunks' owners swapped every pass (each pass reads the lines the other
-// core wrote last), against the same kick with the chunks kept; and per line, reads of many
-// lines the other core wrote last (in order and shuffled) and stores to lines it read.
+// core wrote last), against the same kick with the chunks kept; per line, reads of many
+// lines the other core wrote last (in order and shuffled) and stores to lines it read; and a
+// step's exchange of two halves as the rigid melt's pair loop makes it.
 //   cmake --build build --target deli-parallel-overhead
 //   OMP_NUM_THREADS=2 build/bench/parallel_overhead/deli-parallel-overhead
 #include <benchmark/benchmark.h>
@@ -244,6 +245,61 @@ void StoreToLinesTheOtherCoreRead(benchmark::State& state) {
   benchmark::DoNotOptimize(sum);
 }
 BENCHMARK(StoreToLinesTheOtherCoreRead)->UseManualTime();
+
+// A step's exchange between two threads as the pair loop of a 4000-particle box makes it (the
+// rigid melt's chunks and LJ 4000's each touch about 3100 of the 4000: bench/README.md, "Stop
+// 61"; here every particle), with no other work.
+// In one job: each thread writes its half of kParticles positions (a solve's output: "write"),
+// then, after a barrier, copies every position into a padded copy of its own and zeroes a
+// padded force piece of its own over every particle ("gather"), adds a force to every third
+// particle of its piece and, after a barrier, sums both pieces over its half ("sums"). Thread
+// 0's times per step: every step each core writes lines the other read and reads lines the
+// other wrote, which costs what the cores' distance makes it (CacheLineRoundTrip).
+void HalvesExchanged(benchmark::State& state) {
+  struct alignas(32) Padded {
+    double x = 0.0, y = 0.0, z = 0.0, w = 0.0;
+  };
+  std::vector<Vec3> x(kParticles, Vec3{1.0, 2.0, 3.0});
+  std::vector<Padded> copy[2], piece[2];
+  for (int t = 0; t < 2; ++t) copy[t].resize(kParticles), piece[t].resize(kParticles);
+  double write = 0.0, gather = 0.0, sums = 0.0, sum = 0.0;
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+  };
+  for (auto _ : state) {
+    auto job = [&](int thread, int) {
+      const IndexRange half = chunk_range(kParticles, thread, 2);
+      const auto t0 = Clock::now();
+      for (std::size_t i = half.begin; i < half.end; ++i) x[i].x += 1e-9, x[i].y -= 1e-9;
+      const auto t1 = Clock::now();
+      team_barrier();
+      const auto t2 = Clock::now();
+      std::vector<Padded>& mine = copy[thread];
+      std::vector<Padded>& f = piece[thread];
+      for (std::size_t i = 0; i < kParticles; ++i) mine[i] = {x[i].x, x[i].y, x[i].z, 0.0};
+      for (std::size_t i = 0; i < kParticles; ++i) f[i] = Padded{};
+      const auto t3 = Clock::now();
+      for (std::size_t i = 0; i < kParticles; i += 3) f[i].x += 1e-3 * mine[i].x;
+      team_barrier();
+      const auto t4 = Clock::now();
+      const std::vector<Padded>& other = piece[1 - thread];
+      double s = 0.0;
+      for (std::size_t i = half.begin; i < half.end; ++i) s += f[i].x + other[i].x;
+      const auto t5 = Clock::now();
+      if (thread != 0) return;
+      sum += s;
+      write += seconds(t0, t1), gather += seconds(t2, t3), sums += seconds(t4, t5);
+    };
+    run_on_team(2, job);
+  }
+  benchmark::DoNotOptimize(sum);
+  const auto steps = static_cast<double>(state.iterations());
+  state.counters["write_us"] = 1e6 * write / steps;
+  state.counters["gather_us"] = 1e6 * gather / steps;
+  state.counters["sums_us"] = 1e6 * sums / steps;
+}
+BENCHMARK(HalvesExchanged)->UseRealTime();
 
 }  // namespace
 }  // namespace deli
