@@ -9,7 +9,7 @@
 // kick with the chunks' owners swapped every pass (each pass reads the lines the other
 // core wrote last), against the same kick with the chunks kept; per line, reads of many
 // lines the other core wrote last (in order and shuffled) and stores to lines it read; and a
-// step's exchange of two halves as the rigid melt's pair loop makes it.
+// step's exchange of two halves as a 4000-particle box's pair loop makes it.
 //   cmake --build build --target deli-parallel-overhead
 //   OMP_NUM_THREADS=2 build/bench/parallel_overhead/deli-parallel-overhead
 #include <benchmark/benchmark.h>
