@@ -43,6 +43,12 @@ bool team_profile_on() {
   return profile().on;
 }
 
+std::int64_t steady_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 void set_team_profile(bool on) {
   Profile& p = profile();
   p.on = on;
@@ -55,9 +61,7 @@ void team_profile_loop_started() {
   Profile& p = profile();
   if (!p.on) return;
   p.totals.clear();
-  p.last_done_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                       std::chrono::steady_clock::now().time_since_epoch())
-                       .count();
+  p.last_done_ns = steady_ns();
   p.recording = true;
 }
 

@@ -33,7 +33,9 @@ void set_team_profile(bool on);
 // process that runs several loops (a restart chain in one test) writes the last one's.
 void team_profile_loop_started();
 void team_profile_loop_ended();
-// One job's times in nanoseconds of the steady clock: started, its own chunks done, every
+// The steady clock in nanoseconds: the clock of the times below (and of the team's waits).
+std::int64_t steady_ns();
+// One job's times in nanoseconds of steady_ns(): started, its own chunks done, every
 // worker done; the slowest worker's chunks. Called by the calling thread, one job at a time.
 void team_profile_record(const void* job, std::int64_t start_ns, std::int64_t own_done_ns,
                          std::int64_t done_ns, std::int64_t slowest_worker_ns);

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
@@ -51,12 +50,6 @@ WaitPolicy wait_policy_from_environment() {
     policy.spins_before_sleep = -1;
   }
   return policy;
-}
-
-std::int64_t steady_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 // Other processes' threads on this process's CPUs: a thread that has waited within a job
