@@ -206,6 +206,7 @@ void Gvi::start_step(System& system) {
   bool p_made = true;           // ws_.p holds the momenta
   bool prediction_read = true;  // the step reads the prediction and the list before x
   ws_.half_kicked = false;
+  ws_.displacement2_of_prediction = false;
   if (steps_by_cluster(P)) {
     // Nothing in the step reads the list or the momenta before the forces at x: the position
     // update's cluster passes make q, the half kick and the free step (step_start's numbers)
@@ -262,9 +263,20 @@ void Gvi::start_step(System& system) {
     pass.free = kick ? numbers(ws_.free) : nullptr;
     pass.impulse = zero ? numbers(ws_.impulse) : nullptr;
     pass.predicted = keep ? numbers(ws_.predicted) : nullptr;
+    // The displacements the step's first collection of rows by particle reach starts from,
+    // made here with the prediction: that collection's pass of its own was a job a step.
+    const bool displacements = keep && particle_reaches();
+    if (displacements) ws_.displacement2.resize(n);
+    pass.displacement2 = displacements ? ws_.displacement2.data() : nullptr;
+    ChunkSlots<double> largest2(static_cast<std::size_t>(chunks), 0.0);
     for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
-      beyond[static_cast<std::size_t>(c)] = gvi_passes::step_start(pass, begin, end);
+      const gvi_passes::StepStartTally tally = gvi_passes::step_start(pass, begin, end);
+      beyond[static_cast<std::size_t>(c)] = tally.beyond_list;
+      largest2[static_cast<std::size_t>(c)] = tally.largest2;
     });
+    ws_.displacement2_of_prediction = displacements;
+    ws_.prediction_largest2 = 0.0;
+    for (const double m : largest2) ws_.prediction_largest2 = std::max(ws_.prediction_largest2, m);
     // A rebuild below wraps the positions, which leaves these numbers as they are.
     ws_.half_kicked = kick;
     p_made = !kick;
@@ -285,6 +297,7 @@ void Gvi::start_step(System& system) {
       (prediction_known || !engine_.neighbors_cover(ws_.predicted))) {
     engine_.ensure_neighbors(system, true);  // may wrap P.position
     q_copied = false;
+    ws_.displacement2_of_prediction = false;
     // Where nothing reads the prediction (rods alone: the list built for other particles),
     // the test at x follows.
     if (prediction_read) {
@@ -299,7 +312,10 @@ void Gvi::start_step(System& system) {
   }
   if (!q_copied) copy_in_chunks(P.position, ws_.q);
   if (keep_start_momenta && !p_start_made) copy_in_chunks(ws_.p, ws_.p_start);
-  if (constrained_predictor_) predict(system, ws_.p, ws_.predicted, true);
+  if (constrained_predictor_) {
+    predict(system, ws_.p, ws_.predicted, true);
+    ws_.displacement2_of_prediction = false;
+  }
   if (previous_positions_.size() != n) previous_positions_ = ws_.q;
   ws_.x_in_positions = false;
   ws_.changed_cover_known = false;
@@ -430,7 +446,10 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   const Vec3* at = x.data();
   const Vec3* q = ws_.q.data();
   double* moved2 = ws_.displacement2.data();
-  const double largest2 = ordered_max(n, 0.0, [&](std::size_t i) {
+  // Made with the prediction by start_step (a reflection since changes the prediction).
+  const bool made = &x == &ws_.predicted && ws_.displacement2_of_prediction;
+  ws_.displacement2_of_prediction = false;
+  const double largest2 = made ? ws_.prediction_largest2 : ordered_max(n, 0.0, [&](std::size_t i) {
     moved2[i] = norm2(at[i] - q[i]);
     return moved2[i];
   });

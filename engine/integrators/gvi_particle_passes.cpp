@@ -87,7 +87,7 @@ inline double norm2(const Three& d) {
 }
 }  // namespace
 
-std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end) {
+StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t end) {
   const double h = pass.h;
   const double kick = 0.5 * h;
   const double* __restrict position = pass.position;
@@ -96,14 +96,16 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
   const double* __restrict force = pass.force;
   const double* __restrict at_build = pass.at_build;
   double* __restrict q = pass.q;
+  double* __restrict displacement2 = pass.predicted ? pass.displacement2 : nullptr;
   BlockMask outside = {};
   const Block limit = broadcast(pass.list_limit2);
+  Block largest = broadcast(0.0);
   std::size_t i = begin;
   for (; i + w <= end; i += w) {
     const std::size_t o = 3 * i;
     const Block m = load(mass + i);
     const Triples ms = spread(m), hms = spread(h / m);
-    Triples momentum, half, d, x, moved;
+    Triples momentum, half, d, x, moved, displaced;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t e = o + k * w;
       const Block start = load(position + e);
@@ -113,6 +115,12 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
       d.v[k] = half.v[k] * hms.v[k];
       x.v[k] = start + d.v[k];
       if (at_build) moved.v[k] = x.v[k] - load(at_build + e);
+      if (displacement2) displaced.v[k] = x.v[k] - start;
+    }
+    if (displacement2) {
+      const Block moved2 = norm2s(displaced);
+      store(displacement2 + i, moved2);
+      largest = largest < moved2 ? moved2 : largest;
     }
     if (pass.p) store_triples(pass.p + o, momentum);
     if (pass.p_start) store_triples(pass.p_start + o, momentum);
@@ -122,7 +130,11 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
     if (pass.predicted) store_triples(pass.predicted + o, x);
     if (at_build) outside += missed(norm2s(moved), limit);
   }
-  std::size_t count = total(outside);
+  StepStartTally tally;
+  tally.beyond_list = total(outside);
+  for (std::size_t l = 0; l < w; ++l) {
+    tally.largest2 = tally.largest2 < largest[l] ? largest[l] : tally.largest2;
+  }
   for (; i < end; ++i) {
     const double m = mass[i];
     const Three start = at(position, i), v = at(velocity, i), f = at(force, i);
@@ -140,10 +152,16 @@ std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end
     if (pass.predicted) put(pass.predicted, i, x);
     if (at_build) {
       const Three ref = at(at_build, i);
-      count += !(norm2(Three{x.x - ref.x, x.y - ref.y, x.z - ref.z}) <= pass.list_limit2);
+      tally.beyond_list +=
+          !(norm2(Three{x.x - ref.x, x.y - ref.y, x.z - ref.z}) <= pass.list_limit2);
+    }
+    if (displacement2) {
+      const double moved2 = norm2(Three{x.x - start.x, x.y - start.y, x.z - start.z});
+      displacement2[i] = moved2;
+      tally.largest2 = tally.largest2 < moved2 ? moved2 : tally.largest2;
     }
   }
-  return count;
+  return tally;
 }
 
 void half_kick(double h, const double* p, const double* force, const double* mass, double* half,

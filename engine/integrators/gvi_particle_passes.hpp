@@ -15,10 +15,11 @@ namespace deli::gvi_passes {
 // The start of a Verlet step, per particle i with m = mass[i]:
 //   q = position; momentum = velocity * m; p = momentum; p_start = momentum;
 //   half = momentum + force * (0.5 h); free = half * (h / m); impulse = 0;
-//   predicted = position + free;
+//   predicted = position + free; displacement2 = |predicted - q|^2;
 // and the count of particles whose predicted position is not within the neighbour list's
-// reach, !(|predicted - at_build|^2 <= list_limit2). Null outputs are not written; a null
-// at_build counts none.
+// reach, !(|predicted - at_build|^2 <= list_limit2), and the largest displacement2 (from 0, a
+// NaN passed over, as ordered_max takes it; 0 unless displacement2 is written). Null outputs
+// are not written; a null at_build counts none.
 struct StepStart {
   double h = 0.0;
   const double* position = nullptr;
@@ -34,8 +35,13 @@ struct StepStart {
   double* free = nullptr;
   double* impulse = nullptr;
   double* predicted = nullptr;
+  double* displacement2 = nullptr;  // one a particle; read only with predicted
 };
-std::size_t step_start(const StepStart& pass, std::size_t begin, std::size_t end);
+struct StepStartTally {
+  std::size_t beyond_list = 0;
+  double largest2 = 0.0;
+};
+StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t end);
 
 // The half kick and free step of momenta p, per particle i with m = mass[i]:
 //   half = p + force * (0.5 h); free = half * (h / m);

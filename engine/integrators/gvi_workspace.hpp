@@ -36,6 +36,10 @@ struct GviWorkspace {
   // displacement it may reach before the rows are collected again, and |x - q|^2 of the
   // last collection.
   std::vector<double> particle_reach, reach_limit2, displacement2;
+  // displacement2 holds |prediction - q|^2 as start_step's pass made them, with their largest
+  // (until the prediction or q changes: the first collection of the step reads them).
+  bool displacement2_of_prediction = false;
+  double prediction_largest2 = 0.0;
 
   // Active and smooth sets; particles whose prediction changed in the last round.
   std::vector<Constraint> active, smooth;

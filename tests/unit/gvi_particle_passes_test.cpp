@@ -100,6 +100,7 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
   const double list_limit2 = 1.0;
   const PassInputs s = edge_inputs(list_limit2);
   std::size_t ranges = 0, counted = 0;
+  double largest_seen = 0.0;
   for (bool listed : {true, false}) {
     for (bool kick : {true, false}) {
       for (std::size_t begin = 0; begin < 9; ++begin) {
@@ -110,7 +111,10 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
               predicted(kPassParticles), p_start(kPassParticles, Vec3{5, 5, 5});
           std::vector<Vec3> q2 = q, p2 = p, half2 = half, free2 = free, impulse2 = impulse,
                             predicted2 = predicted, p_start2 = p_start;
+          std::vector<double> displacement2(kPassParticles, 9.0),
+              displacement2_made = displacement2;
           std::size_t expected = 0;
+          double largest2 = 0.0;  // as collect_by_particle_reach's ordered_max takes it
           for (std::size_t i = begin; i < end; ++i) {
             q[i] = s.position[i];
             const Vec3 momentum = s.velocity[i] * s.mass[i];
@@ -121,6 +125,8 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
             impulse[i] = Vec3{};
             predicted[i] = s.position[i] + free[i];
             if (listed) expected += !(norm2(predicted[i] - s.at_build[i]) <= list_limit2);
+            displacement2[i] = norm2(predicted[i] - q[i]);
+            largest2 = std::max(largest2, displacement2[i]);
           }
           gvi_passes::StepStart pass;
           pass.h = h;
@@ -137,18 +143,31 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
           pass.free = kick ? pass_numbers(free2) : nullptr;
           pass.impulse = kick ? pass_numbers(impulse2) : nullptr;
           pass.predicted = kick ? nullptr : pass_numbers(predicted2);
-          ASSERT_EQ(gvi_passes::step_start(pass, begin, end), expected)
-              << "[" << begin << ", " << end << ")";
+          pass.displacement2 = displacement2_made.data();
+          const gvi_passes::StepStartTally tally = gvi_passes::step_start(pass, begin, end);
+          ASSERT_EQ(tally.beyond_list, expected) << "[" << begin << ", " << end << ")";
           counted += expected;
           expect_same_triples(q, q2, "q", begin, end);
           if (kick) {
             expect_same_triples(half, half2, "half", begin, end);
             expect_same_triples(free, free2, "free", begin, end);
             expect_same_triples(impulse, impulse2, "impulse", begin, end);
+            // Without the prediction, no displacement is written and none is the largest.
+            EXPECT_EQ(displacement2_made, std::vector<double>(kPassParticles, 9.0));
+            EXPECT_EQ(tally.largest2, 0.0);
           } else {
             expect_same_triples(p, p2, "p", begin, end);
             expect_same_triples(p_start, p_start2, "p_start", begin, end);
             expect_same_triples(predicted, predicted2, "predicted", begin, end);
+            for (std::size_t i = 0; i < kPassParticles; ++i) {
+              ASSERT_EQ(std::bit_cast<std::uint64_t>(displacement2[i]),
+                        std::bit_cast<std::uint64_t>(displacement2_made[i]))
+                  << "displacement2 of particle " << i << " in [" << begin << ", " << end << ")";
+            }
+            ASSERT_EQ(std::bit_cast<std::uint64_t>(tally.largest2),
+                      std::bit_cast<std::uint64_t>(largest2))
+                << "[" << begin << ", " << end << ")";
+            largest_seen = std::max(largest_seen, largest2);
           }
           ++ranges;
         }
@@ -158,6 +177,9 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
   EXPECT_GT(ranges, 1000u);
   // Particle 18 (one ulp beyond the limit) and the NaN ones are counted; 17 is not.
   EXPECT_GT(counted, 0u);
+  // Particle 12's infinite force: an infinite displacement is the largest (the NaN of
+  // particle 3 passed over).
+  EXPECT_EQ(largest_seen, std::numeric_limits<double>::infinity());
 }
 
 TEST(GviParticlePasses, EndPositionsMakeTheVec3LoopsNumbersAndTally) {
