@@ -155,9 +155,20 @@ bool NearbyRows::bonded(std::int32_t a, std::int32_t b) const {
 void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                          const NeighborList& list, const Box& box, double reach,
                          const double* particle_reach, double exact_below,
-                         std::vector<Constraint>& out, std::vector<double>& gap_at_q) {
+                         std::vector<Constraint>& out, std::vector<double>& gap_at_q,
+                         const ParticlePass* make_reaches) {
   out.clear();
   gap_at_q.clear();
+  // The reaches made in a job of their own where no pass of this collection makes them first.
+  bool reaches_made = make_reaches == nullptr;
+  auto make_reaches_alone = [&] {
+    if (reaches_made) return;
+    const std::size_t n = particles.size();
+    for_each_chunk(n, chunks_for_cheap(n),
+                   [&](int, std::size_t begin, std::size_t end) { (*make_reaches)(begin, end); });
+    reaches_made = true;
+  };
+  if (!set.always_checked_pairs.empty()) make_reaches_alone();
   auto keep = [&](const Constraint& c, double row_reach) {
     const double gap = evaluate(c, q, box).gap;
     if (gap <= row_reach) out.push_back(c), gap_at_q.push_back(gap);
@@ -174,15 +185,19 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     bool fresh = list_ == &list && list_builds_ == list.builds() &&
                  anchor_.size() == particles.size() && reach < margin_;
     if (fresh) {
-      // The squares first, then, in the same job, the roots as packets (std::sqrt, which may
-      // set errno, does not vectorise), chunk by chunk as the step's other passes over the
-      // particles (each thread on the particles whose lines it holds); the largest square is
-      // exact in any grouping.
+      // The reaches, the squares, then, in the same job, the roots as packets (std::sqrt,
+      // which may set errno, does not vectorise), chunk by chunk as the step's other passes
+      // over the particles (each thread on the particles whose lines it holds); the largest
+      // square is exact in any grouping.
       const std::size_t count = anchor_.size();
       const Vec3* anchor = anchor_.data();
       double* moved = moved_.data();
-      const double largest2 = ordered_max_then(
+      const bool reaches_here = !reaches_made;
+      const double largest2 = ordered_max_around(
           count, 0.0,
+          [&](std::size_t begin, std::size_t end) {
+            if (reaches_here) (*make_reaches)(begin, end);
+          },
           [&](std::size_t i) {
             moved[i] = norm2(q[i] - anchor[i]);
             return moved[i];
@@ -197,11 +212,15 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
               distance = distance.sqrt();
             }
           });
+      reaches_made = true;
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);
       fresh = largest2 <= room * room;
     }
-    if (!fresh) make(set, particles, q, list, box, particle_reach);
+    if (!fresh) {
+      make_reaches_alone();
+      make(set, particles, q, list, box, particle_reach);
+    }
     // With particle reaches, `moved_` holds each particle's displacement plus its reach.
     const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
     // Each scanned chunk screened on its own thread into its own rows, joined in chunk order:
@@ -254,6 +273,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
   // each chunk listing its particles within reach of each wall with their gaps, the rows then
   // kept wall by wall, chunk by chunk (every particle each call: the default input's two walls
   // took 3 % of its loop on two threads when tested on the calling thread alone).
+  make_reaches_alone();  // without hard spheres
   if (set.walls.empty()) return;
   const std::size_t n = particles.size();
   const double* radius = particles.radius.data();

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "constraints/constraint_set.hpp"
@@ -28,9 +29,14 @@ class NearbyRows {
   // squared distance alone shows it beyond, by far more than rounding). A row is kept when
   // its gap is at most `reach`, or, given `particle_reach` (one per particle, each at most
   // reach / 2), at most its two particles' reaches summed (a wall row: twice its particle's).
+  // Given `make_reaches`, particle_reach is made by make_reaches(begin, end), chunk by chunk
+  // as the particle passes split the particles, before anything reads it: in the job of the
+  // collection's own first pass over the particles, when it runs one.
+  using ParticlePass = std::function<void(std::size_t begin, std::size_t end)>;
   void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                const NeighborList& list, const Box& box, double reach, const double* particle_reach,
-               double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q);
+               double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q,
+               const ParticlePass* make_reaches = nullptr);
 
  private:
   // The short list at q; each particle's displacement since (moved_) starts at its reach

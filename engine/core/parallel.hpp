@@ -341,18 +341,22 @@ template <class Term>
 }
 }  // namespace detail
 
-// ordered_max (below), with after(begin, end) run on each chunk's items once its maximum is
-// taken, in the same job: a pass that needs the terms' outputs but not the maximum.
-template <class Term, class After>
-double ordered_max_then(std::size_t n, double start, Term&& term, After&& after) {
+// ordered_max (below), with before(begin, end) run on each chunk's items before its terms
+// and after(begin, end) once its maximum is taken, in the same job: passes that make the
+// terms' inputs, or need their outputs but not the maximum.
+template <class Before, class Term, class After>
+double ordered_max_around(std::size_t n, double start, Before&& before, Term&& term,
+                          After&& after) {
   const int chunks = chunks_for_cheap(n);
   if (chunks == 1) {
+    before(std::size_t{0}, n);
     const double m = detail::max_over(0, n, start, term);
     after(std::size_t{0}, n);
     return m;
   }
   ChunkSlots<double> partial(static_cast<std::size_t>(chunks), start);
   for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    before(begin, end);
     partial[static_cast<std::size_t>(c)] = detail::max_over(begin, end, start, term);
     after(begin, end);
   });
@@ -360,7 +364,11 @@ double ordered_max_then(std::size_t n, double start, Term&& term, After&& after)
   for (const double p : partial) m = std::max(m, p);
   return m;
 }
-
+template <class Term, class After>
+double ordered_max_then(std::size_t n, double start, Term&& term, After&& after) {
+  return ordered_max_around(
+      n, start, [](std::size_t, std::size_t) {}, term, after);
+}
 // What the serial loop `m = start; for (i < n) m = std::max(m, term(i));` finds (term(i) may
 // also write item i's outputs): each chunk takes its maximum, the chunks' maxima are taken
 // in chunk order. The maximum is exact, and a NaN term is passed over as the serial loop

@@ -460,15 +460,16 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   double* reach = ws_.particle_reach.data();
   double* limit2 = ws_.reach_limit2.data();
   // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk; the
-  // step's first reaches grow from zero, set here by the thread that holds the lines.
-  for_each_chunk(n, chunks_for_cheap(n), [=](int, std::size_t begin, std::size_t end) {
+  // step's first reaches grow from zero, set here by the thread that holds the lines. Made
+  // in the collection's first pass over the particles (their own job a step, before).
+  const NearbyRows::ParticlePass make_reaches = [=](std::size_t begin, std::size_t end) {
     const auto length = static_cast<Eigen::Index>(end - begin);
     Eigen::Map<Eigen::ArrayXd> out(reach + begin, length), out_limit2(limit2 + begin, length);
     const Eigen::Map<const Eigen::ArrayXd> in(moved2 + begin, length);
     if (first) out.setZero();
     out = out.max(2.0 * in.max(floor2).sqrt() + gap_tolerance);
     out_limit2 = (out - 0.5 * gap_tolerance).square();
-  });
+  };
   const double widest = 2.0 * std::sqrt(largest2) + gap_tolerance;
   ws_.reach = first ? 2.0 * widest : std::max(ws_.reach, 2.0 * widest);
   ws_.changed_cover_known = false;
@@ -476,7 +477,8 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   if (is_x(system, x)) ws_.x_cover_known = ws_.x_covered = true;
   if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
   nearby_rows_.collect(constraints_, system.particles, q, engine_.neighbors(), system.box,
-                       ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q);
+                       ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q,
+                       &make_reaches);
   ws_.nearby_refreshed = true;
 }
 
