@@ -14,22 +14,6 @@ double Box::volume() const {
   return l.x * l.y * l.z;
 }
 
-void Box::wrap(Vec3& x, std::array<int, 3>& image) const {
-  for (int a = 0; a < 3; ++a) {
-    if (!periodic_[a]) continue;
-    const double shift = std::floor((x[a] - lo_[a]) * inverse_period_[a]);
-    if (shift != 0.0) {
-      x[a] -= shift * period_[a];
-      image[a] += static_cast<int>(shift);
-    }
-    // Rounding can leave x == hi exactly; hi belongs to the next image.
-    if (x[a] >= hi_[a]) {
-      x[a] -= period_[a];
-      image[a] += 1;
-    }
-  }
-}
-
 Vec3 Box::unwrapped(const Vec3& x, const std::array<int, 3>& image) const {
   const Vec3 l = length();
   return {x.x + image[0] * l.x, x.y + image[1] * l.y, x.z + image[2] * l.z};
