@@ -369,6 +369,7 @@ double ordered_max_then(std::size_t n, double start, Term&& term, After&& after)
   return ordered_max_around(
       n, start, [](std::size_t, std::size_t) {}, term, after);
 }
+
 // What the serial loop `m = start; for (i < n) m = std::max(m, term(i));` finds (term(i) may
 // also write item i's outputs): each chunk takes its maximum, the chunks' maxima are taken
 // in chunk order. The maximum is exact, and a NaN term is passed over as the serial loop
