@@ -192,11 +192,10 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       const std::size_t count = anchor_.size();
       const Vec3* anchor = anchor_.data();
       double* moved = moved_.data();
-      const bool reaches_here = !reaches_made;
       const double largest2 = ordered_max_around(
           count, 0.0,
           [&](std::size_t begin, std::size_t end) {
-            if (reaches_here) (*make_reaches)(begin, end);
+            if (!reaches_made) (*make_reaches)(begin, end);
           },
           [&](std::size_t i) {
             moved[i] = norm2(q[i] - anchor[i]);
