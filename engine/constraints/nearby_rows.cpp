@@ -156,9 +156,12 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
                          const NeighborList& list, const Box& box, double reach,
                          const double* particle_reach, double exact_below,
                          std::vector<Constraint>& out, std::vector<double>& gap_at_q,
-                         const ParticlePass* make_reaches) {
+                         const ParticlePass* make_reaches, RowStretches* stretches) {
   out.clear();
   gap_at_q.clear();
+  // The screen's chunks 1.. left as stretches: nothing is appended after them.
+  const bool leave_chunks = stretches != nullptr && set.walls.empty();
+  std::size_t left_chunks = 0;  // chunks 1..left_chunks - 1 left
   // The reaches made in a job of their own where no pass of this collection makes them first.
   bool reaches_made = make_reaches == nullptr;
   auto make_reaches_alone = [&] {
@@ -260,20 +263,27 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       }
     };
     auto join = [&](int c, std::size_t, std::size_t) {
-      if (c != 1) return;
+      if (c != 1 || leave_chunks) return;
       for (std::size_t k = 1; k < static_cast<std::size_t>(chunks); ++k) {
         out.insert(out.end(), chunk_rows_[k].begin(), chunk_rows_[k].end());
         gap_at_q.insert(gap_at_q.end(), chunk_gaps_[k].begin(), chunk_gaps_[k].end());
       }
     };
     for_each_chunk_then(items, items, chunks, screen, join);
+    if (leave_chunks) left_chunks = static_cast<std::size_t>(chunks);
   }
+  // The stretches once `out` is complete (its storage no longer moves).
+  auto publish = [&] {
+    if (!stretches) return;
+    stretches->assign(out, gap_at_q);
+    for (std::size_t c = 1; c < left_chunks; ++c) stretches->add(chunk_rows_[c], chunk_gaps_[c]);
+  };
   // Every wall's rows, wall by wall and particle by particle: the particles tested in chunks,
   // each chunk listing its particles within reach of each wall with their gaps, the rows then
   // kept wall by wall, chunk by chunk (every particle each call: the default input's two walls
   // took 3 % of its loop on two threads when tested on the calling thread alone).
   make_reaches_alone();  // without hard spheres
-  if (set.walls.empty()) return;
+  if (set.walls.empty()) return publish();
   const std::size_t n = particles.size();
   const double* radius = particles.radius.data();
   auto row_reach = [particle_reach, reach](std::size_t i) {
@@ -306,6 +316,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       }
     }
   }
+  publish();
 }
 
 // The screen of nearby_inequalities over pairs [first, last), then its exact test

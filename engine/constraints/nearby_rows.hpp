@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "constraints/constraint_set.hpp"
+#include "constraints/row_stretches.hpp"
 
 namespace deli {
 
@@ -32,11 +33,15 @@ class NearbyRows {
   // Given `make_reaches`, particle_reach is made by make_reaches(begin, end), chunk by chunk
   // as the particle passes split the particles, before anything reads it: in the job of the
   // collection's own first pass over the particles, when it runs one.
+  // Given `stretches`, the rows are those of `stretches` after the call: where the hard-sphere
+  // pairs were screened in chunks (and no wall adds rows after them), chunk 0's in `out` and
+  // the others' left where their threads wrote them, borrowed until the next call; else
+  // `out` alone.
   using ParticlePass = std::function<void(std::size_t begin, std::size_t end)>;
   void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                const NeighborList& list, const Box& box, double reach, const double* particle_reach,
                double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q,
-               const ParticlePass* make_reaches = nullptr);
+               const ParticlePass* make_reaches = nullptr, RowStretches* stretches = nullptr);
 
  private:
   // The short list at q; each particle's displacement since (moved_) starts at its reach

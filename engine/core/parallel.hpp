@@ -296,6 +296,26 @@ void join_kept(std::size_t n, int chunks, const std::vector<std::uint32_t>& pass
   }
 }
 
+// filter_in_order (below) with each chunk's items visited by visit(begin, end, pass), which
+// calls pass(k) for the items k of [begin, end) that pass, in ascending order: for items read
+// in runs (RowStretches::for_each), not one by one.
+template <class Visit, class Join>
+void filter_in_order_visiting(std::size_t n, int chunks, std::vector<std::uint32_t>& passing,
+                              Visit&& visit, Join&& join) {
+  if (chunks <= 1) {
+    visit(std::size_t{0}, n, [&](std::size_t k) { join(k); });
+    return;
+  }
+  passing.resize(n);
+  ChunkSlots<std::size_t> kept(static_cast<std::size_t>(chunks));
+  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    std::size_t at = begin;
+    visit(begin, end, [&](std::size_t k) { passing[at++] = static_cast<std::uint32_t>(k); });
+    kept[static_cast<std::size_t>(c)] = at - begin;
+  });
+  join_kept(n, chunks, passing, kept, join);
+}
+
 // The serial loop `for (k < n) if (test(k)) join(k);` with the tests (independent of each
 // other and of the joins) on several threads: each chunk keeps the items that passed at the
 // start of its own stretch of `passing`, then the joins are made in order on the calling
@@ -304,22 +324,14 @@ void join_kept(std::size_t n, int chunks, const std::vector<std::uint32_t>& pass
 template <class Test, class Join>
 void filter_in_order(std::size_t n, int chunks, std::vector<std::uint32_t>& passing, Test&& test,
                      Join&& join) {
-  if (chunks <= 1) {
-    for (std::size_t k = 0; k < n; ++k) {
-      if (test(k)) join(k);
-    }
-    return;
-  }
-  passing.resize(n);
-  ChunkSlots<std::size_t> kept(static_cast<std::size_t>(chunks));
-  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
-    std::size_t at = begin;
-    for (std::size_t k = begin; k < end; ++k) {
-      if (test(k)) passing[at++] = static_cast<std::uint32_t>(k);
-    }
-    kept[static_cast<std::size_t>(c)] = at - begin;
-  });
-  join_kept(n, chunks, passing, kept, join);
+  filter_in_order_visiting(
+      n, chunks, passing,
+      [&](std::size_t begin, std::size_t end, auto&& pass) {
+        for (std::size_t k = begin; k < end; ++k) {
+          if (test(k)) pass(k);
+        }
+      },
+      join);
 }
 // The tests split as cheap items.
 template <class Test, class Join>

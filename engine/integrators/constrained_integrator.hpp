@@ -9,6 +9,7 @@
 
 #include "constraints/clusters.hpp"
 #include "constraints/constraint_set.hpp"
+#include "constraints/row_stretches.hpp"
 #include "core/cache_line.hpp"
 #include "core/ordered_terms.hpp"
 #include "integrators/integrator.hpp"
@@ -294,7 +295,7 @@ bool contains(const std::vector<Constraint>& rows, const Constraint& c);
 // Per candidate, contains(rows, candidate) into `contained` (1 or 0), by one sort of the rows'
 // particle pairs instead of a scan of every row per candidate (thousands of candidates
 // against hundreds of active rows in a 32000-sphere fluid). `scratch` is reused.
-void mark_contained(const std::vector<Constraint>& rows, const std::vector<Constraint>& candidates,
+void mark_contained(const std::vector<Constraint>& rows, const RowStretches& candidates,
                     std::vector<std::pair<std::uint64_t, std::int32_t>>& scratch,
                     std::vector<char>& contained);
 // grad g . M^-1 p for a row with unit direction u at its particles.

@@ -323,19 +323,20 @@ void Gvi::start_step(System& system) {
   ws_.x_cover_known = false;
   ws_.nearby.clear();
   ws_.nearby_gap_at_q.clear();
+  ws_.candidates.assign(ws_.nearby, ws_.nearby_gap_at_q);
 }
 
 // Candidate rows: those within reach of the largest displacement seen this step, found once
 // and refreshed only if a later displacement outgrows the reach.
-const std::vector<Constraint>& Gvi::candidates_for(const System& system, const std::vector<Vec3>& x,
-                                                   double largest2_bound, bool exact,
-                                                   const std::vector<std::int32_t>* moved) {
+const RowStretches& Gvi::candidates_for(const System& system, const std::vector<Vec3>& x,
+                                        double largest2_bound, bool exact,
+                                        const std::vector<std::int32_t>* moved) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
   ws_.nearby_refreshed = false;
   // Inequality rows are hard-sphere pairs and walls: without either there is none to find
   // (ws_.nearby stays empty), and no displacement need be measured for them.
-  if (!has_inequalities()) return ws_.nearby;
+  if (!has_inequalities()) return ws_.candidates;
   if (particle_reaches()) {
     bool covered = false;
     if (ws_.reach < 0.0) {
@@ -348,13 +349,13 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
       covered = reaches_cover(x, moved);
     }
     if (!covered) collect_by_particle_reach(system, x);
-    return ws_.nearby;
+    return ws_.candidates;
   }
   // 2 sqrt(s) + tol is monotone in s (each operation correctly rounded): a bound that shows
   // no refresh due shows what the exact largest would.
   if (largest2_bound >= 0.0 && 2.0 * std::sqrt(largest2_bound) + gap_tolerance <= ws_.reach) {
     ws_.largest2 = largest2_bound;
-    return ws_.nearby;
+    return ws_.candidates;
   }
   // The largest |x - q| as the square root of the largest square: the same number (the
   // square root is monotone and correctly rounded), one root instead of one per particle.
@@ -381,9 +382,10 @@ const std::vector<Constraint>& Gvi::candidates_for(const System& system, const s
                            system.box, ws_.reach, nullptr, gap_tolerance, ws_.nearby,
                            ws_.nearby_gap_at_q);
     }
+    ws_.candidates.assign(ws_.nearby, ws_.nearby_gap_at_q);
     ws_.nearby_refreshed = true;
   }
-  return ws_.nearby;
+  return ws_.candidates;
 }
 
 bool Gvi::is_x(const System& system, const std::vector<Vec3>& v) const {
@@ -478,7 +480,7 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
   nearby_rows_.collect(constraints_, system.particles, q, engine_.neighbors(), system.box,
                        ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q,
-                       &make_reaches);
+                       &make_reaches, &ws_.candidates);
   ws_.nearby_refreshed = true;
 }
 
@@ -512,7 +514,7 @@ void Gvi::find_active_set(System& system) {
   double largest2_bound = -1.0;
   std::size_t reflected_rows = 0;  // the rows the last round reflected (the first of `active`)
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
-    const std::vector<Constraint>& candidates =
+    const RowStretches& candidates =
         candidates_for(system, ws_.predicted, largest2_bound, false,
                        round > 0 && local_predictions ? &ws_.changed_particles : nullptr);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
@@ -520,26 +522,29 @@ void Gvi::find_active_set(System& system) {
     // rows): made again by search when the candidates were refreshed.
     if (every_row) mark_contained(active, candidates, ws_.row_keys, ws_.candidate_active);
     bool grew = false;
+    auto test = [&, every_row, gap_tolerance](std::size_t begin, std::size_t end, auto&& pass) {
+      candidates.for_each(begin, end, [&](std::size_t k, const Constraint& c, double gap) {
+        if (!every_row && !ws_.prediction_changed[c.i] &&
+            (c.j < 0 || !ws_.prediction_changed[c.j])) {
+          return;
+        }
+        // Not yet active, and active at q or overlapping at the prediction.
+        if (!ws_.candidate_active[k] &&
+            (gap <= gap_tolerance ||
+             gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0)) {
+          pass(k);
+        }
+      });
+    };
+    auto join = [&](std::size_t k) {
+      active.push_back(candidates[k]), grew = true;
+      ws_.active_gap_at_q.push_back(candidates.gap(k));
+      ws_.candidate_active[k] = 1;
+    };
     // Split as the pass that wrote the predictions was.
-    filter_in_order(
-        candidates.size(), chunks_for_rows_of(system.particles.size(), candidates.size()),
-        ws_.candidate_passing,
-        [&, every_row, gap_tolerance](std::size_t k) {
-          const Constraint& c = candidates[k];
-          if (!every_row && !ws_.prediction_changed[c.i] &&
-              (c.j < 0 || !ws_.prediction_changed[c.j])) {
-            return false;
-          }
-          // Not yet active, and active at q or overlapping at the prediction.
-          return !ws_.candidate_active[k] &&
-                 (ws_.nearby_gap_at_q[k] <= gap_tolerance ||
-                  gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0);
-        },
-        [&](std::size_t k) {
-          active.push_back(candidates[k]), grew = true;
-          ws_.active_gap_at_q.push_back(ws_.nearby_gap_at_q[k]);
-          ws_.candidate_active[k] = 1;
-        });
+    filter_in_order_visiting(candidates.size(),
+                             chunks_for_rows_of(system.particles.size(), candidates.size()),
+                             ws_.candidate_passing, test, join);
     if (!grew || !reflections_) {
       settled = true;
       break;
@@ -886,8 +891,7 @@ void Gvi::update_positions(System& system) {
       // chunk of candidates, each bounded by its own running minimum: the exact minimum and
       // the serial order of the overlapping rows on any number of threads. Split as the pass
       // that wrote x was.
-      const std::vector<Constraint>& candidates =
-          candidates_for(system, ws_.x, ws_.x_largest2, true);
+      const RowStretches& candidates = candidates_for(system, ws_.x, ws_.x_largest2, true);
       const std::size_t count = candidates.size();
       const int chunks = chunks_for_rows_of(system.particles.size(), count);
       // Each chunk keeps its overlapping rows at the start of its stretch of `passing`: the
@@ -901,12 +905,12 @@ void Gvi::update_positions(System& system) {
           count, chunks, [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
             double smallest = std::numeric_limits<double>::infinity();
             std::size_t at = begin;
-            for (std::size_t k = begin; k < end; ++k) {
-              const double gap = gap_unless_beyond(candidates[k], ws_.x.data(), system.box,
+            candidates.for_each(begin, end, [&](std::size_t k, const Constraint& c, double) {
+              const double gap = gap_unless_beyond(c, ws_.x.data(), system.box,
                                                    std::max(smallest, -gap_tolerance));
               smallest = std::min(smallest, gap);
               if (gap < -gap_tolerance) passing[at++] = static_cast<std::uint32_t>(k);
-            }
+            });
             chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
             kept[static_cast<std::size_t>(chunk)] = at - begin;
           });
@@ -1048,8 +1052,14 @@ void Gvi::check_constraints(const System& system, bool tally) {
   // The feasibility guard's last pass saw the same candidates at the same positions.
   const bool known = at_x && ws_.x_smallest_gap_known && !ws_.nearby_refreshed;
   ws_.x_smallest_gap_known = false;
-  // Nothing moves the positions after the momentum update's projection.
-  record_geometry(system, ws_.nearby, tally, known ? &ws_.x_smallest_gap : nullptr, true);
+  // Nothing moves the positions after the momentum update's projection. Unless known, the
+  // candidates are read as one vector.
+  const std::vector<Constraint>* candidates = &ws_.nearby;
+  if (!known && ws_.candidates.stretches() > 1) {
+    ws_.candidates.join(ws_.joined, ws_.joined_gaps);
+    candidates = &ws_.joined;
+  }
+  record_geometry(system, *candidates, tally, known ? &ws_.x_smallest_gap : nullptr, true);
 }
 
 void Gvi::restore_energy(System& system, const std::vector<Constraint>& landed, double target,

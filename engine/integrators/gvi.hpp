@@ -124,9 +124,9 @@ class Gvi final : public ConstrainedIntegrator {
   // `largest2_bound`, when given, is at least max |x - q|^2 (the exact value if `exact`):
   // what decides a refresh without a pass over the particles when it shows none is due.
   // `moved`, when given, holds the only particles whose x changed since the last call.
-  const std::vector<Constraint>& candidates_for(const System& system, const std::vector<Vec3>& x,
-                                                double largest2_bound = -1.0, bool exact = false,
-                                                const std::vector<std::int32_t>* moved = nullptr);
+  const RowStretches& candidates_for(const System& system, const std::vector<Vec3>& x,
+                                     double largest2_bound = -1.0, bool exact = false,
+                                     const std::vector<std::int32_t>* moved = nullptr);
   // This step's end positions (ws_.x, or the positions once the momentum update swapped x into
   // them), and whether v is that vector.
   const std::vector<Vec3>& x_now(const System& system) const;

@@ -70,6 +70,7 @@ void Gvi::drift_with_covering_rows(System& system, bool pairs_matter,
     nearby_rows_.collect(constraints_, system.particles, ws_.q.data(), engine_.neighbors(),
                          system.box, ws_.reach, nullptr, gap_tolerance, ws_.nearby,
                          ws_.nearby_gap_at_q);
+    ws_.candidates.assign(ws_.nearby, ws_.nearby_gap_at_q);
   }
 }
 

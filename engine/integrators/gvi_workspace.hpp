@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "constraints/constraint.hpp"
+#include "constraints/row_stretches.hpp"
 #include "core/cache_line.hpp"
 #include "core/vec3.hpp"
 
@@ -26,9 +27,15 @@ struct GviWorkspace {
   std::vector<bool> all_equality;                      // one `true` per equality row
 
   // Candidate inequality rows near q, with their gaps at q (refreshed when a displacement
-  // outgrows `reach`); a gap well beyond the gap tolerance may be held as +infinity.
+  // outgrows `reach`); a gap well beyond the gap tolerance may be held as +infinity. Read
+  // through `candidates`: `nearby` holds its first stretch, every row but where the
+  // collection by particle reach left its chunks' rows where their threads wrote them
+  // (borrowed from Gvi::nearby_rows_ until its next collection).
   std::vector<Constraint> nearby;
   std::vector<double> nearby_gap_at_q;
+  RowStretches candidates;
+  std::vector<Constraint> joined;  // the candidates in one vector, for whole-vector readers
+  std::vector<double> joined_gaps;
   double reach = -1.0;
   bool nearby_refreshed = false;  // by the last candidates call
   double largest2 = 0.0;          // its bound on max |x - q|^2 (exact when it refreshed)

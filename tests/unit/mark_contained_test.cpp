@@ -29,17 +29,29 @@ TEST(MarkContained, AgreesWithContainsRowByRow) {
       pair_row(ConstraintKind::sphere_pair, 3, 7, 1.01),  // another contact distance
       pair_row(ConstraintKind::sphere_pair, 9, 2, 0.8),   // held
       pair_row(ConstraintKind::sphere_pair, 3, 7, 1.0)};  // held
-  std::vector<std::pair<std::uint64_t, std::int32_t>> scratch;
-  std::vector<char> contained;
-  mark_contained(rows, candidates, scratch, contained);
-  ASSERT_EQ(contained.size(), candidates.size());
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
-    EXPECT_EQ(contained[k] != 0, contains(rows, candidates[k])) << "candidate " << k;
+  // The candidates in one stretch, then in three (one of them empty), as the threads that
+  // screened them leave them: the same marks by their place in the whole.
+  const std::vector<double> gaps(candidates.size(), 0.0);
+  const std::vector<Constraint> head(candidates.begin(), candidates.begin() + 4), none;
+  const std::vector<Constraint> tail(candidates.begin() + 4, candidates.end());
+  RowStretches whole, split;
+  whole.assign(candidates, gaps);
+  split.assign(head, gaps);
+  split.add(none, gaps);
+  split.add(tail, gaps);
+  for (const RowStretches* stretches : {&whole, &split}) {
+    std::vector<std::pair<std::uint64_t, std::int32_t>> scratch;
+    std::vector<char> contained;
+    mark_contained(rows, *stretches, scratch, contained);
+    ASSERT_EQ(contained.size(), candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      EXPECT_EQ(contained[k] != 0, contains(rows, candidates[k])) << "candidate " << k;
+    }
+    EXPECT_EQ(contained, (std::vector<char>{1, 0, 1, 0, 0, 0, 0, 1, 1}));
+    // No rows: nothing held, scratch reused.
+    mark_contained({}, *stretches, scratch, contained);
+    EXPECT_EQ(contained, std::vector<char>(candidates.size(), 0));
   }
-  EXPECT_EQ(contained, (std::vector<char>{1, 0, 1, 0, 0, 0, 0, 1, 1}));
-  // No rows: nothing held, scratch reused.
-  mark_contained({}, candidates, scratch, contained);
-  EXPECT_EQ(contained, std::vector<char>(candidates.size(), 0));
 }
 
 }  // namespace

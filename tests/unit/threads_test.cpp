@@ -720,6 +720,32 @@ TEST(ThreadsGvi, FourThousandHardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
   expect_two_threads_repeat_one(hard_sphere_fluid(10));
 }
 
+// Without the feasibility guard, each step's end checks read the candidate rows themselves
+// for the smallest gap (the guard's scan finds it otherwise): on two threads the rows the
+// collection's second thread left in its own stretch are among them, and each step's
+// smallest gap is the one thread's (untallied steps: no scan of every pair).
+TEST(ThreadsGvi, HardSpheresWithoutTheGuardFindEachStepsSmallestGapOnTwoThreads) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  RunInput input = hard_sphere_fluid(10);
+  input.gvi.feasibility = Feasibility::none;
+  auto smallest_gaps = [&](int threads) {
+    const ThreadCount count(threads);
+    System system = input.system;
+    Gvi gvi(*input.force_field, input.constraints, input.gvi, system.particles);
+    gvi.setup(system);
+    gvi.take_statistics();
+    std::vector<double> gaps;
+    for (int n = 0; n < kGviSteps; ++n) {
+      gvi.step(system, false);
+      gaps.push_back(testing::statistic(gvi.take_statistics(), "min_gap"));
+    }
+    return gaps;
+  };
+  const std::vector<double> one = smallest_gaps(1);
+  EXPECT_EQ(smallest_gaps(2), one);
+  EXPECT_LT(*std::min_element(one.begin(), one.end()), 0.1);
+}
+
 // Without forces the midpoint Lagrangian's free step is Verlet's, bit for bit (the kick of a
 // zero force adds zero), but after each reflection it makes the whole prediction again,
 // where Verlet makes again only the reflected particles', on the threads that reflected them
