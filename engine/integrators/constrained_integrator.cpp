@@ -571,20 +571,19 @@ void mark_contained(const std::vector<Constraint>& rows, const RowStretches& can
     scratch.emplace_back(particle_key(rows[r]), static_cast<std::int32_t>(r));
   }
   std::sort(scratch.begin(), scratch.end());
-  candidates.for_each(0, candidates.size(),
-                      [&](std::size_t k, const Constraint& candidate, double) {
-                        const std::uint64_t key = particle_key(candidate);
-                        auto at = std::lower_bound(scratch.begin(), scratch.end(),
-                                                   std::pair<std::uint64_t, std::int32_t>{key, -1});
-                        // same_row decides among the rows on the same particles (a particle's
-                        // walls).
-                        for (; at != scratch.end() && at->first == key; ++at) {
-                          if (same_row(rows[static_cast<std::size_t>(at->second)], candidate)) {
-                            contained[k] = 1;
-                            break;
-                          }
-                        }
-                      });
+  auto mark = [&](std::size_t k, const Constraint& candidate, double) {
+    const std::uint64_t key = particle_key(candidate);
+    auto at = std::lower_bound(scratch.begin(), scratch.end(),
+                               std::pair<std::uint64_t, std::int32_t>{key, -1});
+    // same_row decides among the rows on the same particles (a particle's walls).
+    for (; at != scratch.end() && at->first == key; ++at) {
+      if (same_row(rows[static_cast<std::size_t>(at->second)], candidate)) {
+        contained[k] = 1;
+        break;
+      }
+    }
+  };
+  candidates.for_each(0, candidates.size(), mark);
 }
 
 double normal_velocity(const Constraint& c, const Vec3& u, const std::vector<Vec3>& p,
