@@ -225,12 +225,14 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     }
     // With particle reaches, `moved_` holds each particle's displacement plus its reach.
     const double beyond = (particle_reach ? 0.0 : reach) + 1e-9;
-    // Each scanned chunk screened on its own thread into its own rows, joined in chunk order:
-    // the serial screen's rows in its order on any number of threads (chunk 0 appends in
-    // place, the others are appended after it by chunk 1's thread, in the same job: the rows
-    // it screened stay on its core, as do the rows of `out` after chunk 0's, which the
-    // active set's tests split in two read there; joined by the calling thread, they crossed
-    // to its core and back: the 4000-sphere fluid's loop on two threads 0.99x, stop 53). One
+    // Each scanned chunk screened on its own thread into its own rows, in chunk order the
+    // serial screen's rows in its order on any number of threads. Chunk 0 appends in place;
+    // the others' rows are left as `stretches` where their threads wrote them, or else
+    // appended after chunk 0's by chunk 1's thread, in the same job (the rows it screened stay
+    // on its core, as do the rows of `out` after chunk 0's, which the active set's tests split
+    // in two read there; joined by the calling thread, they crossed to its core and back: the
+    // 4000-sphere fluid's loop on two threads 0.99x, stop 53; that join itself was 1.7 % of
+    // the loop on two threads, stop 63). One
     // scanned chunk (fewer listed pairs than split as cheap items) has its pairs
     // split as cheap items: a pair's screen is a few operations (the 4000-sphere fluid's
     // 12700 pairs took 80 us a call on one thread), and on 2 threads of the loaded 2-core
