@@ -47,4 +47,31 @@ class OrderedTerms {
   std::vector<double> terms_;
 };
 
+// The terms of a sum that a loop over rows makes, at most one a row, possibly on several
+// threads and in any order, added in row order: the total is the same on any number of
+// threads, whichever thread made which term. Each row's slot is written only by the thread
+// that makes its term.
+class TermsByRow {
+ public:
+  // Room for `rows` rows, no term made yet.
+  void reset(std::size_t rows) {
+    terms_.resize(rows);
+    made_.assign(rows, 0);
+  }
+  void set(std::size_t row, double term) {
+    terms_[row] = term;
+    made_[row] = 1;
+  }
+  // total += every term made, in row order.
+  void add_to(double& total) const {
+    for (std::size_t r = 0; r < made_.size(); ++r) {
+      if (made_[r]) total += terms_[r];
+    }
+  }
+
+ private:
+  std::vector<double> terms_;
+  std::vector<char> made_;
+};
+
 }  // namespace deli

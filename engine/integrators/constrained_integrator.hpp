@@ -156,13 +156,17 @@ class ConstrainedIntegrator : public Integrator {
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p, const AfterReflection* after = nullptr,
                         std::size_t first_new_row = 0);
-  // Where reflections leave their figures: the virial's terms (as item `item` of `terms`,
-  // added to the step's virial in item order) and the counters. One per thread where
-  // reflections run on several.
+  // Where reflections leave their figures: the virial's terms, row by row (a term of row r of
+  // the rows reflected goes to row_of[r] of `terms`, or to r without row_of; added to the
+  // step's virial in row order), and the counters (one set per thread where reflections run
+  // on several).
   struct ReflectionTally {
-    OrderedTerms& terms;
-    std::size_t item;
+    TermsByRow& terms;
+    const std::int32_t* row_of;
     ConstraintStatistics& stats;
+    void add(std::int32_t row, double term) const {
+      terms.set(static_cast<std::size_t>(row_of ? row_of[row] : row), term);
+    }
   };
   // Parts of reflect_clusters: one cluster through reflect(); one row in closed form (false,
   // with nothing done, where it has none); rows without equalities, with closed forms.
@@ -171,10 +175,11 @@ class ConstrainedIntegrator : public Integrator {
                        std::size_t first_inequality, const Cluster& cluster,
                        const std::vector<Vec3>& x, std::vector<Vec3>& p,
                        const ShadowOperator* shadow, const ReflectionTally& tally) const;
-  // reflect_closed_form's `settled`: the row left not approaching.
-  bool reflect_closed_form(const System& system, const Constraint& row, const std::vector<Vec3>& x,
-                           std::vector<Vec3>& p, const ReflectionTally& tally,
-                           bool* settled = nullptr) const;
+  // reflect_closed_form's `row` is row `index` of the rows reflected; `settled`: the row left
+  // not approaching.
+  bool reflect_closed_form(const System& system, const Constraint& row, std::int32_t index,
+                           const std::vector<Vec3>& x, std::vector<Vec3>& p,
+                           const ReflectionTally& tally, bool* settled = nullptr) const;
   void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
                             const AfterReflection* after, std::size_t first_new_row);
@@ -271,18 +276,19 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<std::int32_t> local_index_of_particle_;
   std::vector<char> hessian_mask_;
   ShadowPairs shadow_pairs_;
-  // reflect_inequalities' scratch: rows per particle (zero between calls), the rows sharing
-  // no particle, the others.
-  std::vector<std::int32_t> rows_at_particle_;
+  // reflect_inequalities' scratch: rows per particle (stamped by call), the rows sharing no
+  // particle by the chunk that reflects them, the others, and per chunk their clusters.
+  std::vector<std::uint32_t> rows_at_particle_;
+  std::uint32_t rows_stamp_ = 0;
   std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
   std::vector<Constraint> shared_rows_;
   std::vector<std::int32_t> shared_row_of_;  // each shared row's index in the call's rows
-  std::vector<Cluster> shared_clusters_;     // their clusters, the lists' storage kept
+  std::vector<OnItsOwnLine<std::vector<Cluster>>> shared_clusters_of_chunk_;
   // Per row of the last call: in a cluster (of one row or more) that it left with no row
   // approaching (1), else 0.
   std::vector<char> row_settled_;
   // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
-  OrderedTerms reflection_terms_;
+  TermsByRow reflection_terms_;
   std::vector<OnItsOwnLine<ConstraintStatistics>> reflection_stats_;
 };
 

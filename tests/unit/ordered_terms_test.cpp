@@ -60,5 +60,25 @@ TEST(OrderedTerms, TakenSlotsFollowTheItemsTerms) {
   }
 }
 
+// Rows set in any order (as threads would, each its own rows), skipping some, the total is
+// the running sum of the set rows in row order; another reset forgets them.
+TEST(TermsByRow, AnyOrderOfRowsGivesTheRowOrderSum) {
+  // In row order: ((1 + 1e16) + -1e16) + 1 = 1, row 2 left unset; made in the order of the
+  // rows the result would be 2 or 0.
+  const std::vector<double> terms = {1.0, 1e16, 5.0, -1e16, 1.0};
+  TermsByRow sum;
+  sum.reset(terms.size());
+  for (const std::size_t row : {4, 3, 0, 1}) sum.set(row, terms[row]);
+  double total = 0.0;
+  sum.add_to(total);
+  EXPECT_EQ(total, ((1.0 + 1e16) + -1e16) + 1.0);
+  EXPECT_EQ(total, 1.0);
+  sum.reset(2);
+  sum.set(1, 3.0);
+  total = 0.5;
+  sum.add_to(total);
+  EXPECT_EQ(total, 3.5);
+}
+
 }  // namespace
 }  // namespace deli
