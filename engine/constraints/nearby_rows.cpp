@@ -265,14 +265,19 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
       }
     };
     auto join = [&](int c, std::size_t, std::size_t) {
-      if (c != 1 || leave_chunks) return;
+      if (c != 1) return;
       for (std::size_t k = 1; k < static_cast<std::size_t>(chunks); ++k) {
         out.insert(out.end(), chunk_rows_[k].begin(), chunk_rows_[k].end());
         gap_at_q.insert(gap_at_q.end(), chunk_gaps_[k].begin(), chunk_gaps_[k].end());
       }
     };
-    for_each_chunk_then(items, items, chunks, screen, join);
-    if (leave_chunks) left_chunks = static_cast<std::size_t>(chunks);
+    if (leave_chunks) {
+      // Nothing to join: no barrier (a round trip between the cores at every call).
+      for_each_chunk(items, chunks, screen);
+      left_chunks = static_cast<std::size_t>(chunks);
+    } else {
+      for_each_chunk_then(items, items, chunks, screen, join);
+    }
   }
   // The stretches once `out` is complete (its storage no longer moves).
   auto publish = [&] {
