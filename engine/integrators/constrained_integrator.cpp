@@ -710,20 +710,24 @@ bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Cons
   return true;
 }
 
-// Inequality rows alone (the contacts of a hard-sphere fluid): a row that shares no particle
-// with another is a cluster of its own, reflected in closed form without clustering; only
-// the rows that share particles are clustered. The clusters share no particle, so any thread
-// may reflect any of them with the same result, in any order; their virial terms are added
-// in row order.
+// Inequality rows alone (the contacts of a hard-sphere fluid): the rows' connected
+// components (rows joined where they share a particle) are their clusters. A row alone in its
+// component is reflected in closed form; the others' components through reflect(). The
+// components share no particle, so any thread may reflect any of them with the same result, in
+// any order; their virial terms are added in row order.
 //
-// Where the particle passes run in chunks, a chunk's thread reflects the clusters whose
+// Only the components that hold a row added since the last call (rows before first_new_row
+// are its rows) or a row it left approaching are reflected: one whose rows the last call left
+// all settled has the momenta it left and would not change. They are found by walking from
+// those rows (GrowingRowComponents), the other rows not visited.
+//
+// Where the particle passes run in chunks, a chunk's thread reflects the components whose
 // particles are in its chunk: their momenta are lines it holds (reflected by one thread,
-// every other thread's lines crossed to its core and back within the step). A cluster across
-// two chunks goes to one of them by its particles' parity, not to the lower: in a
+// every other thread's lines crossed to its core and back within the step). A component
+// across two chunks goes to one of them by its particles' parity, not to the lower: in a
 // 4000-sphere fluid the lower chunk took 56 % of the rows and 59 % of the shared clusters,
-// and the calling thread's share 7.1 ms of a run against 5.4 on the other thread. Each
-// chunk's thread clusters the shared rows itself (a few a call, 0.6 us on the calling thread
-// alone), and keeps the clusters it reflects.
+// and the calling thread's share 7.1 ms of a run against 5.4 on the other thread. Fewer rows
+// than a job is worth are reflected by the calling thread.
 void ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const std::vector<Constraint>& rows,
                                                  const std::vector<Vec3>& x, std::vector<Vec3>& p,
@@ -733,7 +737,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   // Below this many rows a job's start (about a microsecond) costs more than the rows'
   // lines fetched from the other cores.
   constexpr std::size_t kSplitRows = 64;
-  const int chunks = rows.size() < kSplitRows ? 1 : chunks_for_cheap(n);
+  const int chunks = chunks_for_cheap(n);
   const auto slots = static_cast<std::size_t>(chunks);
   // The chunks' ends, as the particle passes split the particles.
   ChunkSlots<std::int32_t> chunk_end(slots);
@@ -751,57 +755,66 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     const std::size_t cb = chunk_of(b);
     return ((a + b) & 1) != 0 ? ca : cb;
   };
-  // Rows per particle, stamped with the call (stamp << 2 | count): an older stamp counts
-  // none, so nothing is cleared after a call. Two means two or more.
-  constexpr std::uint32_t kLastStamp = (std::uint32_t{1} << 30) - 1;
-  if (rows_at_particle_.size() != n || rows_stamp_ == kLastStamp) {
-    rows_at_particle_.assign(n, 0);
-    rows_stamp_ = 0;
+  // The seeds: the rows added, then those the last call left approaching.
+  std::vector<std::int32_t>& seeds = reflection_seeds_;
+  seeds.clear();
+  std::size_t first_new = first_new_row;
+  if (!row_components_.continues(n, first_new_row)) {
+    row_components_.restart(n);
+    first_new = 0;
+  } else {
+    for (const OnItsOwnLine<std::vector<std::int32_t>>& unsettled : unsettled_of_chunk_) {
+      seeds.insert(seeds.end(), unsettled.value.begin(), unsettled.value.end());
+    }
   }
-  const std::uint32_t once = (++rows_stamp_ << 2) | 1, twice = once + 1;
-  auto count = [&](std::int32_t particle) {
-    std::uint32_t& seen = rows_at_particle_[particle];
-    seen = seen < once ? once : twice;
-  };
-  for (const Constraint& c : rows) {
-    count(c.i);
-    if (c.j >= 0) count(c.j);
+  row_components_.link(rows);
+  for (std::size_t r = first_new; r < rows.size(); ++r) {
+    seeds.push_back(static_cast<std::int32_t>(r));
+  }
+  unsettled_of_chunk_.resize(slots);
+  for (OnItsOwnLine<std::vector<std::int32_t>>& unsettled : unsettled_of_chunk_) {
+    unsettled.value.clear();
   }
   lone_rows_of_chunk_.resize(slots);
   for (std::vector<std::int32_t>& lone : lone_rows_of_chunk_) lone.clear();
-  shared_rows_.clear();
-  shared_row_of_.clear();
-  // A cluster of the last call's rows alone is a cluster of the last call (rows are only
-  // added). If that call left it with no row approaching, its momenta are as it left them,
-  // and reflecting it again would change nothing: it is passed over.
-  std::vector<char>& settled = row_settled_;
-  const std::size_t carried = std::min(first_new_row, settled.size());
-  settled.resize(rows.size());
-  std::fill(settled.begin() + static_cast<std::ptrdiff_t>(carried), settled.end(), 0);
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    const Constraint& c = rows[r];
-    if (rows_at_particle_[c.i] == once && (c.j < 0 || rows_at_particle_[c.j] == once)) {
-      if (!settled[r]) lone_rows_of_chunk_[owner(c.i, c.j)].push_back(static_cast<std::int32_t>(r));
-    } else {
-      shared_rows_.push_back(c);
-      shared_row_of_.push_back(static_cast<std::int32_t>(r));
-    }
-  }
-  // Whether the last call left every row of a shared cluster settled (its rows are written
-  // only by the thread that reflects it).
-  auto unchanged = [&](const Cluster& cluster) {
-    return std::all_of(cluster.rows.begin(), cluster.rows.end(), [&](std::int32_t s) {
-      return settled[static_cast<std::size_t>(shared_row_of_[s])] != 0;
-    });
-  };
+  clusters_of_chunk_.resize(slots);
+  clusters_used_.assign(slots, 0);
+  std::size_t work = 0;  // the rows to reflect
+  row_components_.components_of(
+      seeds.data(), seeds.size(), [&](const std::int32_t* found, std::size_t count) {
+        work += count;
+        if (count == 1) {
+          const Constraint& row = rows[static_cast<std::size_t>(found[0])];
+          lone_rows_of_chunk_[owner(row.i, row.j)].push_back(found[0]);
+          return;
+        }
+        // reflect() reads the rows and the particles in ascending order, as find_clusters
+        // makes them.
+        thread_local std::vector<std::int32_t> particles;
+        particles.clear();
+        for (std::size_t k = 0; k < count; ++k) {
+          const Constraint& row = rows[static_cast<std::size_t>(found[k])];
+          particles.push_back(row.i);
+          if (row.j >= 0) particles.push_back(row.j);
+        }
+        std::sort(particles.begin(), particles.end());
+        particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
+        const std::size_t c = owner(particles.front(), particles.back());
+        std::vector<Cluster>& clusters = clusters_of_chunk_[c];
+        if (clusters_used_[c] == clusters.size()) clusters.emplace_back();
+        Cluster& cluster = clusters[clusters_used_[c]++];
+        cluster.particles.assign(particles.begin(), particles.end());
+        cluster.rows.assign(found, found + count);
+        std::sort(cluster.rows.begin(), cluster.rows.end());
+      });
   reflection_terms_.reset(rows.size());
   reflection_stats_.assign(slots, OnItsOwnLine<ConstraintStatistics>{});
-  shared_clusters_of_chunk_.resize(slots);
-  for_each_chunk(slots, chunks, [&](int chunk, std::size_t, std::size_t) {
-    const auto c = static_cast<std::size_t>(chunk);
+  auto reflect_chunk = [&](std::size_t c) {
     const ReflectionTally tally{reflection_terms_, nullptr, reflection_stats_[c].value};
+    const int chunk = static_cast<int>(c);
+    std::vector<std::int32_t>& unsettled = unsettled_of_chunk_[c].value;
     for (const std::int32_t r : lone_rows_of_chunk_[c]) {
-      const Constraint& row = rows[r];
+      const Constraint& row = rows[static_cast<std::size_t>(r)];
       bool left_settled = false;
       if (!reflect_closed_form(system, row, r, x, p, tally, &left_settled)) {
         Cluster cluster;  // a row without a closed form (no direction): the general reflection
@@ -811,28 +824,28 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
         cluster.rows.push_back(r);
         left_settled = reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally);
       }
-      settled[static_cast<std::size_t>(r)] = left_settled ? 1 : 0;
+      if (!left_settled) unsettled.push_back(r);
       if (after) {
         const std::int32_t particles[2] = {row.i, row.j};
         (*after)(chunk, particles, row.j >= 0 ? 2 : 1);
       }
     }
-    if (shared_rows_.empty()) return;
-    std::vector<Cluster>& shared = shared_clusters_of_chunk_[c].value;
-    find_clusters(shared_rows_, n, shared);
-    const ReflectionTally shared_tally{reflection_terms_, shared_row_of_.data(),
-                                       reflection_stats_[c].value};
-    for (const Cluster& cluster : shared) {
-      if (owner(cluster.particles.front(), cluster.particles.back()) != c) continue;
-      if (unchanged(cluster)) continue;
-      const bool left_settled =
-          reflect_cluster(system, shared_rows_, 0, cluster, x, p, nullptr, shared_tally);
-      for (const std::int32_t s : cluster.rows) {
-        settled[static_cast<std::size_t>(shared_row_of_[s])] = left_settled ? 1 : 0;
+    const std::vector<Cluster>& clusters = clusters_of_chunk_[c];
+    for (std::size_t k = 0; k < clusters_used_[c]; ++k) {
+      const Cluster& cluster = clusters[k];
+      if (!reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally)) {
+        unsettled.insert(unsettled.end(), cluster.rows.begin(), cluster.rows.end());
       }
       if (after) (*after)(chunk, cluster.particles.data(), cluster.particles.size());
     }
-  });
+  };
+  if (work < kSplitRows || chunks == 1) {
+    for (std::size_t c = 0; c < slots; ++c) reflect_chunk(c);
+  } else {
+    for_each_chunk(slots, chunks, [&](int c, std::size_t, std::size_t) {
+      reflect_chunk(static_cast<std::size_t>(c));
+    });
+  }
   reflection_terms_.add_to(step_virial_);
   for (const OnItsOwnLine<ConstraintStatistics>& figures : reflection_stats_) {
     stats_.add(figures.value);

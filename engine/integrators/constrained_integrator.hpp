@@ -9,6 +9,7 @@
 
 #include "constraints/clusters.hpp"
 #include "constraints/constraint_set.hpp"
+#include "constraints/row_components.hpp"
 #include "constraints/row_stretches.hpp"
 #include "core/cache_line.hpp"
 #include "core/ordered_terms.hpp"
@@ -276,17 +277,16 @@ class ConstrainedIntegrator : public Integrator {
   std::vector<std::int32_t> local_index_of_particle_;
   std::vector<char> hessian_mask_;
   ShadowPairs shadow_pairs_;
-  // reflect_inequalities' scratch: rows per particle (stamped by call), the rows sharing no
-  // particle by the chunk that reflects them, the others, and per chunk their clusters.
-  std::vector<std::uint32_t> rows_at_particle_;
-  std::uint32_t rows_stamp_ = 0;
+  // reflect_inequalities': the components of the rows of its calls within a step; per chunk
+  // of a call, the rows sharing no particle that it reflects and its clusters of several
+  // rows (their lists' storage kept: clusters_used_ of them are the call's), and the rows it
+  // left approaching (the next call's seeds, with the rows it adds).
+  GrowingRowComponents row_components_;
+  std::vector<std::int32_t> reflection_seeds_;
   std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
-  std::vector<Constraint> shared_rows_;
-  std::vector<std::int32_t> shared_row_of_;  // each shared row's index in the call's rows
-  std::vector<OnItsOwnLine<std::vector<Cluster>>> shared_clusters_of_chunk_;
-  // Per row of the last call: in a cluster (of one row or more) that it left with no row
-  // approaching (1), else 0.
-  std::vector<char> row_settled_;
+  std::vector<std::vector<Cluster>> clusters_of_chunk_;
+  std::vector<std::size_t> clusters_used_;
+  std::vector<OnItsOwnLine<std::vector<std::int32_t>>> unsettled_of_chunk_;
   // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
   TermsByRow reflection_terms_;
   std::vector<OnItsOwnLine<ConstraintStatistics>> reflection_stats_;

@@ -1,0 +1,73 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "constraints/constraint.hpp"
+
+namespace deli {
+
+// The connected components (rows joined where they share a particle) of a list of rows that
+// only grows between calls, as the active set's rounds grow it within a step: each row is
+// linked to its particles once, when it arrives, and a call walks from given seed rows to
+// their components alone. The active set's later rounds add a row or two to about a hundred
+// (the 4000-sphere fluid); classifying and clustering every row again at each round took
+// as long on two threads as on one.
+class GrowingRowComponents {
+ public:
+  // A new list of rows over `particle_count` particles: none linked.
+  void restart(std::size_t particle_count);
+  // Whether rows [0, count) over `particle_count` particles are the rows linked.
+  bool continues(std::size_t particle_count, std::size_t count) const {
+    return particle_count == particle_count_ && count == linked_ && linked_ > 0;
+  }
+  // Links rows [linked, rows.size()): the rows before are those linked already.
+  void link(const std::vector<Constraint>& rows);
+  std::size_t linked() const { return linked_; }
+
+  // visit(rows, count) for each component that holds one of the seed rows, once each: its
+  // rows in the order the walk found them, the seed first.
+  template <class Visit>
+  void components_of(const std::int32_t* seeds, std::size_t seed_count, Visit&& visit) {
+    next_visit();
+    for (std::size_t s = 0; s < seed_count; ++s) {
+      const std::int32_t seed = seeds[s];
+      if (visited_[static_cast<std::size_t>(seed)] == visit_) continue;
+      visited_[static_cast<std::size_t>(seed)] = visit_;
+      found_.clear();
+      found_.push_back(seed);
+      for (std::size_t k = 0; k < found_.size(); ++k) {
+        const std::int32_t row = found_[k];
+        for (int end = 0; end < 2; ++end) {
+          const std::int32_t particle = particle_[2 * static_cast<std::size_t>(row) + end];
+          if (particle < 0) continue;
+          for (std::int32_t at = head_[static_cast<std::size_t>(particle)]; at >= 0;
+               at = next_[static_cast<std::size_t>(at)]) {
+            const std::int32_t other = at >> 1;
+            if (visited_[static_cast<std::size_t>(other)] == visit_) continue;
+            visited_[static_cast<std::size_t>(other)] = visit_;
+            found_.push_back(other);
+          }
+        }
+      }
+      visit(found_.data(), found_.size());
+    }
+  }
+
+ private:
+  void next_visit();
+
+  std::size_t particle_count_ = 0;
+  std::size_t linked_ = 0;
+  std::uint32_t list_ = 0;   // the list's number: head_ is valid where head_list_ holds it
+  std::uint32_t visit_ = 0;  // the call's number: visited_ holds it for the rows it found
+  std::vector<std::uint32_t> head_list_;
+  std::vector<std::int32_t> head_;      // per particle: its last linked row end (2 row + end)
+  std::vector<std::int32_t> next_;      // per row end: the particle's row end linked before
+  std::vector<std::int32_t> particle_;  // per row end: the particle (-1: a wall row's second)
+  std::vector<std::uint32_t> visited_;  // per row
+  std::vector<std::int32_t> found_;     // the component being walked
+};
+
+}  // namespace deli
