@@ -35,6 +35,10 @@ class GrowingRowComponents {
       const std::int32_t seed = seeds[s];
       if (visited_[static_cast<std::size_t>(seed)] == visit_) continue;
       visited_[static_cast<std::size_t>(seed)] = visit_;
+      if (alone(seed)) {
+        visit(&seed, std::size_t{1});
+        continue;
+      }
       found_.clear();
       found_.push_back(seed);
       for (std::size_t k = 0; k < found_.size(); ++k) {
@@ -57,6 +61,20 @@ class GrowingRowComponents {
 
  private:
   void next_visit();
+  // Whether the row shares no particle with another: at each of its particles its end is the
+  // last linked and was linked first. Most contact rows are alone (the 4000-sphere fluid: 90 %);
+  // the test reads four numbers where the walk took 20 ns a row, in branches it mispredicts.
+  bool alone(std::int32_t row) const {
+    bool alone = true;
+    for (std::size_t end = 0; end < 2; ++end) {
+      const std::size_t at = 2 * static_cast<std::size_t>(row) + end;
+      const std::int32_t particle = particle_[at];
+      if (particle < 0) continue;
+      alone = alone && head_[static_cast<std::size_t>(particle)] == static_cast<std::int32_t>(at) &&
+              next_[at] < 0;
+    }
+    return alone;
+  }
 
   std::size_t particle_count_ = 0;
   std::size_t linked_ = 0;
