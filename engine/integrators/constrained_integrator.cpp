@@ -678,7 +678,7 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
     gather_hessian_blocks(system, clusters, holds_inequality);
   }
   reflection_terms_.reset(rows.size());
-  const ReflectionTally tally{reflection_terms_, nullptr, stats_};
+  const ReflectionTally tally{reflection_terms_, stats_};
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     if (!holds_inequality[c]) continue;
     const Cluster& cluster = clusters[c];
@@ -734,8 +734,8 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const AfterReflection* after,
                                                  std::size_t first_new_row) {
   const std::size_t n = system.particles.size();
-  // Below this many rows a job's start (about a microsecond) costs more than the rows'
-  // lines fetched from the other cores.
+  // Below this many rows to reflect a job's start (about a microsecond) costs more than the
+  // rows' lines fetched from the other cores.
   constexpr std::size_t kSplitRows = 64;
   const int chunks = chunks_for_cheap(n);
   const auto slots = static_cast<std::size_t>(chunks);
@@ -790,7 +790,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
         }
         // reflect() reads the rows and the particles in ascending order, as find_clusters
         // makes them.
-        thread_local std::vector<std::int32_t> particles;
+        std::vector<std::int32_t>& particles = component_particles_;
         particles.clear();
         for (std::size_t k = 0; k < count; ++k) {
           const Constraint& row = rows[static_cast<std::size_t>(found[k])];
@@ -810,7 +810,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
   reflection_terms_.reset(rows.size());
   reflection_stats_.assign(slots, OnItsOwnLine<ConstraintStatistics>{});
   auto reflect_chunk = [&](std::size_t c) {
-    const ReflectionTally tally{reflection_terms_, nullptr, reflection_stats_[c].value};
+    const ReflectionTally tally{reflection_terms_, reflection_stats_[c].value};
     const int chunk = static_cast<int>(c);
     std::vector<std::int32_t>& unsettled = unsettled_of_chunk_[c].value;
     for (const std::int32_t r : lone_rows_of_chunk_[c]) {

@@ -157,16 +157,14 @@ class ConstrainedIntegrator : public Integrator {
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p, const AfterReflection* after = nullptr,
                         std::size_t first_new_row = 0);
-  // Where reflections leave their figures: the virial's terms, row by row (a term of row r of
-  // the rows reflected goes to row_of[r] of `terms`, or to r without row_of; added to the
-  // step's virial in row order), and the counters (one set per thread where reflections run
-  // on several).
+  // Where reflections leave their figures: the virial's terms by row of the rows reflected
+  // (added to the step's virial in row order), and the counters (one set per thread where
+  // reflections run on several).
   struct ReflectionTally {
     TermsByRow& terms;
-    const std::int32_t* row_of;
     ConstraintStatistics& stats;
     void add(std::int32_t row, double term) const {
-      terms.set(static_cast<std::size_t>(row_of ? row_of[row] : row), term);
+      terms.set(static_cast<std::size_t>(row), term);
     }
   };
   // Parts of reflect_clusters: one cluster through reflect(); one row in closed form (false,
@@ -283,6 +281,7 @@ class ConstrainedIntegrator : public Integrator {
   // left approaching (the next call's seeds, with the rows it adds).
   GrowingRowComponents row_components_;
   std::vector<std::int32_t> reflection_seeds_;
+  std::vector<std::int32_t> component_particles_;
   std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
   std::vector<std::vector<Cluster>> clusters_of_chunk_;
   std::vector<std::size_t> clusters_used_;
