@@ -1,5 +1,9 @@
 #include "integrators/reflection.hpp"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+
 #include "core/parallel.hpp"
 #include "solvers/chain_projection.hpp"
 #include "solvers/cluster_matrices.hpp"
@@ -94,6 +98,75 @@ SolveScratch& kinetic_form(ReflectionScratch& s, const Eigen::MatrixXd& N,
   solve.Q.noalias() = solve.NV.transpose() * solve.KN;
   return solve;
 }
+// Algorithm 2 for two inequality rows (no equality row, E = H) in closed form, as most
+// contact clusters of a hard-sphere fluid are (88-96 % of its clusters of several rows; through
+// the general loop below they took 3 % of a one-thread run). With K = W / 2 each solve's QP is
+// min 1/2 lambda^T (A / 2) lambda + v^T lambda over lambda >= 0 on the approaching rows, A =
+// N^T W N and v their normal velocities: for A positive definite its one minimiser is the
+// interior solution where both are positive, else the better single-row one. Anything else (a
+// cap, a stall, a singular A, a solve past kTwoRowSolves, momenta met again) returns false with
+// p untouched, and the general loop reflects the cluster from the start.
+bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double tolerance,
+                      const SolverLimits& limits, Eigen::VectorXd& flat, ReflectionStats& stats,
+                      double total[2], bool reflected[2]) {
+  constexpr int kTwoRowSolves = 8;
+  const Eigen::Index m = N.rows();
+  const double* n0 = N.col(0).data();
+  const double* n1 = N.col(1).data();
+  double a00 = 0.0, a01 = 0.0, a11 = 0.0;
+  for (Eigen::Index k = 0; k < m; ++k) {
+    a00 += n0[k] * w(k) * n0[k];
+    a01 += n0[k] * w(k) * n1[k];
+    a11 += n1[k] * w(k) * n1[k];
+  }
+  const double det = a00 * a11 - a01 * a01;
+  if (!(a00 > 0.0 && a11 > 0.0 && det > 1e-12 * a00 * a11)) return false;
+  std::array<Eigen::VectorXd, kTwoRowSolves> seen;
+  for (int iteration = 0;; ++iteration) {
+    double v[2] = {0.0, 0.0};
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const double velocity = w(k) * flat(k);
+      v[0] += n0[k] * velocity;
+      v[1] += n1[k] * velocity;
+    }
+    const bool approaching[2] = {v[0] < -tolerance, v[1] < -tolerance};
+    if (!approaching[0] && !approaching[1]) {
+      stats.settled = true;
+      return true;
+    }
+    if (iteration >= limits.reflection_solves || iteration >= kTwoRowSolves) return false;
+    // The QP's gradient at zero is v; a row's own minimiser is -2 v / a.
+    const double accepted = 1e-14 * std::max(1.0, std::max(approaching[0] ? std::abs(v[0]) : 0.0,
+                                                           approaching[1] ? std::abs(v[1]) : 0.0));
+    double lambda[2] = {0.0, 0.0};
+    auto alone = [&](int k) {
+      const double a = k == 0 ? a00 : a11;
+      if (!(v[k] < -accepted)) return false;
+      lambda[k] = -2.0 * v[k] / a;
+      lambda[1 - k] = 0.0;
+      // The other row's gradient there, where it is in the set: it must not be negative.
+      return !approaching[1 - k] || 0.5 * a01 * lambda[k] + v[1 - k] >= -accepted;
+    };
+    if (approaching[0] && approaching[1]) {
+      lambda[0] = -2.0 * (a11 * v[0] - a01 * v[1]) / det;
+      lambda[1] = -2.0 * (a00 * v[1] - a01 * v[0]) / det;
+      if (!(lambda[0] > 0.0 && lambda[1] > 0.0) && !alone(0) && !alone(1)) return false;
+    } else if (!alone(approaching[0] ? 0 : 1)) {
+      return false;
+    }
+    for (Eigen::Index k = 0; k < m; ++k) flat(k) += n0[k] * lambda[0] + n1[k] * lambda[1];
+    for (int k = 0; k < 2; ++k) {
+      total[k] += lambda[k];
+      reflected[k] = reflected[k] || lambda[k] > 0.0;
+    }
+    ++stats.iterations;
+    for (int h = 0; h < iteration; ++h) {
+      if (seen[static_cast<std::size_t>(h)] == flat) return false;
+    }
+    seen[static_cast<std::size_t>(iteration)] = flat;
+  }
+}
+
 }  // namespace
 
 ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& equality,
@@ -130,6 +203,25 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     N -= F * Y;
   }
   stats.row_impulse.assign(cluster.rows.size(), 0.0);
+  // A QP limit below the three iterations Lawson-Hanson takes for two rows is the general
+  // loop's to hit (and count).
+  const bool two_rows_closed = eq_rows.empty() && !shadow &&
+                               op == ReflectionOperator::generalized && in_rows.size() == 2 &&
+                               (limits.qp_iterations == 0 || limits.qp_iterations >= 3);
+  if (two_rows_closed) {
+    flatten(p, s.flat);
+    double total[2] = {0.0, 0.0};
+    bool reflected[2] = {false, false};
+    ReflectionStats two = stats;
+    if (reflect_two_rows(N, w, tolerance, limits, s.flat, two, total, reflected)) {
+      for (int k = 0; k < 2; ++k) {
+        two.row_impulse[static_cast<std::size_t>(in_rows[static_cast<std::size_t>(k)])] = total[k];
+        two.reflected += reflected[k] ? 1 : 0;
+      }
+      unflatten(s.flat, p);
+      return two;
+    }
+  }
   Eigen::VectorXd& total_lambda = s.total_lambda;
   total_lambda.setZero(static_cast<Eigen::Index>(in_rows.size()));
   s.k_diag = 0.5 * w;  // K = M^-1 / 2 (E = H)

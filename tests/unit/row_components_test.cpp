@@ -38,7 +38,7 @@ TEST(GrowingRowComponents, AreTheClustersHoldingTheSeedsAsRowsAreAdded) {
     std::vector<Constraint> rows;
     components.restart(static_cast<std::size_t>(particles));
     for (int batch = 0; batch < 5; ++batch) {
-      SCOPED_TRACE(testing::Message() << "list " << list << " batch " << batch);
+      SCOPED_TRACE(::testing::Message() << "list " << list << " batch " << batch);
       const std::size_t first_new = rows.size();
       EXPECT_EQ(components.continues(static_cast<std::size_t>(particles), first_new),
                 first_new > 0);
