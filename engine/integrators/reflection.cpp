@@ -98,6 +98,7 @@ SolveScratch& kinetic_form(ReflectionScratch& s, const Eigen::MatrixXd& N,
   solve.Q.noalias() = solve.NV.transpose() * solve.KN;
   return solve;
 }
+
 // Algorithm 2 for two inequality rows (no equality row, E = H) in closed form, as most
 // contact clusters of a hard-sphere fluid are (88-96 % of its clusters of several rows; through
 // the general loop below they took 3 % of a one-thread run). With K = W / 2 each solve's QP is
@@ -110,7 +111,10 @@ bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double
                       const SolverLimits& limits, Eigen::VectorXd& flat, ReflectionStats& stats,
                       double total[2], bool reflected[2]) {
   constexpr int kTwoRowSolves = 8;
+  // Two rows of one cluster share a particle: three particles at most.
+  constexpr Eigen::Index kCoordinates = 9;
   const Eigen::Index m = N.rows();
+  if (m > kCoordinates) return false;
   const double* n0 = N.col(0).data();
   const double* n1 = N.col(1).data();
   double a00 = 0.0, a01 = 0.0, a11 = 0.0;
@@ -121,7 +125,8 @@ bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double
   }
   const double det = a00 * a11 - a01 * a01;
   if (!(a00 > 0.0 && a11 > 0.0 && det > 1e-12 * a00 * a11)) return false;
-  std::array<Eigen::VectorXd, kTwoRowSolves> seen;
+  // The momenta after each solve (no heap: this runs for most contact clusters).
+  std::array<std::array<double, kCoordinates>, kTwoRowSolves> seen;
   for (int iteration = 0;; ++iteration) {
     double v[2] = {0.0, 0.0};
     for (Eigen::Index k = 0; k < m; ++k) {
@@ -161,9 +166,10 @@ bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double
     }
     ++stats.iterations;
     for (int h = 0; h < iteration; ++h) {
-      if (seen[static_cast<std::size_t>(h)] == flat) return false;
+      const std::array<double, kCoordinates>& before = seen[static_cast<std::size_t>(h)];
+      if (std::equal(flat.data(), flat.data() + m, before.begin())) return false;
     }
-    seen[static_cast<std::size_t>(iteration)] = flat;
+    std::copy(flat.data(), flat.data() + m, seen[static_cast<std::size_t>(iteration)].begin());
   }
 }
 
