@@ -755,7 +755,7 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
     const std::size_t cb = chunk_of(b);
     return ((a + b) & 1) != 0 ? ca : cb;
   };
-  // The seeds: the rows added, then those the last call left approaching.
+  // The seeds: the rows the last call left approaching, then the rows added.
   std::vector<std::int32_t>& seeds = reflection_seeds_;
   seeds.clear();
   std::size_t first_new = first_new_row;

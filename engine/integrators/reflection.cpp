@@ -106,10 +106,11 @@ SolveScratch& kinetic_form(ReflectionScratch& s, const Eigen::MatrixXd& N,
 // N^T W N and v their normal velocities: for A positive definite its one minimiser is the
 // interior solution where both are positive, else the better single-row one. Anything else (a
 // cap, a stall, a singular A, a solve past kTwoRowSolves, momenta met again) returns false with
-// p untouched, and the general loop reflects the cluster from the start.
+// p untouched, and the general loop reflects the cluster from the start. True: settled, after
+// `solves` solves.
 bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double tolerance,
-                      const SolverLimits& limits, Eigen::VectorXd& flat, ReflectionStats& stats,
-                      double total[2], bool reflected[2]) {
+                      const SolverLimits& limits, Eigen::VectorXd& flat, double total[2],
+                      bool reflected[2], int& solves) {
   constexpr int kTwoRowSolves = 8;
   // Two rows of one cluster share a particle: three particles at most.
   constexpr Eigen::Index kCoordinates = 9;
@@ -135,10 +136,7 @@ bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double
       v[1] += n1[k] * velocity;
     }
     const bool approaching[2] = {v[0] < -tolerance, v[1] < -tolerance};
-    if (!approaching[0] && !approaching[1]) {
-      stats.settled = true;
-      return true;
-    }
+    if (!approaching[0] && !approaching[1]) return true;
     if (iteration >= limits.reflection_solves || iteration >= kTwoRowSolves) return false;
     // The QP's gradient at zero is v; a row's own minimiser is -2 v / a.
     const double accepted = 1e-14 * std::max(1.0, std::max(approaching[0] ? std::abs(v[0]) : 0.0,
@@ -164,7 +162,7 @@ bool reflect_two_rows(const Eigen::MatrixXd& N, const Eigen::VectorXd& w, double
       total[k] += lambda[k];
       reflected[k] = reflected[k] || lambda[k] > 0.0;
     }
-    ++stats.iterations;
+    ++solves;
     for (int h = 0; h < iteration; ++h) {
       const std::array<double, kCoordinates>& before = seen[static_cast<std::size_t>(h)];
       if (std::equal(flat.data(), flat.data() + m, before.begin())) return false;
@@ -218,14 +216,17 @@ ReflectionStats reflect(const LocalCluster& cluster, const std::vector<bool>& eq
     flatten(p, s.flat);
     double total[2] = {0.0, 0.0};
     bool reflected[2] = {false, false};
-    ReflectionStats two = stats;
-    if (reflect_two_rows(N, w, tolerance, limits, s.flat, two, total, reflected)) {
+    int solves = 0;
+    if (reflect_two_rows(N, w, tolerance, limits, s.flat, total, reflected, solves)) {
+      stats.settled = true;
+      stats.iterations = solves;
       for (int k = 0; k < 2; ++k) {
-        two.row_impulse[static_cast<std::size_t>(in_rows[static_cast<std::size_t>(k)])] = total[k];
-        two.reflected += reflected[k] ? 1 : 0;
+        stats.row_impulse[static_cast<std::size_t>(in_rows[static_cast<std::size_t>(k)])] =
+            total[k];
+        stats.reflected += reflected[k] ? 1 : 0;
       }
       unflatten(s.flat, p);
-      return two;
+      return stats;
     }
   }
   Eigen::VectorXd& total_lambda = s.total_lambda;
