@@ -539,12 +539,38 @@ void ConstrainedIntegrator::setup(System& system) {
   project_velocities(system);
 }
 
+// A thermostat's kick projected onto the rods (twice a step): the momenta made, and the
+// velocities made again, by the threads that project each chunk's clusters where the rods hold
+// every particle, else in chunks. Made by the calling thread, with a vector allocated at each
+// call, they were serial work on its path (the default input's thermostatted steps).
 void ConstrainedIntegrator::project_velocities(System& system) {
   Particles& P = system.particles;
-  std::vector<Vec3> p(P.size());
-  for (std::size_t i = 0; i < P.size(); ++i) p[i] = P.velocity[i] * P.mass[i];
+  const std::size_t n = P.size();
+  std::vector<Vec3>& p = projected_momenta_;
+  p.resize(n);
+  const Vec3* velocity = P.velocity.data();
+  const double* mass = P.mass.data();
+  Vec3* momenta = p.data();
+  auto make_momenta = [=](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) momenta[i] = velocity[i] * mass[i];
+  };
+  auto make_velocities = [&, mass, momenta](std::size_t begin, std::size_t end) {
+    Vec3* v = P.velocity.data();
+    for (std::size_t i = begin; i < end; ++i) v[i] = momenta[i] * (1.0 / mass[i]);
+  };
+  if (thread_count() > 1 && !constraints_.equalities.empty() && equalities_hold_every_particle(P)) {
+    ClusterPasses passes;
+    passes.before = [&](int, const ParticleRun& run) { run.for_each_range(make_momenta); };
+    passes.after = [&](int, const ParticleRun& run) { run.for_each_range(make_velocities); };
+    project_momenta(system, constraints_.equalities, P.position, p, &passes);
+    return;
+  }
+  const int chunks = chunks_for_cheap(n);
+  for_each_chunk(n, chunks,
+                 [&](int, std::size_t begin, std::size_t end) { make_momenta(begin, end); });
   project_momenta(system, constraints_.equalities, P.position, p);
-  for (std::size_t i = 0; i < P.size(); ++i) P.velocity[i] = p[i] * (1.0 / P.mass[i]);
+  for_each_chunk(n, chunks,
+                 [&](int, std::size_t begin, std::size_t end) { make_velocities(begin, end); });
 }
 
 bool contains(const std::vector<Constraint>& rows, const Constraint& c) {

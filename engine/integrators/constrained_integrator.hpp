@@ -244,6 +244,7 @@ class ConstrainedIntegrator : public Integrator {
   std::array<ConstraintStatistics, 2> sampled_;
   double step_virial_ = 0.0;              // sum of r . J over this step's constraint impulses
   std::array<double, 2> virial_sums_{};   // sum over steps of step_virial_ / h, per sampler
+  std::vector<Vec3> projected_momenta_;   // project_velocities' momenta: its storage, not values
   std::vector<Vec3> previous_positions_;  // linearisation point of `linearized` constraints
   // max |r - L| / L over the equality rows at the positions of the last project_momenta,
   // when it projected them alone and every cluster by a chain kernel (which measures the
