@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "thermostats/polar_log.hpp"
+
 #if defined(__AVX512F__) && defined(__AVX512DQ__) && defined(__AVX512VL__)
 #include <immintrin.h>
 #define DELI_NORMALS_AVX512 1
@@ -59,11 +61,11 @@ __m512d symmetric(__m512i word) {
 }
 
 // The polar method's factor sqrt(-2 log(s) / s), in RandomStream::normal's operations; the
-// logarithm lane by lane from libm (its bits).
+// logarithm lane by lane (polar_log, its bits).
 __m512d polar_factor(__m512d s) {
   alignas(64) double lanes[8];
   _mm512_store_pd(lanes, s);
-  for (double& x : lanes) x = std::log(x);
+  for (double& x : lanes) x = polar_log(x);
   const __m512d log_s = _mm512_load_pd(lanes);
   return _mm512_sqrt_pd(_mm512_div_pd(_mm512_mul_pd(_mm512_set1_pd(-2.0), log_s), s));
 }
@@ -176,13 +178,67 @@ __m256d symmetric(__m256i word) {
                        _mm256_set1_pd(0x1.0p-31));
 }
 
-// The polar method's factor sqrt(-2 log(s) / s), in RandomStream::normal's operations; the
-// logarithm lane by lane from libm (its bits).
+// polar_log on four lanes: its operations in its order, the same bits. Its exponent k as a
+// double exactly: 2^52 + (k + 2048) from its bits, less 2^52 + 2048.
+__m256d polar_log4(__m256d x) {
+  using namespace polar_log_constants;
+  auto integer = [](long long v) { return _mm256_set1_epi64x(v); };
+  auto number = [](double v) { return _mm256_set1_pd(v); };
+  const __m256i bits = _mm256_castpd_si256(x);
+  const __m256i high = _mm256_and_si256(_mm256_srli_epi64(bits, 32), integer(0x000fffff));
+  const __m256i half =
+      _mm256_and_si256(_mm256_add_epi64(high, integer(0x95f64)), integer(0x100000));
+  const __m256i scaled_bits = _mm256_or_si256(
+      _mm256_slli_epi64(_mm256_or_si256(high, _mm256_xor_si256(half, integer(0x3ff00000))), 32),
+      _mm256_and_si256(bits, integer(0xffffffff)));
+  const __m256i k_plus = _mm256_add_epi64(
+      _mm256_add_epi64(_mm256_and_si256(_mm256_srli_epi64(bits, 52), integer(0x7ff)),
+                       integer(2048 - 1023)),
+      _mm256_srli_epi64(half, 20));
+  const __m256d dk =
+      _mm256_sub_pd(_mm256_castsi256_pd(_mm256_or_si256(k_plus, integer(0x4330000000000000))),
+                    number(0x1.0p52 + 2048.0));
+  const __m256d f = _mm256_sub_pd(_mm256_castsi256_pd(scaled_bits), number(1.0));
+  const __m256d k_hi = _mm256_mul_pd(dk, number(ln2_hi));
+  const __m256d k_lo = _mm256_mul_pd(dk, number(ln2_lo));
+  // |f| < 2^-20.
+  const __m256d r_tiny = _mm256_mul_pd(_mm256_mul_pd(f, f),
+                                       _mm256_sub_pd(number(0.5), _mm256_mul_pd(number(third), f)));
+  const __m256d tiny_log = _mm256_sub_pd(k_hi, _mm256_sub_pd(_mm256_sub_pd(r_tiny, k_lo), f));
+  const __m256d s = _mm256_div_pd(f, _mm256_add_pd(number(2.0), f));
+  const __m256d z = _mm256_mul_pd(s, s);
+  const __m256d w = _mm256_mul_pd(z, z);
+  const __m256d t1 = _mm256_mul_pd(
+      w,
+      _mm256_add_pd(number(lg2),
+                    _mm256_mul_pd(w, _mm256_add_pd(number(lg4), _mm256_mul_pd(w, number(lg6))))));
+  const __m256d t2 = _mm256_mul_pd(
+      z,
+      _mm256_add_pd(
+          number(lg1),
+          _mm256_mul_pd(
+              w, _mm256_add_pd(number(lg3),
+                               _mm256_mul_pd(w, _mm256_add_pd(number(lg5),
+                                                              _mm256_mul_pd(w, number(lg7))))))));
+  const __m256d r = _mm256_add_pd(t2, t1);
+  const __m256d hfsq = _mm256_mul_pd(_mm256_mul_pd(number(0.5), f), f);
+  const __m256d middle_log = _mm256_sub_pd(
+      k_hi,
+      _mm256_sub_pd(
+          _mm256_sub_pd(hfsq, _mm256_add_pd(_mm256_mul_pd(s, _mm256_add_pd(hfsq, r)), k_lo)), f));
+  const __m256d other_log = _mm256_sub_pd(
+      k_hi, _mm256_sub_pd(_mm256_sub_pd(_mm256_mul_pd(s, _mm256_sub_pd(f, r)), k_lo), f));
+  const __m256d tiny = _mm256_castsi256_pd(_mm256_cmpgt_epi64(
+      integer(3), _mm256_and_si256(_mm256_add_epi64(high, integer(2)), integer(0x000fffff))));
+  const __m256d middle =
+      _mm256_castsi256_pd(_mm256_and_si256(_mm256_cmpgt_epi64(high, integer(0x6147a - 1)),
+                                           _mm256_cmpgt_epi64(integer(0x6b851 + 1), high)));
+  return _mm256_blendv_pd(_mm256_blendv_pd(other_log, middle_log, middle), tiny_log, tiny);
+}
+
+// The polar method's factor sqrt(-2 log(s) / s), in RandomStream::normal's operations.
 __m256d polar_factor(__m256d s) {
-  alignas(32) double lanes[4];
-  _mm256_store_pd(lanes, s);
-  for (double& x : lanes) x = std::log(x);
-  const __m256d log_s = _mm256_load_pd(lanes);
+  const __m256d log_s = polar_log4(s);
   return _mm256_sqrt_pd(_mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(-2.0), log_s), s));
 }
 

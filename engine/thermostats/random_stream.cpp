@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "thermostats/polar_log.hpp"
+
 namespace deli {
 
 PhiloxCounter philox4x32_10(PhiloxCounter c, PhiloxKey k) {
@@ -51,7 +53,7 @@ double RandomStream::normal() {
     const double u = symmetric_uniform(), v = symmetric_uniform();
     const double s = u * u + v * v;
     if (s >= 1.0) continue;
-    const double factor = std::sqrt(-2.0 * std::log(s) / s);
+    const double factor = std::sqrt(-2.0 * polar_log(s) / s);
     spare_normal_ = v * factor;
     has_spare_normal_ = true;
     return u * factor;

@@ -5,10 +5,11 @@
 //
 // Compared bit for bit (as text that round-trips every double): deli is IEEE-exact (no
 // -ffast-math, no FMA contraction on x86-64 without -march) and its results do not depend
-// on the optimisation level, so any change of a result shows here. The libm functions the
-// run calls (log and exp in the thermostat's noise) are glibc's, fixed on Debian 12; on
-// another libm the first difference would be in the last digits, and the failure message
-// gives the relative size of the first difference to tell that from a change of method.
+// on the optimisation level, so any change of a result shows here. The libm function the
+// run calls (exp in the thermostat's factor; the noise's logarithm is deli's polar_log) is
+// glibc's, fixed on Debian 12; on another libm the first difference would be in the last
+// digits, and the failure message gives the relative size of the first difference to tell
+// that from a change of method.
 //
 // A change of results that is intended (a new solver, a reordered sum) regenerates the file:
 //   OMP_NUM_THREADS=1 DELI_GOLDEN_UPDATE=1 build/tests/deli_property_tests --gtest_filter=Golden.*

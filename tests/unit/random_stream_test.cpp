@@ -6,9 +6,12 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <random>
 #include <vector>
 
 #include "thermostats/normal_triples.hpp"
+#include "thermostats/polar_log.hpp"
 
 namespace deli {
 namespace {
@@ -73,6 +76,53 @@ TEST(RandomStream, SameCounterSameNumbersOtherSeedOthers) {
   const double x = a.normal();
   EXPECT_EQ(x, b.normal());
   EXPECT_NE(x, c.normal());
+}
+
+// The units in the last place between two positive finite doubles (their bit patterns'
+// distance).
+std::uint64_t ulps_apart(double a, double b) {
+  std::int64_t ia, ib;
+  std::memcpy(&ia, &a, sizeof a);
+  std::memcpy(&ib, &b, sizeof b);
+  if ((ia < 0) != (ib < 0)) return a == b ? 0 : ~std::uint64_t{0};
+  return static_cast<std::uint64_t>(ia > ib ? ia - ib : ib - ia);
+}
+
+// polar_log against libm's log (a second implementation): within one unit in the last place
+// on the polar method's s, uniform in (0, 1) and where its three forms change: near each power
+// of two (f within 2^-20 of 0, where the first form takes over), near its two scaled ranges'
+// edges (mantissas 1.38 and 1.42), and at exact powers of two (f = 0: k ln 2 alone).
+TEST(PolarLog, WithinOneUlpOfLibmsLogOnTheUnitInterval) {
+  std::mt19937_64 random(2026);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<double> s;
+  for (int k = 0; k < 400000; ++k) s.push_back(uniform(random));
+  for (int e = -60; e <= 0; ++e) {
+    const double power = std::ldexp(1.0, e);
+    for (int k = 1; k < 200; ++k) {
+      const double step = power * std::ldexp(1.0, -20) * k / 100.0;
+      if (e < 0) s.push_back(power + step);
+      s.push_back(power - step / 2);
+    }
+    if (e < 0) s.push_back(power);
+    for (const double mantissa : {1.38, 1.42, 1.3799, 1.4201}) {
+      s.push_back(std::ldexp(mantissa, e - 1));
+      s.push_back(std::nextafter(std::ldexp(mantissa, e - 1), 0.0));
+    }
+  }
+  s.push_back(1.0);
+  s.push_back(std::nextafter(1.0, 0.0));
+  std::uint64_t worst = 0;
+  double worst_at = 0.0;
+  for (const double x : s) {
+    ASSERT_GT(x, 0.0);
+    ASSERT_LE(x, 1.0);
+    const std::uint64_t apart = ulps_apart(polar_log(x), std::log(x));
+    if (apart > worst) worst = apart, worst_at = x;
+  }
+  EXPECT_LE(worst, 1u) << "at s = " << worst_at;
+  EXPECT_EQ(polar_log(1.0), 0.0);
+  EXPECT_EQ(polar_log(0.5), -std::log(2.0));
 }
 
 // The Langevin thermostat's draws (normal_triples: eight streams at a time where the build
