@@ -55,6 +55,12 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
   list_builds_ = list.builds();
 }
 
+NearbyRows::Anchors NearbyRows::anchors_for(const NeighborList& list, std::size_t particle_count) {
+  if (list_ != &list || list_builds_ != list.builds() || anchor_.size() != particle_count)
+    return {};
+  return {anchor_.data(), moved_.data()};
+}
+
 void NearbyRows::scan_list(const NeighborList::PartnerRanges& ranges, const Vec3* q, const Box& box,
                            const double* radius, bool bonded_pairs, std::size_t first,
                            std::size_t last, std::vector<Pair>& pairs) const {
@@ -156,7 +162,8 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
                          const NeighborList& list, const Box& box, double reach,
                          const double* particle_reach, double exact_below,
                          std::vector<Constraint>& out, std::vector<double>& gap_at_q,
-                         const ParticlePass* make_reaches, RowStretches* stretches) {
+                         const ParticlePass* make_reaches, RowStretches* stretches,
+                         const double* anchored_largest2) {
   out.clear();
   gap_at_q.clear();
   // The screen's chunks 1.. left as stretches: nothing is appended after them.
@@ -185,35 +192,37 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     for (const auto& [a, b] : set.always_checked_pairs) {
       keep(sphere_pair(a, b, particles), pair_reach(a, b));
     }
-    bool fresh = list_ == &list && list_builds_ == list.builds() &&
-                 anchor_.size() == particles.size() && reach < margin_;
+    bool fresh = anchors_for(list, particles.size()).anchor != nullptr && reach < margin_;
     if (fresh) {
-      // The reaches, the squares, then, in the same job, the roots as packets (std::sqrt,
-      // which may set errno, does not vectorise), chunk by chunk as the step's other passes
-      // over the particles (each thread on the particles whose lines it holds); the largest
-      // square is exact in any grouping.
+      // The caller's pass made them, or: the reaches, the squares, then, in the same job, the
+      // roots as packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk
+      // as the step's other passes over the particles (each thread on the particles whose
+      // lines it holds); the largest square is exact in any grouping.
       const std::size_t count = anchor_.size();
       const Vec3* anchor = anchor_.data();
       double* moved = moved_.data();
-      const double largest2 = ordered_max_around(
-          count, 0.0,
-          [&](std::size_t begin, std::size_t end) {
-            if (!reaches_made) (*make_reaches)(begin, end);
-          },
-          [&](std::size_t i) {
-            moved[i] = norm2(q[i] - anchor[i]);
-            return moved[i];
-          },
-          [&](std::size_t begin, std::size_t end) {
-            const auto length = static_cast<Eigen::Index>(end - begin);
-            Eigen::Map<Eigen::ArrayXd> distance(moved + begin, length);
-            if (particle_reach) {
-              distance = distance.sqrt() +
-                         Eigen::Map<const Eigen::ArrayXd>(particle_reach + begin, length);
-            } else {
-              distance = distance.sqrt();
-            }
-          });
+      const double largest2 =
+          anchored_largest2
+              ? *anchored_largest2
+              : ordered_max_around(
+                    count, 0.0,
+                    [&](std::size_t begin, std::size_t end) {
+                      if (!reaches_made) (*make_reaches)(begin, end);
+                    },
+                    [&](std::size_t i) {
+                      moved[i] = norm2(q[i] - anchor[i]);
+                      return moved[i];
+                    },
+                    [&](std::size_t begin, std::size_t end) {
+                      const auto length = static_cast<Eigen::Index>(end - begin);
+                      Eigen::Map<Eigen::ArrayXd> distance(moved + begin, length);
+                      if (particle_reach) {
+                        distance = distance.sqrt() +
+                                   Eigen::Map<const Eigen::ArrayXd>(particle_reach + begin, length);
+                      } else {
+                        distance = distance.sqrt();
+                      }
+                    });
       reaches_made = true;
       // reach + 2 s <= margin, with room for rounding.
       const double room = 0.5 * (margin_ - reach) * (1.0 - 1e-6);

@@ -37,11 +37,24 @@ class NearbyRows {
   // pairs were screened in chunks (and no wall adds rows after them), chunk 0's in `out` and
   // the others' left where their threads wrote them, borrowed until the next call; else
   // `out` alone.
+  // Given `anchored_largest2`, the caller's own pass over the particles has written, into
+  // anchors_for()'s buffer, each particle's |q - anchor| plus its reach (particle_reach), the
+  // largest |q - anchor|^2 being *anchored_largest2: the collection then runs no pass over the
+  // particles of its own (unless the short list is made again).
   using ParticlePass = std::function<void(std::size_t begin, std::size_t end)>;
   void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                const NeighborList& list, const Box& box, double reach, const double* particle_reach,
                double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q,
-               const ParticlePass* make_reaches = nullptr, RowStretches* stretches = nullptr);
+               const ParticlePass* make_reaches = nullptr, RowStretches* stretches = nullptr,
+               const double* anchored_largest2 = nullptr);
+  // Where the short list is the one made from `list` as now built, for `particle_count`
+  // particles: its anchor positions, and the buffer for their displacements that a pass of
+  // the caller may fill (see collect()). Else nulls: the next collection makes it again.
+  struct Anchors {
+    const Vec3* anchor = nullptr;
+    double* moved = nullptr;
+  };
+  Anchors anchors_for(const NeighborList& list, std::size_t particle_count);
 
  private:
   // The short list at q; each particle's displacement since (moved_) starts at its reach

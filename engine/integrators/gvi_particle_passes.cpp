@@ -65,6 +65,11 @@ inline void store_triples(double* p, const Triples& t) {
 inline BlockMask missed(const Block& value, const Block& limit) {
   return (value <= limit) + 1;
 }
+// Each lane's square root (correctly rounded; built without errno, so in vectors).
+inline Block roots(Block v) {
+  for (std::size_t l = 0; l < w; ++l) v[l] = __builtin_sqrt(v[l]);
+  return v;
+}
 inline std::size_t total(const BlockMask& counts) {
   std::size_t sum = 0;
   for (std::size_t l = 0; l < w; ++l) sum += static_cast<std::size_t>(counts[l]);
@@ -97,15 +102,21 @@ StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t 
   const double* __restrict at_build = pass.at_build;
   double* __restrict q = pass.q;
   double* __restrict displacement2 = pass.predicted ? pass.displacement2 : nullptr;
+  double* __restrict reach = displacement2 ? pass.reach : nullptr;
+  double* __restrict reach_limit2 = pass.reach_limit2;
+  const double* __restrict anchor = reach ? pass.anchor : nullptr;
+  double* __restrict moved_from_anchor = pass.moved;
+  const double floor2 = pass.reach_floor2, tolerance = pass.gap_tolerance;
+  const double half_tolerance = 0.5 * tolerance;
   BlockMask outside = {};
-  const Block limit = broadcast(pass.list_limit2);
-  Block largest = broadcast(0.0);
+  const Block limit = broadcast(pass.list_limit2), floor2s = broadcast(floor2);
+  Block largest = broadcast(0.0), anchored_largest = broadcast(0.0);
   std::size_t i = begin;
   for (; i + w <= end; i += w) {
     const std::size_t o = 3 * i;
     const Block m = load(mass + i);
     const Triples ms = spread(m), hms = spread(h / m);
-    Triples momentum, half, d, x, moved, displaced;
+    Triples momentum, half, d, x, moved, displaced, anchored;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t e = o + k * w;
       const Block start = load(position + e);
@@ -116,11 +127,23 @@ StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t 
       x.v[k] = start + d.v[k];
       if (at_build) moved.v[k] = x.v[k] - load(at_build + e);
       if (displacement2) displaced.v[k] = x.v[k] - start;
+      if (anchor) anchored.v[k] = start - load(anchor + e);
     }
     if (displacement2) {
       const Block moved2 = norm2s(displaced);
       store(displacement2 + i, moved2);
       largest = largest < moved2 ? moved2 : largest;
+      if (reach) {
+        const Block own = roots(moved2 < floor2s ? floor2s : moved2) * 2.0 + tolerance;
+        store(reach + i, own);
+        const Block inner = own - half_tolerance;
+        store(reach_limit2 + i, inner * inner);
+        if (anchor) {
+          const Block anchored2 = norm2s(anchored);
+          anchored_largest = anchored_largest < anchored2 ? anchored2 : anchored_largest;
+          store(moved_from_anchor + i, roots(anchored2) + own);
+        }
+      }
     }
     if (pass.p) store_triples(pass.p + o, momentum);
     if (pass.p_start) store_triples(pass.p_start + o, momentum);
@@ -134,6 +157,9 @@ StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t 
   tally.beyond_list = total(outside);
   for (std::size_t l = 0; l < w; ++l) {
     tally.largest2 = tally.largest2 < largest[l] ? largest[l] : tally.largest2;
+    tally.anchored_largest2 = tally.anchored_largest2 < anchored_largest[l]
+                                  ? anchored_largest[l]
+                                  : tally.anchored_largest2;
   }
   for (; i < end; ++i) {
     const double m = mass[i];
@@ -159,6 +185,18 @@ StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t 
       const double moved2 = norm2(Three{x.x - start.x, x.y - start.y, x.z - start.z});
       displacement2[i] = moved2;
       tally.largest2 = tally.largest2 < moved2 ? moved2 : tally.largest2;
+      if (reach) {
+        const double own = 2.0 * __builtin_sqrt(moved2 < floor2 ? floor2 : moved2) + tolerance;
+        reach[i] = own;
+        reach_limit2[i] = (own - half_tolerance) * (own - half_tolerance);
+        if (anchor) {
+          const Three a = at(anchor, i);
+          const double anchored2 = norm2(Three{start.x - a.x, start.y - a.y, start.z - a.z});
+          tally.anchored_largest2 =
+              tally.anchored_largest2 < anchored2 ? anchored2 : tally.anchored_largest2;
+          moved_from_anchor[i] = __builtin_sqrt(anchored2) + own;
+        }
+      }
     }
   }
   return tally;

@@ -20,6 +20,13 @@ namespace deli::gvi_passes {
 // reach, !(|predicted - at_build|^2 <= list_limit2), and the largest displacement2 (from 0, a
 // NaN passed over, as ordered_max takes it; 0 unless displacement2 is written). Null outputs
 // are not written; a null at_build counts none.
+// Given `reach` (with displacement2), also the particles' reaches for the candidate rows
+// (Gvi::collect_by_particle_reach's, from a floor given beforehand) and, given `anchor`, their
+// displacements from the short list's anchors plus those reaches (NearbyRows::collect's):
+//   s = displacement2 < reach_floor2 ? reach_floor2 : displacement2;
+//   reach = 2 * sqrt(s) + gap_tolerance; reach_limit2 = (reach - gap_tolerance / 2)^2;
+//   anchored2 = |q - anchor|^2; moved = sqrt(anchored2) + reach;
+// with the largest anchored2 (from 0, a NaN passed over).
 struct StepStart {
   double h = 0.0;
   const double* position = nullptr;
@@ -36,10 +43,17 @@ struct StepStart {
   double* impulse = nullptr;
   double* predicted = nullptr;
   double* displacement2 = nullptr;  // one a particle; read only with predicted
+  double reach_floor2 = 0.0;
+  double gap_tolerance = 0.0;
+  double* reach = nullptr;         // one a particle; read only with displacement2
+  double* reach_limit2 = nullptr;  // one a particle; written with reach
+  const double* anchor = nullptr;  // read only with reach
+  double* moved = nullptr;         // one a particle; written with anchor
 };
 struct StepStartTally {
   std::size_t beyond_list = 0;
   double largest2 = 0.0;
+  double anchored_largest2 = 0.0;
 };
 StepStartTally step_start(const StepStart& pass, std::size_t begin, std::size_t end);
 

@@ -47,6 +47,15 @@ struct GviWorkspace {
   // (until the prediction or q changes: the first collection of the step reads them).
   bool displacement2_of_prediction = false;
   double prediction_largest2 = 0.0;
+  // The floor of the reaches the step's first collection made (its square; negative: none
+  // yet). The next step's pass makes its first reaches with the prediction from this floor,
+  // and with them each particle's displacement from the short list's anchors (`anchored`),
+  // the largest squared anchored_largest2: then that collection runs no pass of its own.
+  // Any floor serves (it only widens reaches); the last step's is close to the step's own.
+  double reach_floor2 = -1.0;
+  bool reaches_of_prediction = false;  // with displacement2_of_prediction
+  bool anchored = false;
+  double anchored_largest2 = 0.0;
 
   // Active and smooth sets; particles whose prediction changed in the last round.
   std::vector<Constraint> active, smooth;

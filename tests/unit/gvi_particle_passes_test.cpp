@@ -182,6 +182,83 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
   EXPECT_EQ(largest_seen, std::numeric_limits<double>::infinity());
 }
 
+// The step's first reaches and the displacements from the short list's anchors, made in the
+// same pass (gvi_particle_passes.hpp's definition, as collect_by_particle_reach and
+// NearbyRows::collect wrote them in passes of their own), with a floor above some
+// displacements and below others.
+TEST(GviParticlePasses, StepStartMakesTheReachesAndAnchoredDisplacements) {
+  const double h = 0.005;
+  const double list_limit2 = 1.0;
+  const double tolerance = 1e-9;
+  const PassInputs s = edge_inputs(list_limit2);
+  std::mt19937_64 rng(12);
+  std::vector<Vec3> anchor = s.position;
+  std::uniform_real_distribution<double> drift(-0.2, 0.2);
+  for (Vec3& a : anchor) a += Vec3{drift(rng), drift(rng), drift(rng)};
+  std::size_t ranges = 0, floored = 0, above = 0;
+  for (bool anchored : {true, false}) {
+    for (std::size_t begin = 0; begin < 9; ++begin) {
+      for (std::size_t end = begin; end <= kPassParticles; ++end) {
+        std::vector<Vec3> q(kPassParticles), predicted(kPassParticles), p(kPassParticles),
+            p_start(kPassParticles);
+        std::vector<double> displacement2(kPassParticles), reach(kPassParticles, 9.0),
+            limit2(kPassParticles, 9.0), moved(kPassParticles, 9.0);
+        std::vector<double> reach_made = reach, limit2_made = limit2, moved_made = moved;
+        gvi_passes::StepStart pass;
+        pass.h = h;
+        pass.position = pass_numbers(s.position);
+        pass.velocity = pass_numbers(s.velocity);
+        pass.mass = s.mass.data();
+        pass.force = pass_numbers(s.force);
+        pass.q = pass_numbers(q);
+        pass.p = pass_numbers(p);
+        pass.p_start = pass_numbers(p_start);
+        pass.predicted = pass_numbers(predicted);
+        pass.displacement2 = displacement2.data();
+        // A floor near the middle of the displacements' squares (about 1e-4 here).
+        pass.reach_floor2 = 6e-5;
+        pass.gap_tolerance = tolerance;
+        pass.reach = reach_made.data();
+        pass.reach_limit2 = limit2_made.data();
+        pass.anchor = anchored ? pass_numbers(anchor) : nullptr;
+        pass.moved = moved_made.data();
+        const gvi_passes::StepStartTally tally = gvi_passes::step_start(pass, begin, end);
+        double anchored_largest2 = 0.0;  // as NearbyRows::collect's ordered_max took it
+        for (std::size_t i = begin; i < end; ++i) {
+          const double d2 = displacement2[i];
+          floored += d2 < pass.reach_floor2 ? 1 : 0;
+          above += d2 > pass.reach_floor2 ? 1 : 0;
+          reach[i] = 2.0 * std::sqrt(d2 < pass.reach_floor2 ? pass.reach_floor2 : d2) + tolerance;
+          limit2[i] = (reach[i] - 0.5 * tolerance) * (reach[i] - 0.5 * tolerance);
+          if (!anchored) continue;
+          const double a2 = norm2(s.position[i] - anchor[i]);
+          anchored_largest2 = std::max(anchored_largest2, a2);
+          moved[i] = std::sqrt(a2) + reach[i];
+        }
+        for (std::size_t i = 0; i < kPassParticles; ++i) {
+          ASSERT_EQ(std::bit_cast<std::uint64_t>(reach[i]),
+                    std::bit_cast<std::uint64_t>(reach_made[i]))
+              << "reach of particle " << i << " in [" << begin << ", " << end << ")";
+          ASSERT_EQ(std::bit_cast<std::uint64_t>(limit2[i]),
+                    std::bit_cast<std::uint64_t>(limit2_made[i]))
+              << "reach limit of particle " << i << " in [" << begin << ", " << end << ")";
+          ASSERT_EQ(std::bit_cast<std::uint64_t>(moved[i]),
+                    std::bit_cast<std::uint64_t>(moved_made[i]))
+              << "anchored displacement of particle " << i << " in [" << begin << ", " << end
+              << ")";
+        }
+        ASSERT_EQ(std::bit_cast<std::uint64_t>(tally.anchored_largest2),
+                  std::bit_cast<std::uint64_t>(anchored_largest2))
+            << "[" << begin << ", " << end << ")";
+        ++ranges;
+      }
+    }
+  }
+  EXPECT_GT(ranges, 500u);
+  EXPECT_GT(floored, 100u);
+  EXPECT_GT(above, 100u);
+}
+
 TEST(GviParticlePasses, EndPositionsMakeTheVec3LoopsNumbersAndTally) {
   const double h = 0.005;
   const double list_limit2 = 1.0;
