@@ -706,7 +706,7 @@ void Gvi::find_smooth_set(const System& system) {
   stats_.smooth += static_cast<std::int64_t>(ws_.smooth.size());
 }
 
-void Gvi::displaced(const Particles& P, bool kick) {
+void Gvi::displaced(const Particles& P, bool kick, const ChunkPass* then, std::size_t then_count) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
@@ -730,7 +730,7 @@ void Gvi::displaced(const Particles& P, bool kick) {
   // x = q + (half + impulse) (h / m), in vectors.
   const gvi_passes::EndPositions pass = end_positions_pass(ws_, P, h, list, built, limit2);
   const std::vector<Vec3>& f_start = engine_.force();
-  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+  auto end_positions = [&](int c, std::size_t begin, std::size_t end) {
     if (kick) {
       gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
                             nullptr, begin, end);
@@ -739,7 +739,12 @@ void Gvi::displaced(const Particles& P, bool kick) {
     largest2[static_cast<std::size_t>(c)] = tally.largest2;
     outgrown[static_cast<std::size_t>(c)] = tally.beyond_reach;
     unlisted[static_cast<std::size_t>(c)] = tally.beyond_list;
-  });
+  };
+  if (then) {
+    for_each_chunk_then(n, then_count, chunks, end_positions, *then);
+  } else {
+    for_each_chunk(n, chunks, end_positions);
+  }
   ws_.x_largest2 = 0.0;
   ws_.x_covered = by_particle;
   ws_.x_listed = built;
@@ -913,49 +918,70 @@ void Gvi::update_positions(System& system) {
   ws_.held = reflections_ ? ws_.smooth : ws_.active;
   ws_.landed.clear();  // rows added by the guard this step
   const bool by_cluster = steps_by_cluster(system.particles);
+  const std::size_t n = system.particles.size();
   for (int round = 0;; ++round) {
+    ws_.violated.clear();
+    ws_.x_smallest_gap_known = false;
+    // Overlapping beyond tolerance at x (such a row is also active there). The same pass
+    // keeps the smallest candidate gap at x for the constraint checks: every gap that may
+    // be below the smallest so far (or the tolerance) exactly, the others beyond both. Per
+    // chunk of candidates, each bounded by its own running minimum: the exact minimum and
+    // the serial order of the overlapping rows on any number of threads. Split as the pass
+    // that wrote x was. Each chunk keeps its overlapping rows at the start of its stretch of
+    // `passing`: the calling thread reads those alone, not a flag per row.
+    const bool guarded = feasibility_ != Feasibility::none;
+    const RowStretches* candidates = &ws_.candidates;
+    std::size_t count = candidates->size();
+    int chunks = chunks_for_rows_of(n, count);
+    std::vector<std::uint32_t>& passing = ws_.candidate_passing;
+    ChunkSlots<double> chunk_smallest(static_cast<std::size_t>(chunks));
+    ChunkSlots<std::size_t> kept(static_cast<std::size_t>(chunks));
+    auto screen_at_x = [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
+      double smallest = std::numeric_limits<double>::infinity();
+      std::size_t at = begin;
+      candidates->for_each(begin, end, [&](std::size_t k, const Constraint& c, double) {
+        const double gap =
+            gap_unless_beyond(c, ws_.x.data(), system.box, std::max(smallest, -gap_tolerance));
+        smallest = std::min(smallest, gap);
+        if (gap < -gap_tolerance) passing[at++] = static_cast<std::uint32_t>(k);
+      });
+      chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
+      kept[static_cast<std::size_t>(chunk)] = at - begin;
+    };
+    // With reaches per particle made this step, the candidates stay unless x leaves them,
+    // which the end positions' chunks count: the screen then runs in their job, after them
+    // (a job and its start fewer a step), where every chunk counted none.
+    bool screened = false;
+    const ChunkPass screen_if_covered = [&](int chunk, std::size_t begin, std::size_t end) {
+      for (const std::size_t outgrown : ws_.chunk_outgrown) {
+        if (outgrown > 0) return;
+      }
+      if (chunk == 0) screened = true;
+      screen_at_x(chunk, begin, end);
+    };
+    const bool screen_with_x = guarded && !by_cluster && particle_reaches() && ws_.reach >= 0.0 &&
+                               chunks > 1 && chunks == chunks_for_cheap(n);
+    if (screen_with_x) passing.resize(count);
     if (by_cluster) {
       held_positions_by_cluster(system);
     } else {
       const bool kick = solve_held_positions(system);
-      displaced(system.particles, kick);
+      displaced(system.particles, kick, screen_with_x ? &screen_if_covered : nullptr, count);
     }
-    ws_.violated.clear();
-    ws_.x_smallest_gap_known = false;
-    if (feasibility_ != Feasibility::none) {
-      // Overlapping beyond tolerance at x (such a row is also active there). The same pass
-      // keeps the smallest candidate gap at x for the constraint checks: every gap that may
-      // be below the smallest so far (or the tolerance) exactly, the others beyond both. Per
-      // chunk of candidates, each bounded by its own running minimum: the exact minimum and
-      // the serial order of the overlapping rows on any number of threads. Split as the pass
-      // that wrote x was.
-      const RowStretches& candidates = candidates_for(system, ws_.x, ws_.x_largest2, true);
-      const std::size_t count = candidates.size();
-      const int chunks = chunks_for_rows_of(system.particles.size(), count);
-      // Each chunk keeps its overlapping rows at the start of its stretch of `passing`: the
-      // calling thread reads those alone, not a flag per row.
-      std::vector<std::uint32_t>& passing = ws_.candidate_passing;
-      passing.resize(count);
-      const auto slots = static_cast<std::size_t>(chunks);
-      ChunkSlots<double> chunk_smallest(slots, std::numeric_limits<double>::infinity());
-      ChunkSlots<std::size_t> kept(slots);
-      for_each_chunk(
-          count, chunks, [&, gap_tolerance](int chunk, std::size_t begin, std::size_t end) {
-            double smallest = std::numeric_limits<double>::infinity();
-            std::size_t at = begin;
-            candidates.for_each(begin, end, [&](std::size_t k, const Constraint& c, double) {
-              const double gap = gap_unless_beyond(c, ws_.x.data(), system.box,
-                                                   std::max(smallest, -gap_tolerance));
-              smallest = std::min(smallest, gap);
-              if (gap < -gap_tolerance) passing[at++] = static_cast<std::uint32_t>(k);
-            });
-            chunk_smallest[static_cast<std::size_t>(chunk)] = smallest;
-            kept[static_cast<std::size_t>(chunk)] = at - begin;
-          });
+    if (guarded) {
+      candidates = &candidates_for(system, ws_.x, ws_.x_largest2, true);
+      if (!screened || ws_.nearby_refreshed) {
+        count = candidates->size();
+        chunks = chunks_for_rows_of(n, count);
+        passing.resize(count);
+        chunk_smallest = ChunkSlots<double>(static_cast<std::size_t>(chunks));
+        kept = ChunkSlots<std::size_t>(static_cast<std::size_t>(chunks));
+        for_each_chunk(count, chunks, screen_at_x);
+      }
       double smallest = std::numeric_limits<double>::infinity();
       for (const double s : chunk_smallest) smallest = std::min(smallest, s);
       join_kept(count, chunks, passing, kept, [&](std::size_t k) {
-        if (!contains(ws_.held, candidates[k])) ws_.violated.push_back(candidates[k]);
+        if (!contains(ws_.held, (*candidates)[k])) ws_.violated.push_back((*candidates)[k]);
       });
       ws_.x_smallest_gap = smallest;
       ws_.x_smallest_gap_known = true;

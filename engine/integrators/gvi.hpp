@@ -157,8 +157,13 @@ class Gvi final : public ConstrainedIntegrator {
   // clusters made before their solves and their end positions after (the same numbers).
   void held_positions_by_cluster(System& system);
   // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
-  // ws_.x_largest2; with `kick`, the half kick made first in the same pass.
-  void displaced(const Particles& particles, bool kick = false);
+  // ws_.x_largest2; with `kick`, the half kick made first in the same pass. Given `then`,
+  // then(c, begin, end) for the `chunks` chunks of [0, then_count) in the same job, once
+  // every end position is made, each on the thread of chunk c of the end positions (given
+  // only where those are `chunks` chunks too).
+  using ChunkPass = std::function<void(int, std::size_t, std::size_t)>;
+  void displaced(const Particles& particles, bool kick = false, const ChunkPass* then = nullptr,
+                 std::size_t then_count = 0);
   double start_energy(System& system);
   // Verlet's shadow energy at the step's start, from its H `start` (none where a force term
   // has no pairwise Hessian).
