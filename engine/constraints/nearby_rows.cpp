@@ -158,12 +158,12 @@ bool NearbyRows::bonded(std::int32_t a, std::int32_t b) const {
   return false;
 }
 
-void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
+bool NearbyRows::collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                          const NeighborList& list, const Box& box, double reach,
                          const double* particle_reach, double exact_below,
                          std::vector<Constraint>& out, std::vector<double>& gap_at_q,
                          const ParticlePass* make_reaches, RowStretches* stretches,
-                         const double* anchored_largest2) {
+                         const double* anchored_largest2, const StretchPass* then) {
   out.clear();
   gap_at_q.clear();
   // The screen's chunks 1.. left as stretches: nothing is appended after them.
@@ -272,6 +272,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
         screen_pairs(scanned_[0], q, box, radius, reach, particle_reach, exact_below, beyond, begin,
                      end, rows, gaps);
       }
+      if (then && leave_chunks) (*then)(c, rows.data(), gaps.data(), rows.size());
     };
     auto join = [&](int c, std::size_t, std::size_t) {
       if (c != 1) return;
@@ -299,7 +300,10 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
   // kept wall by wall, chunk by chunk (every particle each call: the default input's two walls
   // took 3 % of its loop on two threads when tested on the calling thread alone).
   make_reaches_alone();  // without hard spheres
-  if (set.walls.empty()) return publish();
+  if (set.walls.empty()) {
+    publish();
+    return then && left_chunks > 0;
+  }
   const std::size_t n = particles.size();
   const double* radius = particles.radius.data();
   auto row_reach = [particle_reach, reach](std::size_t i) {
@@ -333,6 +337,7 @@ void NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     }
   }
   publish();
+  return false;
 }
 
 // The screen of nearby_inequalities over pairs [first, last), then its exact test

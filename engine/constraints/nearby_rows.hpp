@@ -41,12 +41,17 @@ class NearbyRows {
   // anchors_for()'s buffer, each particle's |q - anchor| plus its reach (particle_reach), the
   // largest |q - anchor|^2 being *anchored_largest2: the collection then runs no pass over the
   // particles of its own (unless the short list is made again).
+  // Given `then`, where the rows are left as `stretches` by the threads that screened them
+  // (returns true): then(s, rows, gaps, count) for each stretch s, with its rows and gaps, on
+  // that thread in the same job, right after it screened them.
   using ParticlePass = std::function<void(std::size_t begin, std::size_t end)>;
-  void collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
+  using StretchPass = std::function<void(int stretch, const Constraint* rows, const double* gaps,
+                                         std::size_t count)>;
+  bool collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                const NeighborList& list, const Box& box, double reach, const double* particle_reach,
                double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q,
                const ParticlePass* make_reaches = nullptr, RowStretches* stretches = nullptr,
-               const double* anchored_largest2 = nullptr);
+               const double* anchored_largest2 = nullptr, const StretchPass* then = nullptr);
   // Where the short list is the one made from `list` as now built, for `particle_count`
   // particles: its anchor positions, and the buffer for their displacements that a pass of
   // the caller may fill (see collect()). Else nulls: the next collection makes it again.

@@ -32,6 +32,8 @@ class RowStretches {
 
   std::size_t size() const { return start_.back(); }
   std::size_t stretches() const { return rows_.size(); }
+  // Stretch s's first row in the whole.
+  std::size_t first_of(std::size_t s) const { return start_[s]; }
   const Constraint& operator[](std::size_t k) const {
     const std::size_t s = stretch_of(k);
     return rows_[s][k - start_[s]];

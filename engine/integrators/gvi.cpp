@@ -361,10 +361,12 @@ void Gvi::start_step(System& system) {
 // and refreshed only if a later displacement outgrows the reach.
 const RowStretches& Gvi::candidates_for(const System& system, const std::vector<Vec3>& x,
                                         double largest2_bound, bool exact,
-                                        const std::vector<std::int32_t>* moved) {
+                                        const std::vector<std::int32_t>* moved,
+                                        const NearbyRows::StretchPass* then, bool* then_ran) {
   const std::vector<Vec3>& q = ws_.q;
   const double gap_tolerance = constraints_.tolerances.gap;
   ws_.nearby_refreshed = false;
+  if (then_ran) *then_ran = false;
   // Inequality rows are hard-sphere pairs and walls: without either there is none to find
   // (ws_.nearby stays empty), and no displacement need be measured for them.
   if (!has_inequalities()) return ws_.candidates;
@@ -379,7 +381,10 @@ const RowStretches& Gvi::candidates_for(const System& system, const std::vector<
     } else {
       covered = reaches_cover(x, moved);
     }
-    if (!covered) collect_by_particle_reach(system, x);
+    if (!covered) {
+      const bool ran = collect_by_particle_reach(system, x, then);
+      if (then_ran) *then_ran = ran;
+    }
     return ws_.candidates;
   }
   // 2 sqrt(s) + tol is monotone in s (each operation correctly rounded): a bound that shows
@@ -469,7 +474,8 @@ bool Gvi::reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32
 // four times the step's largest displacement for every pair, most pairs of slow particles
 // drop out; a particle may then double its displacement (a reflection) before the rows
 // are collected again.
-void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3>& x) {
+bool Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3>& x,
+                                    const NearbyRows::StretchPass* then) {
   const std::size_t n = ws_.q.size();
   const double gap_tolerance = constraints_.tolerances.gap;
   const bool first = ws_.reach < 0.0;
@@ -515,11 +521,12 @@ void Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   // The reaches only grow: x stays covered if it was, and is when they were made from it.
   if (is_x(system, x)) ws_.x_cover_known = ws_.x_covered = true;
   if (ws_.x_cover_known && !ws_.x_covered) ws_.x_cover_known = false;
-  nearby_rows_.collect(constraints_, system.particles, q, engine_.neighbors(), system.box,
-                       ws_.reach, reach, gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q,
-                       folded ? nullptr : &make_reaches, &ws_.candidates,
-                       anchored ? &ws_.anchored_largest2 : nullptr);
+  const bool ran = nearby_rows_.collect(
+      constraints_, system.particles, q, engine_.neighbors(), system.box, ws_.reach, reach,
+      gap_tolerance, ws_.nearby, ws_.nearby_gap_at_q, folded ? nullptr : &make_reaches,
+      &ws_.candidates, anchored ? &ws_.anchored_largest2 : nullptr, then);
   ws_.nearby_refreshed = true;
+  return ran;
 }
 
 // Extended active set and reflection. A reflection can send a particle into a contact the
@@ -551,10 +558,29 @@ void Gvi::find_active_set(System& system) {
   // particles whose prediction changed.
   double largest2_bound = -1.0;
   std::size_t reflected_rows = 0;  // the rows the last round reflected (the first of `active`)
+  // The first round's test (no row is active yet) on the threads that collect the candidates,
+  // right after each collects its stretch, in the collection's job: its own job and start a
+  // step, before, and each stretch's rows read again there.
+  ws_.stretch_passing.resize(static_cast<std::size_t>(thread_count()));
+  const NearbyRows::StretchPass test_collected = [&, gap_tolerance](
+                                                     int stretch, const Constraint* rows,
+                                                     const double* gaps, std::size_t count) {
+    std::vector<std::uint32_t>& passing =
+        ws_.stretch_passing.at(static_cast<std::size_t>(stretch)).value;
+    passing.clear();
+    for (std::size_t k = 0; k < count; ++k) {
+      if (gaps[k] <= gap_tolerance ||
+          gap_unless_beyond(rows[k], ws_.predicted.data(), system.box, 0.0) <= 0.0) {
+        passing.push_back(static_cast<std::uint32_t>(k));
+      }
+    }
+  };
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
+    bool tested = false;
     const RowStretches& candidates =
         candidates_for(system, ws_.predicted, largest2_bound, false,
-                       round > 0 && local_predictions ? &ws_.changed_particles : nullptr);
+                       round > 0 && local_predictions ? &ws_.changed_particles : nullptr,
+                       round == 0 ? &test_collected : nullptr, &tested);
     const bool every_row = round == 0 || ws_.nearby_refreshed;
     // Per candidate, whether it is in the active set already (the candidates are distinct
     // rows): made again by search when the candidates were refreshed.
@@ -579,10 +605,17 @@ void Gvi::find_active_set(System& system) {
       ws_.active_gap_at_q.push_back(candidates.gap(k));
       ws_.candidate_active[k] = 1;
     };
-    // Split as the pass that wrote the predictions was.
-    filter_in_order_visiting(candidates.size(),
-                             chunks_for_rows_of(system.particles.size(), candidates.size()),
-                             ws_.candidate_passing, test, join);
+    if (tested) {
+      for (std::size_t s = 0; s < candidates.stretches(); ++s) {
+        const std::size_t first = candidates.first_of(s);
+        for (const std::uint32_t k : ws_.stretch_passing[s].value) join(first + k);
+      }
+    } else {
+      // Split as the pass that wrote the predictions was.
+      filter_in_order_visiting(candidates.size(),
+                               chunks_for_rows_of(system.particles.size(), candidates.size()),
+                               ws_.candidate_passing, test, join);
+    }
     if (!grew || !reflections_) {
       settled = true;
       break;

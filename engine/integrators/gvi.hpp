@@ -124,9 +124,13 @@ class Gvi final : public ConstrainedIntegrator {
   // `largest2_bound`, when given, is at least max |x - q|^2 (the exact value if `exact`):
   // what decides a refresh without a pass over the particles when it shows none is due.
   // `moved`, when given, holds the only particles whose x changed since the last call.
+  // `then`, when given, is handed to the collection by particle reach, if one is made
+  // (NearbyRows::collect); `*then_ran` tells whether it ran.
   const RowStretches& candidates_for(const System& system, const std::vector<Vec3>& x,
                                      double largest2_bound = -1.0, bool exact = false,
-                                     const std::vector<std::int32_t>* moved = nullptr);
+                                     const std::vector<std::int32_t>* moved = nullptr,
+                                     const NearbyRows::StretchPass* then = nullptr,
+                                     bool* then_ran = nullptr);
   // This step's end positions (ws_.x, or the positions once the momentum update swapped x into
   // them), and whether v is that vector.
   const std::vector<Vec3>& x_now(const System& system) const;
@@ -137,7 +141,9 @@ class Gvi final : public ConstrainedIntegrator {
   // rows) instead of one reach from the step's largest displacement.
   bool particle_reaches() const;
   bool reaches_cover(const std::vector<Vec3>& x, const std::vector<std::int32_t>* moved) const;
-  void collect_by_particle_reach(const System& system, const std::vector<Vec3>& x);
+  // Whether `then` ran (NearbyRows::collect).
+  bool collect_by_particle_reach(const System& system, const std::vector<Vec3>& x,
+                                 const NearbyRows::StretchPass* then = nullptr);
   static constexpr double kReachFloor = 0.5;
   // Without equality rows and with Verlet: the rows reflected (those before `first_new_row`
   // the last round's, see reflect_clusters), and the free prediction made again for the

@@ -66,6 +66,9 @@ struct GviWorkspace {
   // prediction_changed holds zeros alone (local predictions unmark their particles at the
   // end of the search): the next search need not clear it in a pass of its own.
   bool prediction_changed_clear = false;
+  // The first round's candidates that pass its test, by stretch of the candidates (tested by
+  // the threads that collected them): their indices within their stretch.
+  std::vector<OnItsOwnLine<std::vector<std::uint32_t>>> stretch_passing;
   // By share of the reflections: the particles whose prediction changed, the bound on their
   // max |prediction - q|^2, and how many of them left their reach (reach_limit2).
   struct ChangedTally {
