@@ -671,18 +671,19 @@ ShadowOperator ConstrainedIntegrator::shadow_operator(const System& system, std:
 
 // Reflects the momenta of every cluster of `rows` (equalities first, then inequalities from
 // index `first_inequality`) that holds an inequality, at positions x.
-void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<Constraint>& rows,
+bool ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<Constraint>& rows,
                                              std::size_t first_inequality,
                                              const std::vector<Vec3>& x, std::vector<Vec3>& p,
                                              const AfterReflection* after,
-                                             std::size_t first_new_row) {
+                                             std::size_t first_new_row, const ChunkPass* then,
+                                             std::size_t then_count) {
   const Particles& P = system.particles;
   // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
   // the same single-row problem with H as its energy.
   const bool lone_rows_closed =
       energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
   if (lone_rows_closed && first_inequality == 0) {
-    return reflect_inequalities(system, rows, x, p, after, first_new_row);
+    return reflect_inequalities(system, rows, x, p, after, first_new_row, then, then_count);
   }
   // Only the clusters holding an inequality are reflected: with the equality rows first (the
   // rods, prepared), found from the inequality rows alone. Clustering every row took the
@@ -720,6 +721,7 @@ void ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
     if (after) (*after)(0, cluster.particles.data(), cluster.particles.size());
   }
   reflection_terms_.add_to(step_virial_);
+  return false;
 }
 
 bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Constraint& row,
@@ -754,11 +756,12 @@ bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Cons
 // 4000-sphere fluid the lower chunk took 56 % of the rows and 59 % of the shared clusters,
 // and the calling thread's share 7.1 ms of a run against 5.4 on the other thread. Fewer rows
 // than a job is worth are reflected by the calling thread.
-void ConstrainedIntegrator::reflect_inequalities(System& system,
+bool ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const std::vector<Constraint>& rows,
                                                  const std::vector<Vec3>& x, std::vector<Vec3>& p,
                                                  const AfterReflection* after,
-                                                 std::size_t first_new_row) {
+                                                 std::size_t first_new_row, const ChunkPass* then,
+                                                 std::size_t then_count) {
   const std::size_t n = system.particles.size();
   // Below this many rows to reflect a job's start (about a microsecond) costs more than the
   // rows' lines fetched from the other cores.
@@ -865,17 +868,22 @@ void ConstrainedIntegrator::reflect_inequalities(System& system,
       if (after) (*after)(chunk, cluster.particles.data(), cluster.particles.size());
     }
   };
-  if (work < kSplitRows || chunks == 1) {
+  auto reflect_in_chunk = [&](int c, std::size_t, std::size_t) {
+    reflect_chunk(static_cast<std::size_t>(c));
+  };
+  const bool split = work >= kSplitRows && chunks > 1;
+  if (!split) {
     for (std::size_t c = 0; c < slots; ++c) reflect_chunk(c);
+  } else if (then) {
+    for_each_chunk_then(slots, then_count, chunks, reflect_in_chunk, *then);
   } else {
-    for_each_chunk(slots, chunks, [&](int c, std::size_t, std::size_t) {
-      reflect_chunk(static_cast<std::size_t>(c));
-    });
+    for_each_chunk(slots, chunks, reflect_in_chunk);
   }
   reflection_terms_.add_to(step_virial_);
   for (const OnItsOwnLine<ConstraintStatistics>& figures : reflection_stats_) {
     stats_.add(figures.value);
   }
+  return split && then;
 }
 
 bool ConstrainedIntegrator::reflect_cluster(const System& system,

@@ -153,10 +153,16 @@ class ConstrainedIntegrator : public Integrator {
   // `first_new_row` are the last call's rows, the momenta changed since by that call alone: a
   // cluster of those rows alone that it left with no row approaching would not change, and
   // is passed over (in reflect_inequalities).
-  void reflect_clusters(System& system, const std::vector<Constraint>& rows,
+  // Given `then`, where the reflections run in a job of the team (reflect_inequalities, with
+  // as many chunks as a loop over `then_count` rows read after a pass over the particles):
+  // then(c, begin, end) for those chunks in the same job, once every reflection (and `after`)
+  // is done, each on the thread of the reflections' chunk c; returns whether it ran.
+  using ChunkPass = std::function<void(int chunk, std::size_t begin, std::size_t end)>;
+  bool reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p, const AfterReflection* after = nullptr,
-                        std::size_t first_new_row = 0);
+                        std::size_t first_new_row = 0, const ChunkPass* then = nullptr,
+                        std::size_t then_count = 0);
   // Where reflections leave their figures: the virial's terms by row of the rows reflected
   // (added to the step's virial in row order), and the counters (one set per thread where
   // reflections run on several).
@@ -179,9 +185,10 @@ class ConstrainedIntegrator : public Integrator {
   bool reflect_closed_form(const System& system, const Constraint& row, std::int32_t index,
                            const std::vector<Vec3>& x, std::vector<Vec3>& p,
                            const ReflectionTally& tally, bool* settled = nullptr) const;
-  void reflect_inequalities(System& system, const std::vector<Constraint>& rows,
+  bool reflect_inequalities(System& system, const std::vector<Constraint>& rows,
                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
-                            const AfterReflection* after, std::size_t first_new_row);
+                            const AfterReflection* after, std::size_t first_new_row,
+                            const ChunkPass* then, std::size_t then_count);
   // Projects the momenta p onto the rows' tangent space at x, cluster by cluster (`passes`
   // as for solve_positions); returns the projection's virial.
   double project_momenta(System& system, const std::vector<Constraint>& rows,

@@ -575,7 +575,14 @@ void Gvi::find_active_set(System& system) {
       }
     }
   };
+  // A later round's test, where the last round's reflections ran in a job of the team: in
+  // that job (its own job and start a round, before), once every prediction is made, unless
+  // a reflected particle left its reach (then the candidates are collected again first).
+  bool tested_in_reflections = false;
+  int reflections_test_chunks = 1;
   for (int round = 0; round < constraints_.limits.active_set_rounds; ++round) {
+    const bool tested_before = tested_in_reflections;
+    tested_in_reflections = false;
     bool tested = false;
     const RowStretches& candidates =
         candidates_for(system, ws_.predicted, largest2_bound, false,
@@ -586,7 +593,8 @@ void Gvi::find_active_set(System& system) {
     // rows): made again by search when the candidates were refreshed.
     if (every_row) mark_contained(active, candidates, ws_.row_keys, ws_.candidate_active);
     bool grew = false;
-    auto test = [&, every_row, gap_tolerance](std::size_t begin, std::size_t end, auto&& pass) {
+    auto test_rows = [&, gap_tolerance](bool every_row, std::size_t begin, std::size_t end,
+                                        auto&& pass) {
       candidates.for_each(begin, end, [&](std::size_t k, const Constraint& c, double gap) {
         if (!every_row && !ws_.prediction_changed[c.i] &&
             (c.j < 0 || !ws_.prediction_changed[c.j])) {
@@ -600,6 +608,9 @@ void Gvi::find_active_set(System& system) {
         }
       });
     };
+    auto test = [&, every_row](std::size_t begin, std::size_t end, auto&& pass) {
+      test_rows(every_row, begin, end, pass);
+    };
     auto join = [&](std::size_t k) {
       active.push_back(candidates[k]), grew = true;
       ws_.active_gap_at_q.push_back(candidates.gap(k));
@@ -610,6 +621,9 @@ void Gvi::find_active_set(System& system) {
         const std::size_t first = candidates.first_of(s);
         for (const std::uint32_t k : ws_.stretch_passing[s].value) join(first + k);
       }
+    } else if (tested_before && !ws_.nearby_refreshed) {
+      join_kept(candidates.size(), reflections_test_chunks, ws_.candidate_passing,
+                ws_.reflections_test_kept, join);
     } else {
       // Split as the pass that wrote the predictions was.
       filter_in_order_visiting(candidates.size(),
@@ -629,7 +643,25 @@ void Gvi::find_active_set(System& system) {
       // Each reflected particle's prediction made again on the thread that reflected it,
       // which holds its lines (timed as the reflections).
       const TimedPhase reflecting(Phase::reflections);
-      largest2_bound = reflect_and_predict(system, *rows, reflected_rows);
+      const std::size_t count = candidates.size();
+      const int chunks = chunks_for_rows_of(n, count);
+      const bool next_round = round + 1 < constraints_.limits.active_set_rounds;
+      const bool test_with = next_round && chunks > 1 && chunks == chunks_for_cheap(n);
+      if (test_with) {
+        ws_.candidate_passing.resize(count);
+        ws_.reflections_test_kept.assign(static_cast<std::size_t>(chunks), 0);
+      }
+      const ChunkPass test_next = [&](int chunk, std::size_t begin, std::size_t end) {
+        std::size_t at = begin;
+        test_rows(false, begin, end, [&](std::size_t k) {
+          ws_.candidate_passing[at++] = static_cast<std::uint32_t>(k);
+        });
+        ws_.reflections_test_kept[static_cast<std::size_t>(chunk)] = at - begin;
+      };
+      largest2_bound =
+          reflect_and_predict(system, *rows, reflected_rows, test_with ? &test_next : nullptr,
+                              count, &tested_in_reflections);
+      reflections_test_chunks = chunks;
       reflected_rows = rows->size();
       continue;
     }
@@ -662,7 +694,8 @@ void Gvi::find_active_set(System& system) {
 // (the only ones reflections move), as free_displacement and predict make it: marks those
 // whose prediction changed and returns the bound on max |prediction - q|^2.
 double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& rows,
-                                std::size_t first_new_row) {
+                                std::size_t first_new_row, const ChunkPass* next_test,
+                                std::size_t test_count, bool* tested) {
   const Particles& P = system.particles;
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
@@ -707,7 +740,17 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
       }
     }
   };
-  reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again, first_new_row);
+  // The next round's test once every chunk has reflected, unless a chunk saw a prediction
+  // leave its reach (as candidates_for will find from the tallies).
+  const ChunkPass test_if_covered = [&, limit2](int chunk, std::size_t begin, std::size_t end) {
+    if (!limit2) return;
+    for (const OnItsOwnLine<GviWorkspace::ChangedTally>& tally : ws_.changed_tally) {
+      if (tally.value.outgrown > 0) return;
+    }
+    (*next_test)(chunk, begin, end);
+  };
+  const bool test_ran = reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again, first_new_row,
+                                         next_test ? &test_if_covered : nullptr, test_count);
   double largest2_bound = ws_.largest2;
   ws_.changed_cover_known = limit2 != nullptr;
   ws_.changed_covered = true;
@@ -717,6 +760,7 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
     largest2_bound = std::max(largest2_bound, ws_.changed_tally[c].value.largest2);
     ws_.changed_covered = ws_.changed_covered && ws_.changed_tally[c].value.outgrown == 0;
   }
+  if (tested) *tested = test_ran && ws_.changed_cover_known && ws_.changed_covered;
   return largest2_bound;
 }
 

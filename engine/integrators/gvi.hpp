@@ -148,8 +148,12 @@ class Gvi final : public ConstrainedIntegrator {
   // Without equality rows and with Verlet: the rows reflected (those before `first_new_row`
   // the last round's, see reflect_clusters), and the free prediction made again for the
   // reflected particles alone.
+  // Given `next_test`, run in the reflections' job where they run in one (reflect_clusters'
+  // `then` over `test_count` rows), once every prediction is made, unless a changed one left
+  // its particle's reach; `*tested` tells whether it ran so.
   double reflect_and_predict(System& system, const std::vector<Constraint>& rows,
-                             std::size_t first_new_row);
+                             std::size_t first_new_row, const ChunkPass* next_test = nullptr,
+                             std::size_t test_count = 0, bool* tested = nullptr);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   // Returns true where it left the half kick to displaced() (Verlet, no row held: nothing
   // reads it before the end positions).
@@ -167,7 +171,6 @@ class Gvi final : public ConstrainedIntegrator {
   // then(c, begin, end) for the `chunks` chunks of [0, then_count) in the same job, once
   // every end position is made, each on the thread of chunk c of the end positions (given
   // only where those are `chunks` chunks too).
-  using ChunkPass = std::function<void(int, std::size_t, std::size_t)>;
   void displaced(const Particles& particles, bool kick = false, const ChunkPass* then = nullptr,
                  std::size_t then_count = 0);
   double start_energy(System& system);

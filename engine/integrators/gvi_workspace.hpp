@@ -69,6 +69,9 @@ struct GviWorkspace {
   // The first round's candidates that pass its test, by stretch of the candidates (tested by
   // the threads that collected them): their indices within their stretch.
   std::vector<OnItsOwnLine<std::vector<std::uint32_t>>> stretch_passing;
+  // A later round's passing candidates, tested in the last round's reflections' job: by chunk
+  // of the candidates, at the start of its stretch of candidate_passing, this many.
+  std::vector<std::size_t> reflections_test_kept;
   // By share of the reflections: the particles whose prediction changed, the bound on their
   // max |prediction - q|^2, and how many of them left their reach (reach_limit2).
   struct ChangedTally {
