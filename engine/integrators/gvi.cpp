@@ -268,7 +268,8 @@ void Gvi::start_step(System& system) {
     pass.predicted = keep ? numbers(ws_.predicted) : nullptr;
     // The displacements the step's first collection of rows by particle reach starts from,
     // made here with the prediction: that collection's pass of its own was a job a step.
-    const bool displacements = keep && particle_reaches();
+    // (Not where the constrained predictor replaces this prediction below.)
+    const bool displacements = keep && particle_reaches() && !constrained_predictor_;
     if (displacements) ws_.displacement2.resize(n);
     pass.displacement2 = displacements ? ws_.displacement2.data() : nullptr;
     // And that collection's reaches from the last step's floor, and the particles'
