@@ -95,6 +95,17 @@ PassInputs edge_inputs(double list_limit2) {
   return s;
 }
 
+// step_start's inputs from the particles (its outputs left null).
+gvi_passes::StepStart step_start_inputs(const PassInputs& s, double h) {
+  gvi_passes::StepStart pass;
+  pass.h = h;
+  pass.position = pass_numbers(s.position);
+  pass.velocity = pass_numbers(s.velocity);
+  pass.mass = s.mass.data();
+  pass.force = pass_numbers(s.force);
+  return pass;
+}
+
 TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
   const double h = 0.005;
   const double list_limit2 = 1.0;
@@ -128,12 +139,7 @@ TEST(GviParticlePasses, StepStartMakesTheVec3LoopsNumbers) {
             displacement2[i] = norm2(predicted[i] - q[i]);
             largest2 = std::max(largest2, displacement2[i]);
           }
-          gvi_passes::StepStart pass;
-          pass.h = h;
-          pass.position = pass_numbers(s.position);
-          pass.velocity = pass_numbers(s.velocity);
-          pass.mass = s.mass.data();
-          pass.force = pass_numbers(s.force);
+          gvi_passes::StepStart pass = step_start_inputs(s, h);
           pass.at_build = listed ? pass_numbers(s.at_build) : nullptr;
           pass.list_limit2 = list_limit2;
           pass.q = pass_numbers(q2);
@@ -204,12 +210,7 @@ TEST(GviParticlePasses, StepStartMakesTheReachesAndAnchoredDisplacements) {
         std::vector<double> displacement2(kPassParticles), reach(kPassParticles, 9.0),
             limit2(kPassParticles, 9.0), moved(kPassParticles, 9.0);
         std::vector<double> reach_made = reach, limit2_made = limit2, moved_made = moved;
-        gvi_passes::StepStart pass;
-        pass.h = h;
-        pass.position = pass_numbers(s.position);
-        pass.velocity = pass_numbers(s.velocity);
-        pass.mass = s.mass.data();
-        pass.force = pass_numbers(s.force);
+        gvi_passes::StepStart pass = step_start_inputs(s, h);
         pass.q = pass_numbers(q);
         pass.p = pass_numbers(p);
         pass.p_start = pass_numbers(p_start);
