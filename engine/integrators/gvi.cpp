@@ -562,6 +562,12 @@ void Gvi::find_active_set(System& system) {
   // The first round's test (no row is active yet) on the threads that collect the candidates,
   // right after each collects its stretch, in the collection's job: its own job and start a
   // step, before, and each stretch's rows read again there.
+  // Whether a candidate not yet active joins: active at q (its gap) or overlapping at the
+  // prediction. Every round's test.
+  auto joins = [&, gap_tolerance](const Constraint& c, double gap) {
+    return gap <= gap_tolerance ||
+           gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0;
+  };
   ws_.stretch_passing.resize(static_cast<std::size_t>(thread_count()));
   const NearbyRows::StretchPass test_collected = [&, gap_tolerance](
                                                      int stretch, const Constraint* rows,
@@ -570,10 +576,7 @@ void Gvi::find_active_set(System& system) {
         ws_.stretch_passing.at(static_cast<std::size_t>(stretch)).value;
     passing.clear();
     for (std::size_t k = 0; k < count; ++k) {
-      if (gaps[k] <= gap_tolerance ||
-          gap_unless_beyond(rows[k], ws_.predicted.data(), system.box, 0.0) <= 0.0) {
-        passing.push_back(static_cast<std::uint32_t>(k));
-      }
+      if (joins(rows[k], gaps[k])) passing.push_back(static_cast<std::uint32_t>(k));
     }
   };
   // A later round's test, where the last round's reflections ran in a job of the team: in
@@ -594,19 +597,14 @@ void Gvi::find_active_set(System& system) {
     // rows): made again by search when the candidates were refreshed.
     if (every_row) mark_contained(active, candidates, ws_.row_keys, ws_.candidate_active);
     bool grew = false;
-    auto test_rows = [&, gap_tolerance](bool every_row, std::size_t begin, std::size_t end,
-                                        auto&& pass) {
+    auto test_rows = [&](bool every_row, std::size_t begin, std::size_t end, auto&& pass) {
       candidates.for_each(begin, end, [&](std::size_t k, const Constraint& c, double gap) {
         if (!every_row && !ws_.prediction_changed[c.i] &&
             (c.j < 0 || !ws_.prediction_changed[c.j])) {
           return;
         }
         // Not yet active, and active at q or overlapping at the prediction.
-        if (!ws_.candidate_active[k] &&
-            (gap <= gap_tolerance ||
-             gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0)) {
-          pass(k);
-        }
+        if (!ws_.candidate_active[k] && joins(c, gap)) pass(k);
       });
     };
     auto test = [&, every_row](std::size_t begin, std::size_t end, auto&& pass) {
@@ -743,13 +741,16 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
   };
   // The next round's test once every chunk has reflected, unless a chunk saw a prediction
   // leave its reach (as candidates_for will find from the tallies).
-  const ChunkPass test_if_covered = [&, limit2](int chunk, std::size_t begin, std::size_t end) {
-    if (!limit2) return;
-    for (const OnItsOwnLine<GviWorkspace::ChangedTally>& tally : ws_.changed_tally) {
-      if (tally.value.outgrown > 0) return;
-    }
-    (*next_test)(chunk, begin, end);
-  };
+  ChunkPass test_if_covered;
+  if (next_test) {
+    test_if_covered = [&, limit2](int chunk, std::size_t begin, std::size_t end) {
+      if (!limit2) return;
+      for (const OnItsOwnLine<GviWorkspace::ChangedTally>& tally : ws_.changed_tally) {
+        if (tally.value.outgrown > 0) return;
+      }
+      (*next_test)(chunk, begin, end);
+    };
+  }
   const bool test_ran = reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again, first_new_row,
                                          next_test ? &test_if_covered : nullptr, test_count);
   double largest2_bound = ws_.largest2;
