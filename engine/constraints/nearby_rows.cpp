@@ -44,7 +44,23 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
     for (std::size_t i = begin; i < end; ++i) moved_[i] = particle_reach ? particle_reach[i] : 0.0;
   };
   const bool anchored_by_chunk = listed == n;
-  for_each_chunk(listed, chunks, [&](int c, std::size_t begin, std::size_t end) {
+  // The chunks hold near-equal listed pairs, not particles: a half list gives each pair to
+  // its lower particle, so the first chunk holds the pairs across both of the slabs' faces
+  // (sorted in space), and in hs_4000 it held 4 % more pairs than the second (6478 against
+  // 6210, the mean over 346 builds), screened at every collection in the step's largest job.
+  std::vector<std::size_t>& starts = scan_starts_;
+  if (chunks > 1) {
+    std::vector<std::size_t>& offsets = scan_offsets_;
+    offsets.resize(listed + 1);
+    offsets[0] = 0;
+    for (std::size_t i = 0; i < listed; ++i) {
+      offsets[i + 1] = offsets[i] + (ranges.end[i] - ranges.begin[i]);
+    }
+    equal_work_starts(offsets.data(), listed, chunks, starts);
+  } else {
+    starts.assign({std::size_t{0}, listed});
+  }
+  for_each_range(starts, [&](int c, std::size_t begin, std::size_t end) {
     ScannedChunk& chunk = scanned_[static_cast<std::size_t>(c)];
     chunk.pairs.clear();
     if (anchored_by_chunk) anchor(begin, end);

@@ -97,6 +97,8 @@ class NearbyRows {
     std::vector<double> near_d2;     // their squared distances at q, after the second screen
   };
   std::vector<ScannedChunk> scanned_;
+  // make()'s chunks of the listed particles, and their listed pairs' running count.
+  std::vector<std::size_t> scan_starts_, scan_offsets_;
   // Entries of one owner scan_list() tests at a time (its buffers on the stack).
   static constexpr std::size_t kScanBlock = 64;
   // The list's pairs of particles [first, last) within contact + margin at q, appended.

@@ -143,6 +143,37 @@ TEST(Threads, DihedralsOnTwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
   for (int c = 0; c < 6; ++c) EXPECT_NEAR(w2s[c], w1s[c], 1e-12 * w_largest) << "component " << c;
 }
 
+// equal_work_starts (the pair loops' and the short list's scan's chunks): by its definition each
+// chunk c starts at the first item whose work begins at or past c k-ths of the whole, so the
+// chunks cut [0, n) in order and each holds its share of the work to within one item's.
+TEST(Threads, EqualWorkStartsCutTheItemsIntoSharesWithinOneItem) {
+  std::mt19937_64 random(11);
+  // Uneven items, heavier towards the start (as a half list's first chunk of a slab box).
+  std::uniform_int_distribution<std::size_t> work(0, 40);
+  const std::size_t n = 4000;
+  std::vector<std::size_t> offsets(n + 1, 0);
+  std::size_t largest = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t w = work(random) + (i < n / 8 ? 30 : 0);
+    largest = std::max(largest, w);
+    offsets[i + 1] = offsets[i] + w;
+  }
+  for (const int chunks : {1, 2, 3, 8}) {
+    std::vector<std::size_t> starts;
+    equal_work_starts(offsets.data(), n, chunks, starts);
+    ASSERT_EQ(starts.size(), static_cast<std::size_t>(chunks) + 1);
+    EXPECT_EQ(starts.front(), 0u);
+    EXPECT_EQ(starts.back(), n);
+    const double share = static_cast<double>(offsets[n]) / chunks;
+    for (int c = 0; c < chunks; ++c) {
+      EXPECT_LE(starts[c], starts[c + 1]) << chunks << " chunks, chunk " << c;
+      const double held = static_cast<double>(offsets[starts[c + 1]] - offsets[starts[c]]);
+      EXPECT_LE(std::abs(held - share), static_cast<double>(largest))
+          << chunks << " chunks, chunk " << c;
+    }
+  }
+}
+
 TEST(Threads, NeighbourListIsTheSameListOnAnyThreadCount) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
   // Positions inside the box, as a run wraps them: the list then has image codes too.
