@@ -44,10 +44,10 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
     for (std::size_t i = begin; i < end; ++i) moved_[i] = particle_reach ? particle_reach[i] : 0.0;
   };
   const bool anchored_by_chunk = listed == n;
-  // The chunks hold near-equal listed pairs, not particles: a half list gives each pair to
-  // its lower particle, so the first chunk holds the pairs across both of the slabs' faces
-  // (sorted in space), and in hs_4000 it held 4 % more pairs than the second (6478 against
-  // 6210, the mean over 346 builds), screened at every collection in the step's largest job.
+  // The chunks hold near-equal listed pairs, not particles: split by particles, the first of
+  // hs_4000's two chunks held 4 % more pairs than the second (6478 against 6210, the mean over
+  // 346 builds), and its screen, at every collection in the step's largest job, 6 % more
+  // instructions (0.8 % so split: bench/README.md, "Stop 67").
   std::vector<std::size_t>& starts = scan_starts_;
   if (chunks > 1) {
     std::vector<std::size_t>& offsets = scan_offsets_;
