@@ -148,7 +148,7 @@ TEST(Threads, DihedralsOnTwoThreadsRepeatBitForBitAndAgreeWithOneToRoundOff) {
 // chunks cut [0, n) in order and each holds its share of the work to within one item's.
 TEST(Threads, EqualWorkStartsCutTheItemsIntoSharesWithinOneItem) {
   std::mt19937_64 random(11);
-  // Uneven items, heavier towards the start (as a half list's first chunk of a slab box).
+  // Uneven items, heavier towards the start (as hs_4000's first chunk held more pairs).
   std::uniform_int_distribution<std::size_t> work(0, 40);
   const std::size_t n = 4000;
   std::vector<std::size_t> offsets(n + 1, 0);
