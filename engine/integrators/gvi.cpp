@@ -569,8 +569,7 @@ void Gvi::find_active_set(System& system) {
            gap_unless_beyond(c, ws_.predicted.data(), system.box, 0.0) <= 0.0;
   };
   ws_.stretch_passing.resize(static_cast<std::size_t>(thread_count()));
-  const NearbyRows::StretchPass test_collected = [&, gap_tolerance](
-                                                     int stretch, const Constraint* rows,
+  const NearbyRows::StretchPass test_collected = [&](int stretch, const Constraint* rows,
                                                      const double* gaps, std::size_t count) {
     std::vector<std::uint32_t>& passing =
         ws_.stretch_passing.at(static_cast<std::size_t>(stretch)).value;
@@ -646,17 +645,18 @@ void Gvi::find_active_set(System& system) {
       const int chunks = chunks_for_rows_of(n, count);
       const bool next_round = round + 1 < constraints_.limits.active_set_rounds;
       const bool test_with = next_round && chunks > 1 && chunks == chunks_for_cheap(n);
+      ChunkPass test_next;
       if (test_with) {
         ws_.candidate_passing.resize(count);
         ws_.reflections_test_kept.assign(static_cast<std::size_t>(chunks), 0);
+        test_next = [&](int chunk, std::size_t begin, std::size_t end) {
+          std::size_t at = begin;
+          test_rows(false, begin, end, [&](std::size_t k) {
+            ws_.candidate_passing[at++] = static_cast<std::uint32_t>(k);
+          });
+          ws_.reflections_test_kept[static_cast<std::size_t>(chunk)] = at - begin;
+        };
       }
-      const ChunkPass test_next = [&](int chunk, std::size_t begin, std::size_t end) {
-        std::size_t at = begin;
-        test_rows(false, begin, end, [&](std::size_t k) {
-          ws_.candidate_passing[at++] = static_cast<std::uint32_t>(k);
-        });
-        ws_.reflections_test_kept[static_cast<std::size_t>(chunk)] = at - begin;
-      };
       largest2_bound =
           reflect_and_predict(system, *rows, reflected_rows, test_with ? &test_next : nullptr,
                               count, &tested_in_reflections);
