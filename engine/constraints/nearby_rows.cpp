@@ -44,12 +44,10 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
     for (std::size_t i = begin; i < end; ++i) moved_[i] = particle_reach ? particle_reach[i] : 0.0;
   };
   const bool anchored_by_chunk = listed == n;
-  // The chunks hold shares of the listed pairs, not of the particles: split by particles, the
-  // first of hs_4000's two chunks held 4 % more pairs than the second (6478 against 6210, the
-  // mean over 346 builds), and its screen, at every collection in the step's largest job, 6 %
-  // more instructions (0.8 % in equal pairs: bench/README.md, "Stop 67"). The shares follow the
-  // threads' measured speeds (SpeedShares): on a machine whose two vCPUs ran 20-30 %
-  // apart for whole runs, the faster thread waited for the other at every collection.
+  // The chunks hold near-equal listed pairs, not particles: split by particles, the first of
+  // hs_4000's two chunks held 4 % more pairs than the second (6478 against 6210, the mean over
+  // 346 builds), and its screen, at every collection in the step's largest job, 6 % more
+  // instructions (0.8 % so split: bench/README.md, "Stop 67").
   std::vector<std::size_t>& starts = scan_starts_;
   if (chunks > 1) {
     std::vector<std::size_t>& offsets = scan_offsets_;
@@ -58,7 +56,7 @@ void NearbyRows::make(const ConstraintSet& set, const Particles& particles, cons
     for (std::size_t i = 0; i < listed; ++i) {
       offsets[i + 1] = offsets[i] + (ranges.end[i] - ranges.begin[i]);
     }
-    weighted_work_starts(offsets.data(), listed, split_.update(chunks).data(), chunks, starts);
+    equal_work_starts(offsets.data(), listed, chunks, starts);
   } else {
     starts.assign({std::size_t{0}, listed});
   }
@@ -277,7 +275,6 @@ bool NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
     chunk_rows_.resize(static_cast<std::size_t>(chunks));
     chunk_gaps_.resize(static_cast<std::size_t>(chunks));
     auto screen = [&](int c, std::size_t begin, std::size_t end) {
-      const ChunkClock clock;
       std::vector<Constraint>& rows = c == 0 ? out : chunk_rows_[static_cast<std::size_t>(c)];
       std::vector<double>& gaps = c == 0 ? gap_at_q : chunk_gaps_[static_cast<std::size_t>(c)];
       if (c != 0) rows.clear(), gaps.clear();
@@ -292,10 +289,6 @@ bool NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
                      end, rows, gaps);
       }
       if (then && leave_chunks) (*then)(c, rows.data(), gaps.data(), rows.size());
-      if (by_scanned_chunk) {
-        split_.record(c, static_cast<double>(scanned_[static_cast<std::size_t>(c)].pairs.size()),
-                      clock.seconds());
-      }
     };
     auto join = [&](int c, std::size_t, std::size_t) {
       if (c != 1) return;

@@ -3,12 +3,10 @@
 #include <array>
 #include <cstdint>
 #include <functional>
-#include <utility>
 #include <vector>
 
 #include "constraints/constraint_set.hpp"
 #include "constraints/row_stretches.hpp"
-#include "core/speed_shares.hpp"
 
 namespace deli {
 
@@ -62,10 +60,6 @@ class NearbyRows {
     double* moved = nullptr;
   };
   Anchors anchors_for(const NeighborList& list, std::size_t particle_count);
-  // Where the short list's scan is split: each chunk's share of the listed pairs at every make
-  // in proportion to `weights` (one per chunk) rather than to its thread's measured speed
-  // (tests: the rows are the same whatever the shares). Empty: measured again.
-  void set_split_weights(std::vector<double> weights) { split_.fix(std::move(weights)); }
 
  private:
   // The short list at q; each particle's displacement since (moved_) starts at its reach
@@ -105,9 +99,6 @@ class NearbyRows {
   std::vector<ScannedChunk> scanned_;
   // make()'s chunks of the listed particles, and their listed pairs' running count.
   std::vector<std::size_t> scan_starts_, scan_offsets_;
-  // Each chunk's share of the listed pairs, by its thread's speed in the screen since the last
-  // make: the rows and their order are the serial scan's whatever the shares.
-  SpeedShares split_;
   // Entries of one owner scan_list() tests at a time (its buffers on the stack).
   static constexpr std::size_t kScanBlock = 64;
   // The list's pairs of particles [first, last) within contact + margin at q, appended.

@@ -119,43 +119,6 @@ inline void equal_work_starts(const std::size_t* offsets, std::size_t n, int chu
   }
 }
 
-// equal_work_starts with chunk c's share of the work weights[c] over the weights' sum (each
-// weight positive): chunk c starts at the first item whose work begins at or past the shares
-// of chunks 0..c-1.
-inline void weighted_work_starts(const std::size_t* offsets, std::size_t n, const double* weights,
-                                 int chunks, std::vector<std::size_t>& starts) {
-  const auto k = static_cast<std::size_t>(chunks);
-  starts.assign(k + 1, n);
-  starts[0] = 0;
-  double total = 0.0;
-  for (std::size_t c = 0; c < k; ++c) total += weights[c];
-  const auto work = static_cast<double>(offsets[n] - offsets[0]);
-  double before = 0.0;
-  for (std::size_t c = 1; c < k; ++c) {
-    before += weights[c - 1];
-    const auto share = offsets[0] + static_cast<std::size_t>(work * std::min(before / total, 1.0));
-    starts[c] = static_cast<std::size_t>(std::lower_bound(offsets, offsets + n, share) - offsets);
-  }
-}
-
-// The starts of `chunks` contiguous chunks of [0, n), chunk c holding weights[c] over the
-// weights' sum of the items (rounded down); starts[chunks] = n.
-inline void weighted_starts(std::size_t n, const double* weights, int chunks,
-                            std::vector<std::size_t>& starts) {
-  const auto k = static_cast<std::size_t>(chunks);
-  starts.assign(k + 1, n);
-  starts[0] = 0;
-  double total = 0.0;
-  for (std::size_t c = 0; c < k; ++c) total += weights[c];
-  double before = 0.0;
-  for (std::size_t c = 1; c < k; ++c) {
-    before += weights[c - 1];
-    starts[c] =
-        std::max(starts[c - 1],
-                 std::min(n, static_cast<std::size_t>(static_cast<double>(n) * before / total)));
-  }
-}
-
 // One value per chunk, on the stack for up to 16 chunks: a GVI step of the 4000-sphere fluid
 // runs some twenty loops, and their heap blocks (allocated and freed by the calling thread
 // while the others wait) were 2 % of its samples on two threads.

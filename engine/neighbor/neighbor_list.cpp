@@ -356,14 +356,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
       std::find(chunk_moved.begin(), chunk_moved.end(), 1) == chunk_moved.end();
   // Chunks of consecutive slots, each listing its particles' partners in order; the lists
   // are then joined in chunk order: the same list on any number of threads.
-  // Cut where the threads' speeds in the last builds' scans put it (the same list wherever).
   const int chunks = chunks_for(static_cast<std::size_t>(n));
-  if (chunks > 1) {
-    weighted_starts(static_cast<std::size_t>(n), scan_split_.update(chunks).data(), chunks,
-                    scan_starts_);
-  } else {
-    scan_starts_.assign({std::size_t{0}, static_cast<std::size_t>(n)});
-  }
   chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
   chunk_codes_.resize(static_cast<std::size_t>(chunks));
   chunk_hit_slots_.resize(static_cast<std::size_t>(chunks));
@@ -499,11 +492,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     chunk_hit_slots_[k] = std::move(hit_slot);
     chunk_hit_codes_[k] = std::move(hit_code);
   };
-  for_each_range(scan_starts_, [&](int chunk, std::size_t begin, std::size_t end) {
-    const ChunkClock clock;
-    list_chunk(chunk, begin, end);
-    scan_split_.record(chunk, static_cast<double>(end - begin), clock.seconds());
-  });
+  for_each_chunk(static_cast<std::size_t>(n), chunks, list_chunk);
   std::vector<std::size_t> chunk_start(static_cast<std::size_t>(chunks) + 1, 0);
   for (int c = 0; c < chunks; ++c) {
     chunk_start[c + 1] = chunk_start[c] + chunk_neighbors_[static_cast<std::size_t>(c)].size();
@@ -519,17 +508,19 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   } else {
     slot_neighbors_.resize(pairs);
     slot_codes_.resize(coded ? pairs : 0);
-    for_each_range(scan_starts_, [&](int chunk, std::size_t begin, std::size_t end) {
-      const std::size_t base = chunk_start[static_cast<std::size_t>(chunk)];
-      const std::vector<std::int32_t>& in = chunk_neighbors_[static_cast<std::size_t>(chunk)];
-      std::copy(in.begin(), in.end(), slot_neighbors_.begin() + static_cast<std::ptrdiff_t>(base));
-      if (coded) {
-        const std::vector<std::uint8_t>& codes = chunk_codes_[static_cast<std::size_t>(chunk)];
-        std::copy(codes.begin(), codes.end(),
-                  slot_codes_.begin() + static_cast<std::ptrdiff_t>(base));
-      }
-      for (std::size_t slot = begin; slot < end; ++slot) slot_offsets_[slot + 1] += base;
-    });
+    for_each_chunk(
+        static_cast<std::size_t>(n), chunks, [&](int chunk, std::size_t begin, std::size_t end) {
+          const std::size_t base = chunk_start[static_cast<std::size_t>(chunk)];
+          const std::vector<std::int32_t>& in = chunk_neighbors_[static_cast<std::size_t>(chunk)];
+          std::copy(in.begin(), in.end(),
+                    slot_neighbors_.begin() + static_cast<std::ptrdiff_t>(base));
+          if (coded) {
+            const std::vector<std::uint8_t>& codes = chunk_codes_[static_cast<std::size_t>(chunk)];
+            std::copy(codes.begin(), codes.end(),
+                      slot_codes_.begin() + static_cast<std::ptrdiff_t>(base));
+          }
+          for (std::size_t slot = begin; slot < end; ++slot) slot_offsets_[slot + 1] += base;
+        });
   }
 
   pairs_ = pairs;

@@ -4,10 +4,8 @@
 #include <atomic>
 #include <cstdint>
 #include <mutex>
-#include <utility>
 #include <vector>
 
-#include "core/speed_shares.hpp"
 #include "core/vec3.hpp"
 #include "neighbor/touched_blocks.hpp"
 #include "system/box.hpp"
@@ -31,10 +29,6 @@ class NeighborList {
   void set_exclusions(std::vector<std::array<std::int32_t, 2>> excluded);
 
   void build(const std::vector<Vec3>& position, const Box& box);
-  // The build's scan cut into chunks holding shares of the particles in proportion to
-  // `weights` (one per chunk) rather than to their threads' measured speeds (tests: the list
-  // is the same whatever the shares). Empty: measured again.
-  void set_scan_shares(std::vector<double> weights) { scan_split_.fix(std::move(weights)); }
   bool needs_rebuild(const std::vector<Vec3>& position) const;
   // needs_rebuild's test one particle at a time, for a caller's pass over the particles:
   // the list holds `count` particles' build positions, and particle i at x keeps it valid.
@@ -159,10 +153,6 @@ class NeighborList {
   std::vector<std::int32_t> stencil_cells_, stencil_ends_;
   std::vector<std::uint8_t> stencil_codes_;
 
-  // The build's scan in chunks of slots [scan_starts_[c], scan_starts_[c + 1]), their shares
-  // by the threads' measured speeds.
-  std::vector<std::size_t> scan_starts_;
-  SpeedShares scan_split_;
   // Each chunk's part of the list during a build (kept: their capacity is reused).
   std::vector<std::vector<std::int32_t>> chunk_neighbors_;
   std::vector<std::vector<std::uint8_t>> chunk_codes_;

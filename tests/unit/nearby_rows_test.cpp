@@ -15,7 +15,6 @@
 #include <limits>
 #include <random>
 #include <string>
-#include <utility>
 
 #include "core/parallel.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -177,74 +176,6 @@ TEST(NearbyRows, TwoThreadsCollectTheOneThreadRows) {
       }
     }
   }
-}
-
-// The short list's chunks hold shares of its pairs that follow the threads' measured speeds
-// (NearbyRows::update_split_weights): the rows, their order, their gaps and the stretches'
-// passes' results must not depend on those shares. Two threads with shares fixed at 1:3 and
-// 3:1 against one thread: the same rows and gaps bit for bit, and each row met once by
-// `then` in a stretch whose rows, joined in stretch order, are those rows. The shares must
-// move the cut: the first stretch holds fewer rows at 1:3 than at 3:1.
-TEST(NearbyRows, TheRowsDoNotDependOnTheChunksShares) {
-#ifndef _OPENMP
-  GTEST_SKIP() << "built without OpenMP";
-#endif
-  NearbyRowsFluid fluid = nearby_rows_fluid(1200, 13);
-  fluid.set.walls.clear();  // the rows left as stretches where their threads wrote them
-  NeighborList list(1.0, 0.4);
-  list.build(fluid.particles.position, fluid.box);
-  struct Collected {
-    std::vector<Constraint> rows;
-    std::vector<double> gaps;
-    std::size_t first_stretch = 0;
-    std::vector<Constraint> passed;  // the rows `then` met, in stretch order
-  };
-  auto collect = [&](int threads, std::vector<double> weights) {
-    const int before = thread_count();
-    const std::size_t cheap_before = cheap_chunk_minimum();
-    set_thread_count(threads);
-    set_cheap_chunk_minimum(512);
-    NearbyRows rows;
-    rows.set_split_weights(std::move(weights));
-    std::vector<Constraint> out;
-    std::vector<double> gaps;
-    RowStretches stretches;
-    std::vector<std::vector<Constraint>> met(2);
-    const NearbyRows::StretchPass then = [&](int stretch, const Constraint* r, const double*,
-                                             std::size_t count) {
-      met.at(static_cast<std::size_t>(stretch)).assign(r, r + count);
-    };
-    rows.collect(fluid.set, fluid.particles, fluid.particles.position.data(), list, fluid.box, 0.1,
-                 fluid.reach.data(), 1e-10, out, gaps, nullptr, &stretches, nullptr, &then);
-    set_thread_count(before);
-    set_cheap_chunk_minimum(cheap_before);
-    Collected c;
-    stretches.join(c.rows, c.gaps);
-    c.first_stretch = stretches.stretches() > 1 ? stretches.first_of(1) : c.rows.size();
-    for (std::size_t s = 0; s < stretches.stretches(); ++s) {
-      c.passed.insert(c.passed.end(), met[s].begin(), met[s].end());
-    }
-    return c;
-  };
-  const Collected one = collect(1, {});
-  EXPECT_GT(one.rows.size(), kParallelMinimum);
-  std::vector<std::size_t> first_stretch;
-  for (const std::vector<double>& weights :
-       {std::vector<double>{1.0, 3.0}, std::vector<double>{3.0, 1.0}}) {
-    SCOPED_TRACE(weights[0]);
-    const Collected two = collect(2, weights);
-    first_stretch.push_back(two.first_stretch);
-    ASSERT_EQ(two.rows.size(), one.rows.size());
-    ASSERT_EQ(two.passed.size(), one.rows.size());
-    for (std::size_t k = 0; k < one.rows.size(); ++k) {
-      EXPECT_TRUE(same_row(two.rows[k], one.rows[k])) << "row " << k;
-      EXPECT_EQ(two.gaps[k], one.gaps[k]) << "row " << k;
-      EXPECT_TRUE(same_row(two.passed[k], one.rows[k])) << "row " << k;
-    }
-  }
-  // About a quarter and three quarters of the rows.
-  EXPECT_LT(first_stretch[0], one.rows.size() / 3);
-  EXPECT_GT(first_stretch[1], 2 * one.rows.size() / 3);
 }
 
 // ConstraintSet::minimum_gap (the thermo's min_gap) is the smallest gap over every pair not

@@ -16,12 +16,10 @@
 #include <fstream>
 #include <random>
 #include <thread>
-#include <tuple>
 
 #include "constraints/clusters.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
-#include "core/speed_shares.hpp"
 #include "input/run_input.hpp"
 #include "integrators/gvi.hpp"
 #include "neighbor/neighbor_list.hpp"
@@ -176,92 +174,6 @@ TEST(Threads, EqualWorkStartsCutTheItemsIntoSharesWithinOneItem) {
   }
 }
 
-// weighted_work_starts and weighted_starts (the chunks' shares by their threads' speeds, core/
-// speed_shares.hpp): by their definitions chunk c holds weights[c] over the weights' sum of
-// the work, or of the items, to within one item's; chunks cut [0, n) in order.
-TEST(Threads, WeightedStartsCutTheItemsIntoTheirWeightsShares) {
-  std::mt19937_64 random(12);
-  std::uniform_int_distribution<std::size_t> work(0, 40);
-  const std::size_t n = 4000;
-  std::vector<std::size_t> offsets(n + 1, 0), ones(n + 1, 0);
-  std::size_t largest = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t w = work(random) + (i < n / 8 ? 30 : 0);
-    largest = std::max(largest, w);
-    offsets[i + 1] = offsets[i] + w;
-    ones[i + 1] = i + 1;
-  }
-  for (const std::vector<double>& weights : {std::vector<double>{1.0},
-                                             {1.0, 3.0},
-                                             {0.7, 0.3},
-                                             {1.0, 2.0, 3.0},
-                                             {5, 1, 1, 1, 1, 1, 1, 1}}) {
-    const int chunks = static_cast<int>(weights.size());
-    double sum = 0.0;
-    for (const double w : weights) sum += w;
-    std::vector<std::size_t> by_work, by_item;
-    weighted_work_starts(offsets.data(), n, weights.data(), chunks, by_work);
-    weighted_starts(n, weights.data(), chunks, by_item);
-    for (const auto& [starts, counts, one] :
-         {std::tuple{&by_work, &offsets, largest}, std::tuple{&by_item, &ones, std::size_t{1}}}) {
-      ASSERT_EQ(starts->size(), weights.size() + 1);
-      EXPECT_EQ(starts->front(), 0u);
-      EXPECT_EQ(starts->back(), n);
-      for (int c = 0; c < chunks; ++c) {
-        const double share = static_cast<double>((*counts)[n]) * weights[c] / sum;
-        EXPECT_LE((*starts)[c], (*starts)[c + 1]) << chunks << " chunks, chunk " << c;
-        const double held =
-            static_cast<double>((*counts)[(*starts)[c + 1]] - (*counts)[(*starts)[c]]);
-        EXPECT_LE(std::abs(held - share), static_cast<double>(one))
-            << chunks << " chunks, chunk " << c;
-      }
-    }
-  }
-}
-
-// SpeedShares by its definition: halfway from the last shares to the measured speeds' shares
-// (work a second), none below half an equal share; equal before any measurement; unchanged
-// after calls that recorded nothing for some chunk; fixed shares over their sum.
-TEST(Threads, SpeedSharesMoveHalfwayToTheMeasuredSpeeds) {
-  SpeedShares shares;
-  std::vector<double> s = shares.update(2);
-  EXPECT_EQ(s, (std::vector<double>{0.5, 0.5}));
-  // Speeds 100 and 50 a second: shares 2/3 and 1/3.
-  shares.record(0, 100.0, 1.0);
-  shares.record(1, 50.0, 0.5);
-  shares.record(1, 50.0, 1.5);
-  s = shares.update(2);
-  EXPECT_NEAR(s[0], 0.5 * (0.5 + 2.0 / 3.0), 1e-15);
-  EXPECT_NEAR(s[1], 0.5 * (0.5 + 1.0 / 3.0), 1e-15);
-  // Nothing recorded for chunk 1: the shares stay.
-  shares.record(0, 100.0, 1.0);
-  EXPECT_EQ(shares.update(2), s);
-  for (int call = 0; call < 40; ++call) {
-    shares.record(0, 300.0, 3.0);
-    shares.record(1, 100.0, 2.0);
-    s = shares.update(2);
-  }
-  EXPECT_NEAR(s[0], 2.0 / 3.0, 1e-12);
-  // Speeds 10:1 (shares 10/11 and 1/11), none below half an equal share: 1/4 for the slower,
-  // 3/4 for the other.
-  for (int call = 0; call < 40; ++call) {
-    shares.record(0, 10.0, 1.0);
-    shares.record(1, 1.0, 1.0);
-    s = shares.update(2);
-  }
-  EXPECT_NEAR(s[0], 0.75, 1e-12);
-  EXPECT_NEAR(s[1], 0.25, 1e-12);
-  // A chunk beyond the last update's is not recorded; another chunk count starts equal.
-  shares.record(2, 1.0, 1.0);
-  EXPECT_EQ(shares.update(3), (std::vector<double>{1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0}));
-  shares.fix({1.0, 3.0});
-  shares.record(0, 1.0, 1.0);
-  shares.record(1, 1.0, 1.0);
-  EXPECT_EQ(shares.update(2), (std::vector<double>{0.25, 0.75}));
-  shares.fix({});
-  EXPECT_EQ(shares.update(2), (std::vector<double>{0.25, 0.75}));  // measured nothing since
-}
-
 TEST(Threads, NeighbourListIsTheSameListOnAnyThreadCount) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
   // Positions inside the box, as a run wraps them: the list then has image codes too.
@@ -280,19 +192,6 @@ TEST(Threads, NeighbourListIsTheSameListOnAnyThreadCount) {
   EXPECT_EQ(serial.offsets(), threaded.offsets());
   EXPECT_EQ(serial.image_codes(), threaded.image_codes());
   EXPECT_FALSE(serial.image_codes().empty());
-  // The scan's chunks hold shares that follow the threads' measured speeds: any shares give
-  // the same list. Two builds at each (the second from the first's scratch arrays).
-  for (const std::vector<double>& shares : {std::vector<double>{1.0, 3.0}, {3.0, 1.0}}) {
-    const ThreadCount threads(2);
-    NeighborList shared(2.5, 0.3);
-    shared.set_scan_shares(shares);
-    for (int build = 0; build < 2; ++build) {
-      shared.build(input.system.particles.position, input.system.box);
-      EXPECT_EQ(serial.neighbors(), shared.neighbors()) << shares[0] << ":" << shares[1];
-      EXPECT_EQ(serial.offsets(), shared.offsets()) << shares[0] << ":" << shares[1];
-      EXPECT_EQ(serial.image_codes(), shared.image_codes()) << shares[0] << ":" << shares[1];
-    }
-  }
 }
 
 // A list object rebuilt keeps its scratch arrays between builds: its list after other
