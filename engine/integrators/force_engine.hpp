@@ -40,6 +40,11 @@ class ForceEngine {
   bool neighbors_cover(const std::vector<Vec3>& x) const { return !neighbors_.needs_rebuild(x); }
 
   const std::vector<Vec3>& force() const { return force_; }
+  // Whether compute() for `particle_count` particles leaves force() as it is: zeros, from a
+  // force field without terms.
+  bool forces_stay(std::size_t particle_count) const {
+    return force_field_.terms().empty() && force_zero_ && force_.size() == particle_count;
+  }
   const ForceEvaluation& last() const { return last_; }
   const NeighborList& neighbors() const { return neighbors_; }
   const ForceField& force_field() const { return force_field_; }

@@ -809,12 +809,28 @@ void Gvi::displaced(const Particles& P, bool kick, const ChunkPass* then, std::s
   // x = q + (half + impulse) (h / m), in vectors.
   const gvi_passes::EndPositions pass = end_positions_pass(ws_, P, h, list, built, limit2);
   const std::vector<Vec3>& f_start = engine_.force();
-  auto end_positions = [&](int c, std::size_t begin, std::size_t end) {
+  // No row held and no force (the hard-sphere fluid's usual step): the force at x is f_start's
+  // zeros, and the momentum update's kick and velocities are made here, from the half kick
+  // just made, into buffers of their own (a later round of the feasibility guard starts from
+  // the momenta again). update_momenta's pass of its own was a job of the team a step.
+  const bool momenta = kick && engine_.forces_stay(n);
+  ws_.momenta_made = momenta;
+  if (momenta) {
+    ws_.p_next.resize(n);
+    ws_.velocity_next.resize(n);
+  }
+  auto end_positions = [&, momenta](int c, std::size_t begin, std::size_t end) {
     if (kick) {
       gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
                             nullptr, begin, end);
     }
     const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(pass, begin, end);
+    if (momenta) {
+      gvi_passes::second_kick(h, numbers(ws_.half), pass.impulse, numbers(f_start),
+                              numbers(ws_.p_next), begin, end);
+      gvi_passes::velocities(numbers(ws_.p_next), P.mass.data(), numbers(ws_.velocity_next), begin,
+                             end);
+    }
     largest2[static_cast<std::size_t>(c)] = tally.largest2;
     outgrown[static_cast<std::size_t>(c)] = tally.beyond_reach;
     unlisted[static_cast<std::size_t>(c)] = tally.beyond_list;
@@ -1135,12 +1151,21 @@ void Gvi::update_momenta(System& system, bool tally) {
   // No row to project the momenta on, none landed (the hard-sphere fluid's usual step): the
   // velocities in the kick's pass, one job of the team rather than two.
   const bool kick_alone = ws_.held.empty() && constraints_.equalities.empty() && !landed;
-  for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
-    gvi_passes::second_kick(h, numbers(ws_.half), impulse, numbers(f), numbers(p), begin, end);
-    if (kick_alone) {
-      gvi_passes::velocities(numbers(p), P.mass.data(), numbers(P.velocity), begin, end);
-    }
-  });
+  // The end positions' pass made them from these numbers: f stayed f_start's zeros.
+  const bool made =
+      kick_alone && ws_.momenta_made && engine_.forces_stay(n) && lagrangian_ == Lagrangian::verlet;
+  ws_.momenta_made = false;
+  if (made) {
+    std::swap(p, ws_.p_next);
+    std::swap(P.velocity, ws_.velocity_next);
+  } else {
+    for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
+      gvi_passes::second_kick(h, numbers(ws_.half), impulse, numbers(f), numbers(p), begin, end);
+      if (kick_alone) {
+        gvi_passes::velocities(numbers(p), P.mass.data(), numbers(P.velocity), begin, end);
+      }
+    });
+  }
   if (kick_alone) {
     ws_.momentum_rows.clear();
     step_virial_ += ws_.position_virial;

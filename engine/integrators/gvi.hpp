@@ -167,7 +167,8 @@ class Gvi final : public ConstrainedIntegrator {
   // clusters made before their solves and their end positions after (the same numbers).
   void held_positions_by_cluster(System& system);
   // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
-  // ws_.x_largest2; with `kick`, the half kick made first in the same pass. Given `then`,
+  // ws_.x_largest2; with `kick`, the half kick made first in the same pass, and where no force
+  // acts the momentum update's kick and velocities after it (ws_.momenta_made). Given `then`,
   // then(c, begin, end) for the `chunks` chunks of [0, then_count) in the same job, once
   // every end position is made, each on the thread of chunk c of the end positions (given
   // only where those are `chunks` chunks too).

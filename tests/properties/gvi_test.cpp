@@ -275,6 +275,60 @@ TEST(Gvi, ReflectedSphereBeyondItsReachMeetsTheNextOne) {
   EXPECT_LE(p.velocity[1].x, p.velocity[2].x + 1e-14);
 }
 
+// Where no force acts and no row is held (a hard-sphere fluid's usual step), the end positions'
+// pass makes the momentum update's kick and velocities too (Gvi::displaced); a force field
+// whose forces are zeros it computes (LJ of epsilon 0) leaves them to update_momenta's own
+// pass. The same numbers either way: the three spheres above, with one round of
+// the active set so that the light sphere's second contact is missed and the feasibility guard
+// lands it (that step's momenta come from the landing, not from the pass made before it).
+TEST(Gvi, ForcelessStepsMomentaAsInTheirOwnPass) {
+  const double h = 0.01, v = 1.0, gap_to_third = 2.15 * v * h;
+  auto run = [&](const std::string& pairs, double& landings) {
+    GviRun gvi(input_with_atoms("forceless",
+                                {{{-1.0 - 0.5 * v * h, 0, 0}, {v, 0, 0}, 2, 10.0},
+                                 {{0, 0, 0}, {0, 0, 0}, 1, 1.0},
+                                 {{1.0 + gap_to_third, 0, 0}, {-0.5 * v, 0, 0}, 1, 1.0}},
+                                "fff", {-5, -5, -5}, {5, 5, 5},
+                                pairs +
+                                    "[constraints]\nhard_spheres = { diameter = 1.0 }\n"
+                                    "limits = { active_set_rounds = 1 }\n" +
+                                    with_timestep(h)));
+    gvi.gvi->take_statistics();  // setup's own
+    std::vector<Vec3> states;
+    for (int n = 0; n < 40; ++n) {
+      gvi.step();
+      const Particles& p = gvi.particles();
+      states.insert(states.end(), p.position.begin(), p.position.end());
+      states.insert(states.end(), p.velocity.begin(), p.velocity.end());
+    }
+    landings = statistic(gvi.gvi->take_statistics(), "landings");
+    return states;
+  };
+  for (const int threads : {1, 2}) {
+    if (threads > 1 && !testing::kThreaded) continue;
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    const testing::ThreadCount count(threads);
+    double landed_forceless = 0, landed_zero = 0;
+    const std::vector<Vec3> forceless = run(kNoPairs, landed_forceless);
+    const std::vector<Vec3> zero_forces =
+        run("[forcefield.pair]\nstyle = \"lj/cut\"\ncutoff = 2.5\n"
+            "coeffs = [{ types = [1, 1], epsilon = 0.0, sigma = 1.0 },\n"
+            "          { types = [1, 2], epsilon = 0.0, sigma = 1.0 },\n"
+            "          { types = [2, 2], epsilon = 0.0, sigma = 1.0 }]\n",
+            landed_zero);
+    EXPECT_GE(landed_forceless, 1) << "the missed contact is landed";
+    EXPECT_EQ(landed_forceless, landed_zero);
+    ASSERT_EQ(forceless.size(), zero_forces.size());
+    for (std::size_t k = 0; k < forceless.size(); ++k) {
+      const Vec3& a = forceless[k];
+      const Vec3& b = zero_forces[k];
+      ASSERT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z)
+          << "entry " << k << " (step " << k / 6 + 1 << "): " << a.x << " " << a.y << " " << a.z
+          << " against " << b.x << " " << b.y << " " << b.z;
+    }
+  }
+}
+
 // The paper's LJ example: six beads joined by rods, hard cores between all pairs not
 // joined by a rod, LJ between all pairs, inside a bounding sphere, 1e5 steps.
 struct LjChainResult {
