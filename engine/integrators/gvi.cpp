@@ -785,7 +785,7 @@ void Gvi::find_smooth_set(const System& system) {
   stats_.smooth += static_cast<std::int64_t>(ws_.smooth.size());
 }
 
-void Gvi::displaced(const Particles& P, bool kick, const ChunkPass* then, std::size_t then_count) {
+void Gvi::displaced(Particles& P, bool kick, const ChunkPass* then, std::size_t then_count) {
   const std::size_t n = P.size();
   const double h = dt_;
   ws_.x.resize(n);
@@ -810,26 +810,22 @@ void Gvi::displaced(const Particles& P, bool kick, const ChunkPass* then, std::s
   const gvi_passes::EndPositions pass = end_positions_pass(ws_, P, h, list, built, limit2);
   const std::vector<Vec3>& f_start = engine_.force();
   // No row held and no force (the hard-sphere fluid's usual step): the force at x is f_start's
-  // zeros, and the momentum update's kick and velocities are made here, from the half kick
-  // just made, into buffers of their own (a later round of the feasibility guard starts from
-  // the momenta again). update_momenta's pass of its own was a job of the team a step.
-  const bool momenta = kick && engine_.forces_stay(n);
-  ws_.momenta_made = momenta;
-  if (momenta) {
-    ws_.p_next.resize(n);
-    ws_.velocity_next.resize(n);
-  }
-  auto end_positions = [&, momenta](int c, std::size_t begin, std::size_t end) {
+  // zeros, and the momentum update's velocities are made here from the half kick just made
+  // (update_momenta's pass of its own was a job of the team a step). Its momenta are not
+  // stored: nothing reads them after the velocities, and a later round of the feasibility
+  // guard starts from the step's momenta again, as update_momenta then writes every velocity.
+  const bool velocities = kick && engine_.forces_stay(n);
+  ws_.velocities_made = velocities;
+  double* velocity = numbers(P.velocity);
+  auto end_positions = [&, velocities, velocity](int c, std::size_t begin, std::size_t end) {
     if (kick) {
       gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
                             nullptr, begin, end);
     }
     const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(pass, begin, end);
-    if (momenta) {
-      gvi_passes::second_kick(h, numbers(ws_.half), pass.impulse, numbers(f_start),
-                              numbers(ws_.p_next), begin, end);
-      gvi_passes::velocities(numbers(ws_.p_next), P.mass.data(), numbers(ws_.velocity_next), begin,
-                             end);
+    if (velocities) {
+      gvi_passes::kicked_velocities(h, numbers(ws_.half), pass.impulse, numbers(f_start),
+                                    P.mass.data(), velocity, begin, end);
     }
     largest2[static_cast<std::size_t>(c)] = tally.largest2;
     outgrown[static_cast<std::size_t>(c)] = tally.beyond_reach;
@@ -929,7 +925,7 @@ bool Gvi::solve_held_positions(System& system) {
   }
   iterate_midpoint(system, 1, [&] {
     solve();
-    displaced(P);
+    displaced(system.particles);
     ws_.mid.resize(n);
     parallel_for(n, [&](std::size_t i) { ws_.mid[i] = (ws_.q[i] + ws_.x[i]) * 0.5; });
     engine_.forces_at(system, ws_.mid, ws_.f_mid);
@@ -1151,14 +1147,12 @@ void Gvi::update_momenta(System& system, bool tally) {
   // No row to project the momenta on, none landed (the hard-sphere fluid's usual step): the
   // velocities in the kick's pass, one job of the team rather than two.
   const bool kick_alone = ws_.held.empty() && constraints_.equalities.empty() && !landed;
-  // The end positions' pass made them from these numbers: f stayed f_start's zeros.
-  const bool made =
-      kick_alone && ws_.momenta_made && engine_.forces_stay(n) && lagrangian_ == Lagrangian::verlet;
-  ws_.momenta_made = false;
-  if (made) {
-    std::swap(p, ws_.p_next);
-    std::swap(P.velocity, ws_.velocity_next);
-  } else {
+  // The end positions' pass made the velocities from these numbers (f stayed f_start's zeros),
+  // and nothing reads the momenta after them.
+  const bool made = kick_alone && ws_.velocities_made && engine_.forces_stay(n) &&
+                    lagrangian_ == Lagrangian::verlet;
+  ws_.velocities_made = false;
+  if (!made) {
     for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
       gvi_passes::second_kick(h, numbers(ws_.half), impulse, numbers(f), numbers(p), begin, end);
       if (kick_alone) {

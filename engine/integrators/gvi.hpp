@@ -168,11 +168,11 @@ class Gvi final : public ConstrainedIntegrator {
   void held_positions_by_cluster(System& system);
   // End positions q + h M^-1 (half + impulse) into ws_.x, and max |x - q|^2 into
   // ws_.x_largest2; with `kick`, the half kick made first in the same pass, and where no force
-  // acts the momentum update's kick and velocities after it (ws_.momenta_made). Given `then`,
+  // acts the momentum update's velocities after it (ws_.velocities_made). Given `then`,
   // then(c, begin, end) for the `chunks` chunks of [0, then_count) in the same job, once
   // every end position is made, each on the thread of chunk c of the end positions (given
   // only where those are `chunks` chunks too).
-  void displaced(const Particles& particles, bool kick = false, const ChunkPass* then = nullptr,
+  void displaced(Particles& particles, bool kick = false, const ChunkPass* then = nullptr,
                  std::size_t then_count = 0);
   double start_energy(System& system);
   // Verlet's shadow energy at the step's start, from its H `start` (none where a force term

@@ -95,4 +95,10 @@ void second_kick(double h, const double* half, const double* impulse, const doub
 void velocities(const double* p, const double* mass, double* velocity, std::size_t begin,
                 std::size_t end);
 
+// The velocities of second_kick's momenta, the numbers of second_kick then velocities, the
+// momenta made a block of particles at a time on the stack and not stored (the momentum update
+// where nothing reads them after the velocities).
+void kicked_velocities(double h, const double* half, const double* impulse, const double* force,
+                       const double* mass, double* velocity, std::size_t begin, std::size_t end);
+
 }  // namespace deli::gvi_passes

@@ -111,10 +111,9 @@ struct GviWorkspace {
   std::int64_t x_builds = 0;          // neighbour list builds when x was made (a rebuild wraps)
   double x_smallest_gap = 0.0;        // smallest candidate gap at x (feasibility guard's pass)
   bool x_smallest_gap_known = false;  // for the x of the last position update
-  // The momentum update's kick and velocities made in the end positions' pass (no row held, no
-  // force): used where the last position update made them (momenta_made).
-  std::vector<Vec3> p_next, velocity_next;
-  bool momenta_made = false;
+  // The momentum update's velocities made in the last end positions' pass (no row held, no
+  // force): update_momenta makes none where it would make the same.
+  bool velocities_made = false;
   std::vector<Constraint> held, landed, violated;
   std::vector<bool> equality;
   double position_virial = 0.0;

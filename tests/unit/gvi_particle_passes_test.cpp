@@ -362,5 +362,36 @@ TEST(GviParticlePasses, MomentaAndVelocitiesMakeTheVec3LoopsNumbers) {
   }
 }
 
+// kicked_velocities makes second_kick's momenta a block of 64 particles at a time: over four
+// copies of the edge inputs (160 particles), on ranges that start inside the first block and
+// end in every block, its velocities are second_kick's then velocities', bit for bit.
+TEST(GviParticlePasses, KickedVelocitiesAreTheKickThenTheVelocities) {
+  const double h = 0.005;
+  const PassInputs one = edge_inputs(1.0);
+  std::vector<Vec3> half, impulse, force;
+  std::vector<double> mass;
+  for (int copy = 0; copy < 4; ++copy) {
+    half.insert(half.end(), one.half.begin(), one.half.end());
+    impulse.insert(impulse.end(), one.impulse.begin(), one.impulse.end());
+    force.insert(force.end(), one.force.begin(), one.force.end());
+    mass.insert(mass.end(), one.mass.begin(), one.mass.end());
+  }
+  const std::size_t n = mass.size();
+  for (bool with_impulse : {true, false}) {
+    const double* b = with_impulse ? pass_numbers(impulse) : nullptr;
+    for (std::size_t begin = 0; begin < 9; ++begin) {
+      for (std::size_t end = begin; end <= n; ++end) {
+        std::vector<Vec3> p(n, Vec3{5, 5, 5}), v(n, Vec3{4, 4, 4}), v2 = v;
+        gvi_passes::second_kick(h, pass_numbers(half), b, pass_numbers(force), pass_numbers(p),
+                                begin, end);
+        gvi_passes::velocities(pass_numbers(p), mass.data(), pass_numbers(v), begin, end);
+        gvi_passes::kicked_velocities(h, pass_numbers(half), b, pass_numbers(force), mass.data(),
+                                      pass_numbers(v2), begin, end);
+        expect_same_triples(v, v2, "velocity", begin, end);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace deli
