@@ -814,16 +814,16 @@ void Gvi::displaced(Particles& P, bool kick, const ChunkPass* then, std::size_t 
   // (update_momenta's pass of its own was a job of the team a step). Its momenta are not
   // stored: nothing reads them after the velocities, and a later round of the feasibility
   // guard starts from the step's momenta again, as update_momenta then writes every velocity.
-  const bool velocities = kick && engine_.forces_stay(n);
-  ws_.velocities_made = velocities;
+  const bool make_velocities = kick && engine_.forces_stay(n);
+  ws_.velocities_made = make_velocities;
   double* velocity = numbers(P.velocity);
-  auto end_positions = [&, velocities, velocity](int c, std::size_t begin, std::size_t end) {
+  auto end_positions = [&, make_velocities, velocity](int c, std::size_t begin, std::size_t end) {
     if (kick) {
       gvi_passes::half_kick(h, numbers(ws_.p), numbers(f_start), P.mass.data(), numbers(ws_.half),
                             nullptr, begin, end);
     }
     const gvi_passes::EndPositionsTally tally = gvi_passes::end_positions(pass, begin, end);
-    if (velocities) {
+    if (make_velocities) {
       gvi_passes::kicked_velocities(h, numbers(ws_.half), pass.impulse, numbers(f_start),
                                     P.mass.data(), velocity, begin, end);
     }

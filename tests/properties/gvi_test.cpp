@@ -276,11 +276,11 @@ TEST(Gvi, ReflectedSphereBeyondItsReachMeetsTheNextOne) {
 }
 
 // Where no force acts and no row is held (a hard-sphere fluid's usual step), the end positions'
-// pass makes the momentum update's velocities too (Gvi::displaced); a force field
-// whose forces are zeros it computes (LJ of epsilon 0) leaves them to update_momenta's own
-// pass. The same numbers either way: the three spheres above, with one round of
-// the active set so that the light sphere's second contact is missed and the feasibility guard
-// lands it (that step's momenta come from the landing, not from the pass made before it).
+// pass makes the momentum update's velocities too (Gvi::displaced); a force field whose forces
+// are zeros it computes (LJ of epsilon 0) leaves them to update_momenta's own pass. The same
+// numbers either way: the three spheres above, with one round of the active set so that the
+// light sphere's second contact is missed and the feasibility guard lands it (that step's
+// velocities come from the landing, not from the pass made before it).
 TEST(Gvi, ForcelessStepsVelocitiesAsInTheirOwnPass) {
   const double h = 0.01, v = 1.0, gap_to_third = 2.15 * v * h;
   auto run = [&](const std::string& pairs, double& landings) {
