@@ -1147,10 +1147,10 @@ void Gvi::update_momenta(System& system, bool tally) {
   // No row to project the momenta on, none landed (the hard-sphere fluid's usual step): the
   // velocities in the kick's pass, one job of the team rather than two.
   const bool kick_alone = ws_.held.empty() && constraints_.equalities.empty() && !landed;
-  // The end positions' pass made the velocities from these numbers (f stayed f_start's zeros),
-  // and nothing reads the momenta after them.
-  const bool made = kick_alone && ws_.velocities_made && engine_.forces_stay(n) &&
-                    lagrangian_ == Lagrangian::verlet;
+  // The end positions' pass made the velocities from these numbers (it made them only for
+  // Verlet without force, and compute() above left f_start's zeros), and nothing reads the
+  // momenta after them.
+  const bool made = kick_alone && ws_.velocities_made;
   ws_.velocities_made = false;
   if (!made) {
     for_each_chunk(n, chunks_for_cheap(n), [&, h](int, std::size_t begin, std::size_t end) {
