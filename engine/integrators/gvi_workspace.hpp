@@ -67,8 +67,14 @@ struct GviWorkspace {
   // end of the search): the next search need not clear it in a pass of its own.
   bool prediction_changed_clear = false;
   // The first round's candidates that pass its test, by stretch of the candidates (tested by
-  // the threads that collected them): their indices within their stretch.
-  std::vector<OnItsOwnLine<std::vector<std::uint32_t>>> stretch_passing;
+  // the threads that collected them): their indices within their stretch, and copies of their
+  // rows and gaps, made there, for the join.
+  struct StretchPassing {
+    std::vector<std::uint32_t> index;
+    std::vector<Constraint> rows;
+    std::vector<double> gaps;
+  };
+  std::vector<OnItsOwnLine<StretchPassing>> stretch_passing;
   // A later round's passing candidates, tested in the last round's reflections' job: by chunk
   // of the candidates, at the start of its stretch of candidate_passing, this many.
   std::vector<std::size_t> reflections_test_kept;

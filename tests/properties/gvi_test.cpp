@@ -237,6 +237,27 @@ TEST(Gvi, SphereHitsTwoTouchingSpheres) {
   EXPECT_LE(p.velocity[1].x, p.velocity[2].x + 1e-14);
 }
 
+// The active set holds each row once: the touching pair is active at q (its gap zero) in every
+// step's first round, and when the third sphere hits, the reflection changes the predictions
+// of all three, so the next round looks at the touching pair again; it must find it active
+// already. Three spheres in a line have two pairs within contact reach, so no step's active set
+// can hold more than two rows.
+TEST(Gvi, RowsActiveInTheFirstRoundAreNotJoinedAgain) {
+  GviRun run(input_with_atoms(
+      "three", {{{-3, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 0, 0}}, {{1, 0, 0}, {0, 0, 0}}}, "fff",
+      {-5, -5, -5}, {5, 5, 5},
+      kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" + with_timestep(0.01)));
+  run.gvi->take_statistics();  // setup's own
+  double most = 0.0;
+  for (int n = 0; n < 300; ++n) {
+    run.step();
+    const double active = statistic(run.gvi->take_statistics(), "active_per_step");
+    EXPECT_LE(active, 2.0) << "step " << n + 1;
+    most = std::max(most, active);
+  }
+  EXPECT_EQ(most, 2.0) << "the hit's step holds both pairs";
+}
+
 // A reflection that sends a sphere beyond its reach. The step's candidate rows are the pairs
 // within their two particles' reaches (twice a particle's displacement, at least half the
 // largest, Gvi::kReachFloor). A heavy sphere (mass 10, displacement L = v h) hits a light one
