@@ -755,7 +755,9 @@ bool ConstrainedIntegrator::reflect_closed_form(const System& system, const Cons
 // across two chunks goes to one of them by its particles' parity, not to the lower: in a
 // 4000-sphere fluid the lower chunk took 56 % of the rows and 59 % of the shared clusters,
 // and the calling thread's share 7.1 ms of a run against 5.4 on the other thread. Fewer rows
-// than a job is worth are reflected by the calling thread.
+// than a job is worth are reflected by the calling thread, unless `then` is given: the job
+// then runs it as well, and it would be a job of its own after (the active set's later round:
+// 3 rows a round, 7.5 us a call on the calling thread, bench/README.md, "Stop 70").
 bool ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const std::vector<Constraint>& rows,
                                                  const std::vector<Vec3>& x, std::vector<Vec3>& p,
@@ -871,7 +873,9 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
   auto reflect_in_chunk = [&](int c, std::size_t, std::size_t) {
     reflect_chunk(static_cast<std::size_t>(c));
   };
-  const bool split = work >= kSplitRows && chunks > 1;
+  // With `then` (the active set's next test) the job is the test's own: a few rows are
+  // reflected there too, on the threads that hold their lines.
+  const bool split = chunks > 1 && (work >= kSplitRows || then);
   if (!split) {
     for (std::size_t c = 0; c < slots; ++c) reflect_chunk(c);
   } else if (then) {
