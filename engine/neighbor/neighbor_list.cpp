@@ -164,6 +164,70 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
   stencil_grid_ = grid;
 }
 
+// The particles counted into cells by chunks of consecutive indices, then each cell's first
+// slot (cell_start_) and, per chunk, where its particles of each cell go (chunk_cell_fill_).
+void NeighborList::count_into_cells(std::size_t particle_count, std::size_t cell_count,
+                                    int sort_chunks) {
+  // Chunks of consecutive indices count their particles per cell; a cell's slots then hold
+  // chunk 0's particles, then chunk 1's...: ascending index within a cell, the same slots
+  // on any number of threads. The cells' first slots are then made in the same job, each
+  // chunk's thread over its share of the cells from the particles below that share, which
+  // the counting chunks count as well (made by the calling thread after the job, the other
+  // chunks' counts crossing to its core: 4.1 ms of the 4000-sphere fluid's serial time on two
+  // threads, 12 us a build, bench/README.md, "Stop 70").
+  const auto sort_slots = static_cast<std::size_t>(sort_chunks);
+  const std::int32_t* const cell_of = cell_of_.data();
+  std::size_t* const cell_start = cell_start_.data();
+  chunk_cell_fill_.resize(sort_slots);
+  std::vector<std::int32_t> share_first(sort_slots, 0);  // each share's first cell
+  for (std::size_t r = 1; r < sort_slots; ++r) {
+    share_first[r] =
+        static_cast<std::int32_t>(chunk_range(cell_count, static_cast<int>(r), sort_chunks).begin);
+  }
+  // [chunk][share]: the chunk's particles in the share's cells.
+  std::vector<std::size_t> in_share(sort_slots * sort_slots, 0);
+  for_each_chunk_then(
+      particle_count, cell_count, sort_chunks,
+      [&](int c, std::size_t begin, std::size_t end) {
+        std::vector<std::size_t>& count = chunk_cell_fill_[static_cast<std::size_t>(c)];
+        count.assign(cell_count, 0);
+        std::size_t* const in_cell = count.data();
+        std::vector<std::size_t> shares(sort_slots, 0);
+        if (sort_slots == 1) {
+          for (std::size_t i = begin; i < end; ++i) ++in_cell[cell_of[i]];
+          shares[0] = end - begin;
+        } else {
+          for (std::size_t i = begin; i < end; ++i) {
+            const std::int32_t cell = cell_of[i];
+            ++in_cell[cell];
+            std::size_t share = 0;
+            for (std::size_t r = 1; r < sort_slots; ++r) share += cell >= share_first[r] ? 1 : 0;
+            ++shares[share];
+          }
+        }
+        std::copy(shares.begin(), shares.end(),
+                  in_share.begin() +
+                      static_cast<std::ptrdiff_t>(static_cast<std::size_t>(c) * sort_slots));
+      },
+      [&](int share, std::size_t first_cell, std::size_t end_cell) {
+        std::size_t filled = 0;
+        for (std::size_t c = 0; c < sort_slots; ++c) {
+          for (std::size_t r = 0; r < static_cast<std::size_t>(share); ++r) {
+            filled += in_share[c * sort_slots + r];
+          }
+        }
+        for (std::size_t cell = first_cell; cell < end_cell; ++cell) {
+          cell_start[cell] = filled;
+          for (std::vector<std::size_t>& fill : chunk_cell_fill_) {
+            const std::size_t count = fill[cell];
+            fill[cell] = filled;
+            filled += count;
+          }
+        }
+      });
+  cell_start[cell_count] = particle_count;
+}
+
 void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   const auto n = static_cast<std::int32_t>(position.size());
   const double reach = cutoff_ + skin_;
@@ -280,58 +344,8 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     member_cell[s] = cell_of[i];
     member[s] = i;
   };
-  // Chunks of consecutive indices count their particles per cell; a cell's slots then hold
-  // chunk 0's particles, then chunk 1's...: ascending index within a cell, the same slots
-  // on any number of threads. The cells' first slots are then made in the same job, each
-  // chunk's thread over its share of the cells from the particles below that share, which
-  // the counting chunks count as well (made by the calling thread after the job, the other
-  // chunks' counts crossing to its core: 4.1 ms of the 4000-sphere fluid's serial time on two
-  // threads, 12 us a build, bench/README.md, "Stop 70").
   const int sort_chunks = chunks_for(static_cast<std::size_t>(n));
-  const auto sort_slots = static_cast<std::size_t>(sort_chunks);
-  const auto cell_count = static_cast<std::size_t>(cells);
-  chunk_cell_fill_.resize(sort_slots);
-  std::vector<std::int32_t> share_first(sort_slots, 0);  // each share's first cell
-  for (std::size_t r = 1; r < sort_slots; ++r) {
-    share_first[r] =
-        static_cast<std::int32_t>(chunk_range(cell_count, static_cast<int>(r), sort_chunks).begin);
-  }
-  // [chunk][share]: the chunk's particles in the share's cells.
-  std::vector<std::size_t> in_share(sort_slots * sort_slots, 0);
-  for_each_chunk_then(
-      static_cast<std::size_t>(n), cell_count, sort_chunks,
-      [&](int c, std::size_t begin, std::size_t end) {
-        std::vector<std::size_t>& count = chunk_cell_fill_[static_cast<std::size_t>(c)];
-        count.assign(cell_count, 0);
-        std::size_t* const in_cell = count.data();
-        std::vector<std::size_t> shares(sort_slots, 0);
-        for (std::size_t i = begin; i < end; ++i) {
-          const std::int32_t cell = cell_of[i];
-          ++in_cell[cell];
-          std::size_t share = 0;
-          for (std::size_t r = 1; r < sort_slots; ++r) share += cell >= share_first[r] ? 1 : 0;
-          ++shares[share];
-        }
-        std::copy(shares.begin(), shares.end(),
-                  in_share.begin() + static_cast<std::ptrdiff_t>(c * sort_chunks));
-      },
-      [&](int share, std::size_t first_cell, std::size_t end_cell) {
-        std::size_t filled = 0;
-        for (std::size_t c = 0; c < sort_slots; ++c) {
-          for (std::size_t r = 0; r < static_cast<std::size_t>(share); ++r) {
-            filled += in_share[c * sort_slots + r];
-          }
-        }
-        for (std::size_t cell = first_cell; cell < end_cell; ++cell) {
-          cell_start[cell] = filled;
-          for (std::vector<std::size_t>& fill : chunk_cell_fill_) {
-            const std::size_t count = fill[cell];
-            fill[cell] = filled;
-            filled += count;
-          }
-        }
-      });
-  cell_start[cell_count] = static_cast<std::size_t>(n);
+  count_into_cells(static_cast<std::size_t>(n), static_cast<std::size_t>(cells), sort_chunks);
   for_each_chunk(static_cast<std::size_t>(n), sort_chunks,
                  [&](int c, std::size_t begin, std::size_t end) {
                    std::size_t* const fill = chunk_cell_fill_[static_cast<std::size_t>(c)].data();

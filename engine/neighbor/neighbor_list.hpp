@@ -138,6 +138,7 @@ class NeighborList {
                              const std::int32_t* slot_neighbors, const std::int32_t* slot_particle,
                              const std::uint8_t* slot_codes, std::size_t n) const;
   void make_stencils(const Grid& grid, const Box& box);
+  void count_into_cells(std::size_t particle_count, std::size_t cell_count, int sort_chunks);
 
   double cutoff_, skin_;
   std::vector<std::array<std::int32_t, 2>> excluded_;  // sorted, i < j
