@@ -238,10 +238,10 @@ TEST(Gvi, SphereHitsTwoTouchingSpheres) {
 }
 
 // The active set holds each row once: the touching pair is active at q (its gap zero) in every
-// step's first round, and when the third sphere hits, the reflection changes the predictions
-// of all three, so the next round looks at the touching pair again; it must find it active
-// already. Three spheres in a line have two pairs within contact reach, so no step's active set
-// can hold more than two rows.
+// step's first round, and when the moving sphere hits it, the reflection changes the
+// predictions of all three, so the next round looks at the touching pair again; it must find it
+// active already. Three spheres in a line have two pairs within contact reach, so no step's
+// active set can hold more than two rows.
 TEST(Gvi, RowsActiveInTheFirstRoundAreNotJoinedAgain) {
   GviRun run(input_with_atoms(
       "three", {{{-3, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 0, 0}}, {{1, 0, 0}, {0, 0, 0}}}, "fff",
