@@ -14,6 +14,8 @@
 #   UNSPLIT=1 bench/threads.sh             also deli with [run] split_small_loops = false on
 #                                          each count above 1 ("unsplit-deli": README, "Threads
 #                                          and vector instructions"), its speed over deli's
+#   UNBALANCED=1 bench/threads.sh          also deli with [run] balance_threads = false (equal
+#                                          chunks, "unbalanced-deli"), its speed over deli's
 # The peers run in process from bench/peers (deli-peers, built here on first use): OpenMM's
 # CPU platform on the same thread counts (CCMA at 1e-4 for rods), LAMMPS on as many MPI ranks
 # (mpirun -np N; with rods LAMMPS gets its own model: see deli-peers). The hard-sphere fluid
@@ -31,6 +33,7 @@ old=${DELI_OLD:-}
 rounds=${ROUNDS:-3}
 ceiling=${CEILING:-1}
 unsplit=${UNSPLIT:-0}
+unbalanced=${UNBALANCED:-0}
 read -r -a counts <<< "${THREADS:-1 2}"
 source "$top/bench/peers/locate.sh"
 mpirun=${MPIRUN:-$(command -v mpirun || true)}
@@ -61,7 +64,7 @@ for line in sys.stdin:
           f" (runs: {' '.join(rates)})")
 counts = sorted({t for _, t in order}, key=int)
 for engine in dict.fromkeys(e for e, _ in order):
-    if engine in ("old-deli", "two-deli", "unsplit-deli"):
+    if engine in ("old-deli", "two-deli", "unsplit-deli", "unbalanced-deli"):
         continue
     base = median.get((engine, counts[0]))
     scaling = [f"{t}: {median[(engine, t)] / base:.2f}x" for t in counts[1:]
@@ -82,6 +85,10 @@ for t in counts[1:]:
                    if ("deli", counts[0]) in median else "")
         print(f"  split_small_loops = false on {t}: {median[('unsplit-deli', t)] / median[('deli', t)]:.2f}x"
               f" deli's speed{scaling}")
+for t in counts[1:]:
+    if ("unbalanced-deli", t) in median and ("deli", t) in median:
+        print(f"  balance_threads = false on {t}: "
+              f"{median[('unbalanced-deli', t)] / median[('deli', t)]:.3f}x deli's speed")
 if ("old-deli", counts[0]) in median and ("deli", counts[0]) in median:
     print(f"  new / old deli on {counts[0]}: "
           f"{median[('deli', counts[0])] / median[('old-deli', counts[0])]:.3f}x")
@@ -116,12 +123,18 @@ for spec in "${cases[@]}"; do
   if [[ $unsplit == 1 ]]; then
     sed 's/^\[run\]$/[run]\nsplit_small_loops = false/' "$dir/input.toml" > "$dir/input_unsplit.toml"
   fi
+  if [[ $unbalanced == 1 ]]; then
+    sed 's/^\[run\]$/[run]\nbalance_threads = false/' "$dir/input.toml" > "$dir/input_unbalanced.toml"
+  fi
   declare -A rate=()
   variants=()
   [[ -n $old ]] && variants+=("old-deli ${counts[0]}")
   for t in "${counts[@]}"; do variants+=("deli $t"); done
   if [[ $unsplit == 1 ]]; then
     for t in "${counts[@]:1}"; do variants+=("unsplit-deli $t"); done
+  fi
+  if [[ $unbalanced == 1 ]]; then
+    for t in "${counts[@]:1}"; do variants+=("unbalanced-deli $t"); done
   fi
   [[ $ceiling == 1 && ${counts[0]} == 1 && ${counts[1]:-} == 2 ]] && variants+=("two-deli 1")
   has_peers=
@@ -154,6 +167,9 @@ for spec in "${cases[@]}"; do
         unsplit-deli)
           line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run \
             input_unsplit.toml --threads "$threads" | grep "^loop time") ;;
+        unbalanced-deli)
+          line=$(cd "$dir" && env ${wait:+OMP_WAIT_POLICY=$wait} OMP_NUM_THREADS=$threads "$deli" run \
+            input_unbalanced.toml --threads "$threads" | grep "^loop time") ;;
         two-deli)
           # Both runs' rates summed, printed as one line for the parse below; one run a core.
           runs=$(cd "$dir" && {

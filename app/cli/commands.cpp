@@ -10,6 +10,7 @@
 
 #include "cli/exit_status.hpp"
 #include "cli/integrator_factory.hpp"
+#include "core/chunk_balance.hpp"
 #include "core/cpu_quota.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -99,6 +100,7 @@ int command_run(const std::vector<std::string>& args) {
                           std::to_string(quota) + " thread" + (quota == 1 ? "" : "s") +
                           " by default (--threads N to choose)");
   }
+  set_chunk_balance(input.balance_threads);
   if (!input.split_small_loops) {
     set_cheap_chunk_minimum(kUnsplitCheapChunk);
     set_cluster_chunk_minimum(kUnsplitClusterChunk);
@@ -292,6 +294,18 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
   if (sorting) {
     out.print("particles sorted in space %lld times (every %lld steps)\n",
               static_cast<long long>(sorting->sorts()), static_cast<long long>(input.sort_every));
+  }
+  if (const std::vector<double> shares = chunk_shares(); !shares.empty()) {
+    std::string listed;
+    for (const double share : shares) {
+      char text[32];
+      std::snprintf(text, sizeof text, " %.1f %%", 100.0 * share);
+      listed += text;
+    }
+    out.print(
+        "threads' shares of the balanced loops at the end:%s (moved %lld times by their "
+        "speeds; [run] balance_threads)\n",
+        listed.c_str(), chunk_balance_moves());
   }
   out.print("%s", timing_table(stats).c_str());
   return 0;

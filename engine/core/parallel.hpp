@@ -7,6 +7,7 @@
 #include <exception>
 #include <vector>
 
+#include "core/chunk_balance.hpp"
 #include "core/thread_team.hpp"
 
 namespace deli {
@@ -99,22 +100,34 @@ inline int chunks_for_work(std::size_t items, std::size_t work) {
 struct IndexRange {
   std::size_t begin, end;
 };
-// Chunk c of `chunks` contiguous, near-equal chunks of [0, n).
+// Chunk c of `chunks` contiguous chunks of [0, n): near-equal, or, in a loop of one chunk a
+// thread, at the shares the threads' speeds set (core/chunk_balance.hpp). Only for loops
+// whose numbers do not depend on where the chunks begin; sums over chunks take
+// fixed_chunk_range.
 inline IndexRange chunk_range(std::size_t n, int c, int chunks) {
+  return {balanced_chunk_begin(n, c, chunks), balanced_chunk_begin(n, c + 1, chunks)};
+}
+// Chunk c of `chunks` contiguous, near-equal chunks of [0, n), whatever the threads' speeds:
+// the chunks of a sum whose grouping sets its last bits.
+inline IndexRange fixed_chunk_range(std::size_t n, int c, int chunks) {
   const auto k = static_cast<std::size_t>(chunks);
   return {n * static_cast<std::size_t>(c) / k, n * static_cast<std::size_t>(c + 1) / k};
 }
 
 // The starts of `chunks` contiguous chunks of [0, n) holding near-equal work, item i's being
 // [offsets[i], offsets[i + 1]) (ascending): chunk c starts at the first item whose work begins
-// at or past c chunks-ths of it all; starts[chunks] = n.
+// at or past c chunks-ths of it all (or, as chunk_range, at the threads' shares of it);
+// starts[chunks] = n. `fixed`: near-equal work whatever the threads' speeds.
 inline void equal_work_starts(const std::size_t* offsets, std::size_t n, int chunks,
-                              std::vector<std::size_t>& starts) {
+                              std::vector<std::size_t>& starts, bool fixed = false) {
   const auto k = static_cast<std::size_t>(chunks);
   starts.assign(k + 1, n);
   starts[0] = 0;
+  const std::size_t work = offsets[n] - offsets[0];
   for (std::size_t c = 1; c < k; ++c) {
-    const std::size_t share = offsets[0] + (offsets[n] - offsets[0]) * c / k;
+    const std::size_t share =
+        offsets[0] + (fixed ? fixed_chunk_range(work, static_cast<int>(c), chunks).begin
+                            : chunk_range(work, static_cast<int>(c), chunks).begin);
     starts[c] = static_cast<std::size_t>(std::lower_bound(offsets, offsets + n, share) - offsets);
   }
 }
@@ -146,12 +159,12 @@ class ChunkSlots {
 namespace detail {
 // One thread's share of a chunked loop: body(c, begin, end) for its chunks c = thread,
 // thread + threads, ... of [0, n), each exception kept in failed[c] (the caller rethrows).
-template <class Body>
+template <bool kFixed = false, class Body>
 void chunks_of_thread(std::size_t n, int chunks, int thread, int threads, Body& body,
                       std::exception_ptr* failed) {
   for (int c = thread; c < chunks; c += threads) {
     try {
-      const IndexRange r = chunk_range(n, c, chunks);
+      const IndexRange r = kFixed ? fixed_chunk_range(n, c, chunks) : chunk_range(n, c, chunks);
       body(c, r.begin, r.end);
     } catch (...) {
       failed[c] = std::current_exception();
@@ -170,27 +183,45 @@ void ranges_of_thread(const std::size_t* starts, int chunks, int thread, int thr
     }
   }
 }
-}  // namespace detail
-
-// Runs body(c, begin, end) for the chunks c = 0..chunks-1 of [0, n), in parallel. The
-// partition depends on n and `chunks` alone (never on which thread runs a chunk), so a
-// result combined chunk by chunk in chunk order is the same on every run. An exception from
-// a chunk is rethrown once all have finished: the lowest chunk's, the one a serial loop
-// would have met first.
-template <class Body>
-void for_each_chunk(std::size_t n, int chunks, Body&& body) {
+// for_each_chunk (below), in fixed_chunk_range's chunks where kFixed (not measured for the
+// threads' shares).
+template <bool kFixed, class Body>
+void chunks_on_team(std::size_t n, int chunks, Body& body) {
   if (chunks <= 1) {
     body(0, std::size_t{0}, n);
     return;
   }
   ChunkSlots<std::exception_ptr> failed(static_cast<std::size_t>(chunks));
   auto job = [&](int thread, int threads) {
-    detail::chunks_of_thread(n, chunks, thread, threads, body, failed.begin());
+    chunks_of_thread<kFixed>(n, chunks, thread, threads, body, failed.begin());
   };
-  run_on_team(std::min(chunks, thread_count()), job);
+  if constexpr (kFixed) {
+    const UnbalancedJobs unmeasured;
+    run_on_team(std::min(chunks, thread_count()), job);
+  } else {
+    run_on_team(std::min(chunks, thread_count()), job);
+  }
   for (const std::exception_ptr& e : failed) {
     if (e) std::rethrow_exception(e);
   }
+}
+}  // namespace detail
+
+// Runs body(c, begin, end) for the chunks c = 0..chunks-1 of [0, n) (chunk_range's: at the
+// threads' shares where the loop has one chunk a thread), in parallel. Which thread runs a
+// chunk changes nothing; a result whose numbers depend on where the chunks begin (a sum
+// combined chunk by chunk) takes for_each_fixed_chunk. An exception from a chunk is rethrown
+// once all have finished: the lowest chunk's, the one a serial loop would have met first.
+template <class Body>
+void for_each_chunk(std::size_t n, int chunks, Body&& body) {
+  detail::chunks_on_team<false>(n, chunks, body);
+}
+
+// for_each_chunk in fixed_chunk_range's chunks, whatever the threads' speeds: for sums over
+// chunks, combined in chunk order, the same on every run.
+template <class Body>
+void for_each_fixed_chunk(std::size_t n, int chunks, Body&& body) {
+  detail::chunks_on_team<true>(n, chunks, body);
 }
 
 // for_each_chunk with chunks of the caller's choosing: chunk c is the items [starts[c],
@@ -393,12 +424,13 @@ double ordered_max(std::size_t n, double start, Term&& term) {
 
 // The sum over i in [0, n) of term(i) (T: double, Vec3, SymTensor): each chunk sums its
 // items in order, the chunk sums are added in chunk order. One chunk is the serial loop's
-// sum bit for bit; more chunks regroup the additions (round-off, fixed per thread count).
+// sum bit for bit; more chunks regroup the additions (round-off, fixed per thread count:
+// equal chunks, whatever the threads' speeds).
 template <class T, class Term>
 T ordered_sum(std::size_t n, Term&& term) {
   const int chunks = chunks_for_cheap(n);
   ChunkSlots<T> partial(static_cast<std::size_t>(chunks));
-  for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+  for_each_fixed_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
     T sum{};
     for (std::size_t i = begin; i < end; ++i) sum += term(i);
     partial[static_cast<std::size_t>(c)] = sum;

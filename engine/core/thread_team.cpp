@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/chunk_balance.hpp"
 #include "core/cpu_pressure.hpp"
 #include "core/team_profile.hpp"
 
@@ -162,6 +163,10 @@ void spin_until(int threads, Done&& done) {
 thread_local int job_thread = 0;
 thread_local int job_threads = 1;
 thread_local bool in_job = false;
+// Whether the running job's busy time is measured for the chunks' shares, and this thread's
+// waits at its barriers so far (left out of its busy time).
+thread_local bool job_measured = false;
+thread_local std::int64_t barrier_wait_ns = 0;
 
 // One worker thread and what the calling thread posts to it alone: a job is posted only to the
 // workers it runs on (threads 1..threads-1 of the job), so that a job of fewer chunks than the
@@ -176,6 +181,7 @@ struct alignas(64) Worker {
   TeamJob job = nullptr;
   void* context = nullptr;
   int threads = 1;
+  bool measured = false;  // chunk_balance_measures() for this job
   std::atomic<bool> asleep{false};
   std::atomic<std::uint64_t> posted{0};            // jobs posted to this worker
   alignas(64) std::atomic<std::uint64_t> done{0};  // jobs it has finished
@@ -203,19 +209,22 @@ class Team {
     }
     // A worker reads its job's fields after their post, and finished the last job it was
     // posted before this thread returned from it (below).
+    const bool measured = chunk_balance_measures(threads);
     for (int t = 1; t < threads; ++t) {
       Worker& w = *workers_[static_cast<std::size_t>(t - 1)];
       w.job = job;
       w.context = context;
       w.threads = threads;
+      w.measured = measured;
       post(w);
     }
     const bool profiled = team_profile_on();
-    const std::int64_t start = profiled ? steady_ns() : 0;
-    enter(0, threads);
+    const std::int64_t start = profiled || measured ? steady_ns() : 0;
+    enter(0, threads, measured);
     job(context, 0, threads);
-    leave();
-    const std::int64_t own_done = profiled ? steady_ns() : 0;
+    const std::int64_t waited = leave();
+    const std::int64_t own_done = profiled || measured ? steady_ns() : 0;
+    if (measured) add_balanced_busy(0, own_done - start - waited);
     std::int64_t slowest_worker = 0;
     for (int t = 1; t < threads; ++t) {
       const Worker& w = *workers_[static_cast<std::size_t>(t - 1)];
@@ -238,19 +247,26 @@ class Team {
       barrier_phase_.store(phase + 1, std::memory_order_release);
       return;
     }
+    const std::int64_t start = job_measured ? steady_ns() : 0;
     spin_until(threads, [&] { return barrier_phase_.load(std::memory_order_acquire) != phase; });
+    if (job_measured) barrier_wait_ns += steady_ns() - start;
   }
 
  private:
-  static void enter(int thread, int threads) {
+  static void enter(int thread, int threads, bool measured) {
     in_job = true;
     job_thread = thread;
     job_threads = threads;
+    job_measured = measured;
+    barrier_wait_ns = 0;
   }
-  static void leave() {
+  // Returns the thread's waits at the job's barriers where the job was measured.
+  static std::int64_t leave() {
     in_job = false;
     job_thread = 0;
     job_threads = 1;
+    job_measured = false;
+    return barrier_wait_ns;
   }
 
   // seq_cst with the worker's `asleep` (and the worker's the other way round): either the
@@ -288,11 +304,14 @@ class Team {
       if (stop_.load(std::memory_order_acquire)) return;
       last_threads = w.threads;
       const bool profiled = team_profile_on();
-      const std::int64_t start = profiled ? steady_ns() : 0;
-      enter(index, last_threads);
+      const bool measured = w.measured;
+      const std::int64_t start = profiled || measured ? steady_ns() : 0;
+      enter(index, last_threads, measured);
       w.job(w.context, index, last_threads);
-      leave();
-      w.job_ns = profiled ? steady_ns() - start : 0;
+      const std::int64_t waited = leave();
+      const std::int64_t end = profiled || measured ? steady_ns() : 0;
+      w.job_ns = profiled ? end - start : 0;
+      if (measured) add_balanced_busy(index, end - start - waited);
       w.done.store(seen, std::memory_order_release);
     }
   }

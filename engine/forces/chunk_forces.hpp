@@ -40,7 +40,8 @@ class ChunkedForceLoopOf {
     buffers_.resize(extra);
     virials_.resize(extra);
     energies_.resize(static_cast<std::size_t>(chunks));
-    for_each_chunk(items, chunks, [&](int c, std::size_t begin, std::size_t end) {
+    // Equal chunks whatever the threads' speeds: the buffers' sums are grouped by chunk.
+    for_each_fixed_chunk(items, chunks, [&](int c, std::size_t begin, std::size_t end) {
       const auto k = static_cast<std::size_t>(c);
       auto chunk = [&](Force* f, SymTensor& w) {
         if constexpr (std::is_invocable_v<Body&, int, std::size_t, std::size_t, Force*,

@@ -663,12 +663,12 @@ const std::vector<std::size_t>& NeighborList::pair_chunk_starts(int chunks) cons
   chunk_starts_build_ = builds_;
   const std::vector<std::size_t>& offsets = cell_ordered_.offsets;
   if (cell_order_ && offsets.size() == n + 1 && offsets[n] > 0) {
-    equal_work_starts(offsets.data(), n, chunks, chunk_starts_);
+    equal_work_starts(offsets.data(), n, chunks, chunk_starts_, true);
     return chunk_starts_;
   }
   chunk_starts_.assign(k + 1, n);
   for (std::size_t c = 0; c < k; ++c) {
-    chunk_starts_[c] = chunk_range(n, static_cast<int>(c), chunks).begin;
+    chunk_starts_[c] = fixed_chunk_range(n, static_cast<int>(c), chunks).begin;
   }
   return chunk_starts_;
 }

@@ -108,8 +108,9 @@ class NeighborList {
   const CellOrdered& cell_ordered() const { return cell_ordered_; }
   // A pair loop's `chunks` chunks of the list's items: chunk c is items [starts[c],
   // starts[c + 1]). With cell order on, consecutive slots holding equal numbers of listed
-  // pairs (as near as whole slots allow); else chunk_range's equal counts of particles. Made
-  // when first asked for after a build; one caller at a time.
+  // pairs (as near as whole slots allow); else fixed_chunk_range's equal counts of particles,
+  // whatever the threads' speeds (a force loop's per-chunk sums). Made when first asked for
+  // after a build; one caller at a time.
   const std::vector<std::size_t>& pair_chunk_starts(int chunks) const;
   // For a pair loop over the list in `chunks` chunks (pair_chunk_starts) of its items
   // (particles, or slots with cell order on): the blocks each chunk's items and their

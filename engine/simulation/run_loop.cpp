@@ -6,7 +6,9 @@
 #include <exception>
 #include <string>
 
+#include "core/chunk_balance.hpp"
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
 #include "core/team_profile.hpp"
 #include "simulation/interrupt.hpp"
@@ -113,7 +115,10 @@ RunStatistics run(System& system, Integrator& integrator, std::int64_t steps,
     start = std::chrono::steady_clock::now();
     timer.start();
     team_profile_loop_started();
+    const int threads = thread_count();
     for (std::int64_t n = 1; n <= steps; ++n) {
+      // Between steps: no loop runs, and no number depends on the shares.
+      rebalance_chunks(threads);
       // Rows at absolute multiples of thermo_every, as frames: a restart from any step
       // writes the rows of the uninterrupted run.
       const std::int64_t next = system.step + 1;

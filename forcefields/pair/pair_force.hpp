@@ -143,7 +143,7 @@ class PairForce final : public ForceTerm {
       sum += listed_curvature(system, ranges, velocity, 0, n);
     } else {
       std::vector<double> partial(static_cast<std::size_t>(chunks), 0.0);
-      for_each_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
+      for_each_fixed_chunk(n, chunks, [&](int c, std::size_t begin, std::size_t end) {
         partial[static_cast<std::size_t>(c)] =
             listed_curvature(system, ranges, velocity, begin, end);
       });
@@ -555,8 +555,13 @@ class PairForce final : public ForceTerm {
         first = last;
       }
     };
+    // Equal chunks of pairs (the list's, kept for its build with the touched blocks), whatever
+    // the threads' speeds: each slot's force adds the chunks' in chunk order.
     const std::vector<std::size_t>& starts = neighbors.pair_chunk_starts(chunks);
-    for_each_range_then(starts, starts, chunk_loop, add);
+    {
+      const UnbalancedJobs unmeasured;
+      for_each_range_then(starts, starts, chunk_loop, add);
+    }
     // Chunk 0's virial was the caller's own in ChunkedForceLoopOf: added first, then the
     // others in order.
     virial += chunk_virials_[0];

@@ -121,6 +121,7 @@ RunInput parse_run_input(const std::string& text, const std::string& path) {
     input.threads = static_cast<int>(threads);
   }
   input.split_small_loops = run->boolean("split_small_loops", true);
+  input.balance_threads = run->boolean("balance_threads", true);
   run->finish();
 
   const std::vector<OutputFile> output_files = read_output(root, input);

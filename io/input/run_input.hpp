@@ -49,6 +49,9 @@ struct RunInput {
   // least 512 items and the rod-cluster loops in chunks of 256 rows (false: 8192 and 1024;
   // core/parallel.hpp).
   bool split_small_loops = true;
+  // [run] balance_threads: the chunks of the loops whose numbers do not depend on them moved
+  // between steps by the threads' measured speeds (core/chunk_balance.hpp); false: equal.
+  bool balance_threads = true;
   ThermoOutputSpec thermo;
   TrajectorySpec trajectory;
   DumpOutputSpec dump;

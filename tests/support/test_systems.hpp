@@ -90,6 +90,35 @@ steps = 0
 )" + more);
 }
 
+// A hard-sphere fluid as inputs/hard_spheres/hs_4000.toml (fcc at packing fraction 0.30)
+// with 4 cells^3 spheres (fcc: 4 a cell), at a step of 0.02 (free flight is exact at any
+// step), and the TOML `more`.
+inline RunInput hard_sphere_fluid(int cells, const std::string& more = "") {
+  const std::string n = std::to_string(cells);
+  return input_from(R"(
+[system]
+[system.lattice]
+type = "fcc"
+density = 0.5729577951308232
+cells = [)" + n + ", " +
+                    n + ", " + n + R"(]
+[velocities]
+temperature = 1.0
+seed = 30
+[forcefield.pair]
+style = "none"
+[constraints]
+hard_spheres = { diameter = 1.0 }
+[neighbor]
+skin = 0.4
+[integrator]
+type = "gvi"
+timestep = 0.02
+[run]
+steps = 0
+)" + more);
+}
+
 // Energies and forces of `input` at its current positions through a fresh neighbour list.
 struct Evaluated {
   ForceEvaluation evaluation;

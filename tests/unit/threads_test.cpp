@@ -24,6 +24,7 @@
 #include "integrators/gvi.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "pair/lennard_jones.hpp"
+#include "support/same_bits.hpp"
 #include "support/scratch_files.hpp"
 #include "support/short_runs.hpp"
 #include "support/statistic.hpp"
@@ -34,6 +35,7 @@ namespace deli {
 namespace {
 
 using testing::kThreaded;
+using testing::same_bits;
 using testing::ThreadCount;
 
 // 100 harmonic chains of 40 beads: 4000 particles and 3900 bonds, both past the length
@@ -42,14 +44,6 @@ RunInput chain_melt() {
   RunInput input = load_run_input(DELI_SOURCE_DIR "/inputs/lj_chains/chains_4000_harmonic.toml");
   testing::jiggle(input.system.particles, 0.05, 11);
   return input;
-}
-
-bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (a[i].x != b[i].x || a[i].y != b[i].y || a[i].z != b[i].z) return false;
-  }
-  return true;
 }
 
 // 150 chains of 10 beads with harmonic bonds, angles and dihedrals (the cross-check
@@ -715,39 +709,11 @@ GviTrajectory expect_two_threads_repeat_one(const RunInput& input) {
   return one;
 }
 
-// A hard-sphere fluid as inputs/hard_spheres/hs_4000.toml (fcc at packing fraction 0.30)
-// with 4 cells^3 spheres (fcc: 4 a cell), at a step of 0.02 (free flight is exact at any step).
-RunInput hard_sphere_fluid(int cells) {
-  const std::string n = std::to_string(cells);
-  return testing::input_from(R"(
-[system]
-[system.lattice]
-type = "fcc"
-density = 0.5729577951308232
-cells = [)" + n + ", " + n + ", " +
-                             n + R"(]
-[velocities]
-temperature = 1.0
-seed = 30
-[forcefield.pair]
-style = "none"
-[constraints]
-hard_spheres = { diameter = 1.0 }
-[neighbor]
-skin = 0.4
-[integrator]
-type = "gvi"
-timestep = 0.02
-[run]
-steps = 0
-)");
-}
-
 // 1372 hard spheres (7^3 cells): 563 reflections in the first 10 steps from the lattice
 // (deli run of the same input).
 TEST(ThreadsGvi, HardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  const GviTrajectory one = expect_two_threads_repeat_one(hard_sphere_fluid(7));
+  const GviTrajectory one = expect_two_threads_repeat_one(testing::hard_sphere_fluid(7));
   const double reflected = testing::statistic(one.statistics, "reflected");
   if (!testing::short_runs()) EXPECT_GT(reflected, 0.0) << reflected;
 }
@@ -757,7 +723,7 @@ TEST(ThreadsGvi, HardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
 // particles' passes are (the test's cheap-loop minimum is 1024 particles).
 TEST(ThreadsGvi, FourThousandHardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  expect_two_threads_repeat_one(hard_sphere_fluid(10));
+  expect_two_threads_repeat_one(testing::hard_sphere_fluid(10));
 }
 
 // Without the feasibility guard, each step's end checks read the candidate rows themselves
@@ -766,7 +732,7 @@ TEST(ThreadsGvi, FourThousandHardSpheresOnTwoThreadsAreTheOneThreadTrajectory) {
 // smallest gap is the one thread's (untallied steps: no scan of every pair).
 TEST(ThreadsGvi, HardSpheresWithoutTheGuardFindEachStepsSmallestGapOnTwoThreads) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  RunInput input = hard_sphere_fluid(10);
+  RunInput input = testing::hard_sphere_fluid(10);
   input.gvi.feasibility = Feasibility::none;
   auto smallest_gaps = [&](int threads) {
     const ThreadCount count(threads);
@@ -794,7 +760,7 @@ TEST(ThreadsGvi, HardSpheresWithoutTheGuardFindEachStepsSmallestGapOnTwoThreads)
 // the active set's next round (dropping the shared clusters' particles from the predictions
 // made again changes this trajectory). 4000 spheres at twice the step, on 1 and 2 threads.
 TEST(ThreadsGvi, HardSpheresReflectedPredictionsAreTheWholePredictionMadeAgain) {
-  RunInput input = hard_sphere_fluid(10);
+  RunInput input = testing::hard_sphere_fluid(10);
   input.gvi.timestep = 0.04;
   for (const int threads : {1, 2}) {
     if (threads > 1 && !kThreaded) continue;
@@ -820,7 +786,7 @@ TEST(ThreadsGvi, HardSpheresReflectedPredictionsAreTheWholePredictionMadeAgain) 
 // a row one chunk found and the join dropped would change the trajectory.
 TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  RunInput input = hard_sphere_fluid(10);
+  RunInput input = testing::hard_sphere_fluid(10);
   input.gvi.timestep = 0.04;
   input.constraints.limits.active_set_rounds = 1;
   const GviTrajectory one = expect_two_threads_repeat_one(input);
@@ -835,7 +801,7 @@ TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) 
 // approaching not reflected again the velocities differ there by 0.25 (largest 4.2), and
 // still agree to round-off after 20 steps: a shorter run would not tell.
 TEST(ThreadsGvi, HardSpheresCappedReflectionsAreReflectedAgainByLaterRounds) {
-  RunInput input = hard_sphere_fluid(10);
+  RunInput input = testing::hard_sphere_fluid(10);
   input.gvi.timestep = 0.02;
   input.constraints.limits.reflection_solves = 1;
   GviOptions every_cluster = input.gvi;
