@@ -110,14 +110,17 @@ void rebalance_chunks(int threads) {
         std::vector<double>(static_cast<std::size_t>(threads), 1.0 / static_cast<double>(threads)));
     return;
   }
-  std::vector<double> measured(static_cast<std::size_t>(threads));
+  // Called every step: the measured times summed first, their list made only for a move (a
+  // heap block a step on the calling thread, while the others wait, otherwise).
   double total = 0.0;
+  for (int t = 0; t < threads; ++t)
+    total += static_cast<double>(busy[static_cast<std::size_t>(t)].ns);
+  if (total < kMeasuredBeforeMove) return;
+  std::vector<double> measured(static_cast<std::size_t>(threads));
   for (int t = 0; t < threads; ++t) {
     measured[static_cast<std::size_t>(t)] =
         static_cast<double>(busy[static_cast<std::size_t>(t)].ns);
-    total += measured[static_cast<std::size_t>(t)];
   }
-  if (total < kMeasuredBeforeMove) return;
   hold(moved_shares(chunk_shares(), measured));
   ++moves;
 }
