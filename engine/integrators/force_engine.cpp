@@ -27,17 +27,32 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   // and wraps them (a wrap is a few divisions' worth: substantial items, split as the pair
   // loop, not in chunks of cheap_chunk_minimum()) in one pass; the scans that name a bad atom run
   // only if a chunk found one. Checked first on one thread and then wrapped, the rigid melt's 4000
-  // beads were read three times a build while the other thread waited. Nothing reads a list of zero
-  // reach: keep the first one, unwrapped.
+  // beads were read three times a build while the other thread waited. The pass runs in the
+  // list build's first job, each chunk checked and wrapped just before the build copies it (in
+  // a job of its own it cost a job and a read of the positions more a build). Nothing reads a
+  // list of zero reach: keep the first one, unwrapped.
   const bool keep_list = neighbors_.cutoff() <= 0 && neighbors_.builds() > 0;
-  const int chunks = chunks_for(p.size());
-  std::vector<char> usable(static_cast<std::size_t>(chunks), 1);
-  for_each_chunk(p.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
-    usable[static_cast<std::size_t>(c)] = atoms_usable(p, system.box, begin, end);
-    if (keep_list || !usable[static_cast<std::size_t>(c)]) return;
-    for (std::size_t i = begin; i < end; ++i) system.box.wrap(p.position[i], p.image[i]);
-  });
-  if (std::find(usable.begin(), usable.end(), 0) != usable.end()) {
+  bool usable = true;
+  if (keep_list) {
+    const int chunks = chunks_for(p.size());
+    std::vector<char> chunk_usable(static_cast<std::size_t>(chunks), 1);
+    for_each_chunk(p.size(), chunks, [&](int c, std::size_t begin, std::size_t end) {
+      chunk_usable[static_cast<std::size_t>(c)] = atoms_usable(p, system.box, begin, end);
+    });
+    usable = std::find(chunk_usable.begin(), chunk_usable.end(), 0) == chunk_usable.end();
+  } else {
+    if (neighbors_.builds() == 0) {
+      const SpecialPairs special = find_special_pairs(system.topology, p.size());
+      neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
+    }
+    const NeighborList::ChunkCheck check_and_wrap = [&](std::size_t begin, std::size_t end) {
+      if (!atoms_usable(p, system.box, begin, end)) return false;
+      for (std::size_t i = begin; i < end; ++i) system.box.wrap(p.position[i], p.image[i]);
+      return true;
+    };
+    usable = neighbors_.build(p.position, system.box, &check_and_wrap);
+  }
+  if (!usable) {
     if (auto bad = first_non_finite_atom(p)) {
       throw SimulationError("step " + std::to_string(system.step) + ": " + *bad +
                             " is not finite: the run blew up (a timestep too large, overlapping "
@@ -52,13 +67,7 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
     }
     throw std::logic_error("atoms_usable found an atom that neither scan names");
   }
-  if (keep_list) return false;
-  if (neighbors_.builds() == 0) {
-    const SpecialPairs special = find_special_pairs(system.topology, p.size());
-    neighbors_.set_exclusions(special_exclusions(special, force_field_.special_lj));
-  }
-  neighbors_.build(p.position, system.box);
-  return true;
+  return !keep_list;
 }
 
 void ForceEngine::restore_neighbors(System& system, const std::vector<Vec3>& build_positions) {

@@ -228,7 +228,8 @@ void NeighborList::count_into_cells(std::size_t particle_count, std::size_t cell
   cell_start[cell_count] = particle_count;
 }
 
-void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
+bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
+                         const ChunkCheck* first) {
   const auto n = static_cast<std::int32_t>(position.size());
   const double reach = cutoff_ + skin_;
   const double reach2 = reach * reach;
@@ -267,10 +268,15 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
   const int wrap_chunks = chunks_for(static_cast<std::size_t>(n));
   std::vector<double> chunk_largest(static_cast<std::size_t>(wrap_chunks), 0.0);
   std::vector<char> chunk_moved(static_cast<std::size_t>(wrap_chunks), 0);
+  std::vector<char> chunk_unusable(static_cast<std::size_t>(wrap_chunks), 0);
   const bool keep_positions = &position != &position_at_build_;
   if (keep_positions) position_at_build_.resize(static_cast<std::size_t>(n));
   for_each_chunk(static_cast<std::size_t>(n), wrap_chunks,
                  [&](int c, std::size_t begin, std::size_t end) {
+                   if (first && !(*first)(begin, end)) {
+                     chunk_unusable[static_cast<std::size_t>(c)] = 1;
+                     return;
+                   }
                    double largest = 0.0;
                    bool any_moved = false;
                    for (std::size_t i = begin; i < end; ++i) {
@@ -286,6 +292,11 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
                    chunk_moved[static_cast<std::size_t>(c)] = any_moved;
                  });
 
+  if (std::find(chunk_unusable.begin(), chunk_unusable.end(), 1) != chunk_unusable.end()) {
+    // Some chunks' build positions are this build's, the others' the last one's: no list.
+    position_at_build_.clear();
+    return false;
+  }
   const Grid grid = make_grid(inside, box);
   if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
   const int cells = grid.count[0] * grid.count[1] * grid.count[2];
@@ -599,6 +610,7 @@ void NeighborList::build(const std::vector<Vec3>& position, const Box& box) {
     by_particle_.stale.store(true, std::memory_order_release);
   }
   ++builds_;
+  return true;
 }
 
 // Each particle's partners moved from its slot (as particles, or with `slot_particle` as

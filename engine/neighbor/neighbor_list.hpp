@@ -3,6 +3,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <vector>
 
@@ -28,7 +29,14 @@ class NeighborList {
   // Pairs to leave out (bonded exclusions), in any order.
   void set_exclusions(std::vector<std::array<std::int32_t, 2>> excluded);
 
-  void build(const std::vector<Vec3>& position, const Box& box);
+  void build(const std::vector<Vec3>& position, const Box& box) { build(position, box, nullptr); }
+  // A caller's pass over each chunk of the particles, run in the build's first job just before
+  // the build reads the chunk's positions (the force engine's check and wrap of them: a job
+  // and a read of the positions fewer a build). It returns false where the chunk's particles
+  // cannot be listed (a non-finite position): then build stops after that job, returns false
+  // and leaves no list (built_for() is false until a build completes).
+  using ChunkCheck = std::function<bool(std::size_t begin, std::size_t end)>;
+  bool build(const std::vector<Vec3>& position, const Box& box, const ChunkCheck* first);
   bool needs_rebuild(const std::vector<Vec3>& position) const;
   // needs_rebuild's test one particle at a time, for a caller's pass over the particles:
   // the list holds `count` particles' build positions, and particle i at x keeps it valid.
