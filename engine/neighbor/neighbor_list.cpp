@@ -166,8 +166,8 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
 
 // The particles counted into cells by chunks of consecutive indices, then each cell's first
 // slot (cell_start_) and, per chunk, where its particles of each cell go (chunk_cell_fill_).
-void NeighborList::count_into_cells(std::size_t particle_count, std::size_t cell_count,
-                                    int sort_chunks) {
+bool NeighborList::count_into_cells(std::size_t particle_count, std::size_t cell_count,
+                                    int sort_chunks, const CountingChunkPass* first) {
   // Chunks of consecutive indices count their particles per cell; a cell's slots then hold
   // chunk 0's particles, then chunk 1's...: ascending index within a cell, the same slots
   // on any number of threads. The cells' first slots are then made in the same job, each
@@ -186,11 +186,16 @@ void NeighborList::count_into_cells(std::size_t particle_count, std::size_t cell
   }
   // [chunk][share]: the chunk's particles in the share's cells.
   std::vector<std::size_t> in_share(sort_slots * sort_slots, 0);
+  std::vector<char> refused(sort_slots, 0);
   for_each_chunk_then(
       particle_count, cell_count, sort_chunks,
       [&](int c, std::size_t begin, std::size_t end) {
         std::vector<std::size_t>& count = chunk_cell_fill_[static_cast<std::size_t>(c)];
         count.assign(cell_count, 0);
+        if (first && !(*first)(c, begin, end)) {
+          refused[static_cast<std::size_t>(c)] = 1;
+          return;
+        }
         std::size_t* const in_cell = count.data();
         std::vector<std::size_t> shares(sort_slots, 0);
         if (sort_slots == 1) {
@@ -226,6 +231,7 @@ void NeighborList::count_into_cells(std::size_t particle_count, std::size_t cell
         }
       });
   cell_start[cell_count] = particle_count;
+  return std::find(refused.begin(), refused.end(), 1) == refused.end();
 }
 
 bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
@@ -264,49 +270,43 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
   // Split as substantial items, as ForceEngine::ensure_neighbors' wrap. The same pass keeps
   // the positions for needs_rebuild and finds, per chunk, the largest coordinate (the float
   // scan's bounds) and whether any particle was moved: made after it on one thread, those
-  // three passes over the particles left the other thread waiting at every build.
+  // three passes over the particles left the other thread waiting at every build. False
+  // where the caller's pass refuses the chunk.
   const int wrap_chunks = chunks_for(static_cast<std::size_t>(n));
   std::vector<double> chunk_largest(static_cast<std::size_t>(wrap_chunks), 0.0);
   std::vector<char> chunk_moved(static_cast<std::size_t>(wrap_chunks), 0);
-  std::vector<char> chunk_unusable(static_cast<std::size_t>(wrap_chunks), 0);
   const bool keep_positions = &position != &position_at_build_;
   if (keep_positions) position_at_build_.resize(static_cast<std::size_t>(n));
-  for_each_chunk(static_cast<std::size_t>(n), wrap_chunks,
-                 [&](int c, std::size_t begin, std::size_t end) {
-                   if (first && !(*first)(begin, end)) {
-                     chunk_unusable[static_cast<std::size_t>(c)] = 1;
-                     return;
-                   }
-                   double largest = 0.0;
-                   bool any_moved = false;
-                   for (std::size_t i = begin; i < end; ++i) {
-                     if (keep_positions) position_at_build_[i] = position[i];
-                     inside[i] = position[i];
-                     moved[i] = {0, 0, 0};
-                     box.wrap(inside[i], moved[i]);
-                     const Vec3& x = inside[i];
-                     largest = std::max({largest, std::abs(x.x), std::abs(x.y), std::abs(x.z)});
-                     any_moved |= (moved[i][0] | moved[i][1] | moved[i][2]) != 0;
-                   }
-                   chunk_largest[static_cast<std::size_t>(c)] = largest;
-                   chunk_moved[static_cast<std::size_t>(c)] = any_moved;
-                 });
-
-  if (std::find(chunk_unusable.begin(), chunk_unusable.end(), 1) != chunk_unusable.end()) {
-    // Some chunks' build positions are this build's, the others' the last one's: no list.
-    position_at_build_.clear();
-    return false;
-  }
-  const Grid grid = make_grid(inside, box);
-  if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
-  const int cells = grid.count[0] * grid.count[1] * grid.count[2];
+  auto wrap_chunk = [&](int c, std::size_t begin, std::size_t end) {
+    if (first && !(*first)(begin, end)) return false;
+    double largest = 0.0;
+    bool any_moved = false;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (keep_positions) position_at_build_[i] = position[i];
+      inside[i] = position[i];
+      moved[i] = {0, 0, 0};
+      box.wrap(inside[i], moved[i]);
+      const Vec3& x = inside[i];
+      largest = std::max({largest, std::abs(x.x), std::abs(x.y), std::abs(x.z)});
+      any_moved |= (moved[i][0] | moved[i][1] | moved[i][2]) != 0;
+    }
+    chunk_largest[static_cast<std::size_t>(c)] = largest;
+    chunk_moved[static_cast<std::size_t>(c)] = any_moved;
+    return true;
+  };
 
   // Counting sort of particles into cells; within a cell, ascending index.
+  Grid grid;
+  int cells = 0;
   std::vector<std::int32_t>& cell_of = cell_of_;
   std::vector<std::size_t>& cell_start = cell_start_;
   cell_of.resize(static_cast<std::size_t>(n));
-  cell_start.resize(static_cast<std::size_t>(cells) + 1);
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
+  auto use_grid = [&] {
+    if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
+    cells = grid.count[0] * grid.count[1] * grid.count[2];
+    cell_start.resize(static_cast<std::size_t>(cells) + 1);
+  };
+  auto bin = [&](std::size_t i) {
     int k[3];
     for (int a = 0; a < 3; ++a) {
       // Non-negative by construction (wrapped, or above the open-axis minimum): truncation
@@ -315,7 +315,41 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
                         0, grid.count[a] - 1);
     }
     cell_of[i] = (k[2] * grid.count[1] + k[1]) * grid.count[0] + k[0];
-  });
+  };
+  const int sort_chunks = wrap_chunks;
+  bool usable = true;
+  if (box.periodic(0) && box.periodic(1) && box.periodic(2)) {
+    // The grid of a periodic box is the box's (make_grid reads no position): each chunk's
+    // particles are wrapped, binned and counted into cells in one job, not three a build.
+    grid = make_grid(inside, box);
+    use_grid();
+    const CountingChunkPass wrap_and_bin = [&](int c, std::size_t begin, std::size_t end) {
+      if (!wrap_chunk(c, begin, end)) return false;
+      for (std::size_t i = begin; i < end; ++i) bin(i);
+      return true;
+    };
+    usable = count_into_cells(static_cast<std::size_t>(n), static_cast<std::size_t>(cells),
+                              sort_chunks, &wrap_and_bin);
+  } else {
+    // Along an open axis the grid spans the particles' wrapped positions.
+    std::vector<char> chunk_usable(static_cast<std::size_t>(wrap_chunks), 1);
+    for_each_chunk(static_cast<std::size_t>(n), wrap_chunks,
+                   [&](int c, std::size_t begin, std::size_t end) {
+                     chunk_usable[static_cast<std::size_t>(c)] = wrap_chunk(c, begin, end);
+                   });
+    usable = std::find(chunk_usable.begin(), chunk_usable.end(), 0) == chunk_usable.end();
+    if (usable) {
+      grid = make_grid(inside, box);
+      use_grid();
+      parallel_for(static_cast<std::size_t>(n), bin);
+      count_into_cells(static_cast<std::size_t>(n), static_cast<std::size_t>(cells), sort_chunks);
+    }
+  }
+  if (!usable) {
+    // Some chunks' build positions are this build's, the others' the last one's: no list.
+    position_at_build_.clear();
+    return false;
+  }
   // Particles by slot (cell order), with their wrapped positions, periods moved and cells.
   std::vector<std::int32_t>& member = member_;
   std::vector<Vec3>& member_position = member_position_;
@@ -355,15 +389,12 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
     member_cell[s] = cell_of[i];
     member[s] = i;
   };
-  const int sort_chunks = chunks_for(static_cast<std::size_t>(n));
-  count_into_cells(static_cast<std::size_t>(n), static_cast<std::size_t>(cells), sort_chunks);
-  for_each_chunk(static_cast<std::size_t>(n), sort_chunks,
-                 [&](int c, std::size_t begin, std::size_t end) {
-                   std::size_t* const fill = chunk_cell_fill_[static_cast<std::size_t>(c)].data();
-                   for (std::size_t i = begin; i < end; ++i) {
-                     place(static_cast<std::int32_t>(i), fill[cell_of[i]]++);
-                   }
-                 });
+  // Each counting chunk's particles to their slots (the scan's job, before its barrier).
+  auto place_chunk = [&](int c, std::size_t begin, std::size_t end) {
+    std::size_t* const fill = chunk_cell_fill_[static_cast<std::size_t>(c)].data();
+    for (std::size_t i = begin; i < end; ++i)
+      place(static_cast<std::int32_t>(i), fill[cell_of[i]]++);
+  };
 
   // A pair found through stencil shift s (periods) between wrapped positions has, in the
   // caller's positions, the shift s + moved_i - moved_j; codes hold -1..1 periods per
@@ -411,7 +442,7 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
       std::find(chunk_moved.begin(), chunk_moved.end(), 1) == chunk_moved.end();
   // Chunks of consecutive slots, each listing its particles' partners in order; the lists
   // are then joined in chunk order: the same list on any number of threads.
-  const int chunks = chunks_for(static_cast<std::size_t>(n));
+  const int chunks = sort_chunks;
   chunk_neighbors_.resize(static_cast<std::size_t>(chunks));
   chunk_codes_.resize(static_cast<std::size_t>(chunks));
   chunk_hit_slots_.resize(static_cast<std::size_t>(chunks));
@@ -547,7 +578,11 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
     chunk_hit_slots_[k] = std::move(hit_slot);
     chunk_hit_codes_[k] = std::move(hit_code);
   };
-  for_each_chunk(static_cast<std::size_t>(n), chunks, list_chunk);
+  // The particles placed, then (once every chunk has placed its own) the slots scanned: one
+  // job, a barrier between (two jobs a build before). The scan's chunks of slots are the
+  // counting chunks' number.
+  for_each_chunk_then(static_cast<std::size_t>(n), static_cast<std::size_t>(n), sort_chunks,
+                      place_chunk, list_chunk);
   std::vector<std::size_t> chunk_start(static_cast<std::size_t>(chunks) + 1, 0);
   for (int c = 0; c < chunks; ++c) {
     chunk_start[c + 1] = chunk_start[c] + chunk_neighbors_[static_cast<std::size_t>(c)].size();

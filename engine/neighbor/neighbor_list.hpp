@@ -147,7 +147,11 @@ class NeighborList {
                              const std::int32_t* slot_neighbors, const std::int32_t* slot_particle,
                              const std::uint8_t* slot_codes, std::size_t n) const;
   void make_stencils(const Grid& grid, const Box& box);
-  void count_into_cells(std::size_t particle_count, std::size_t cell_count, int sort_chunks);
+  // `first` (the build's first pass, given where the grid is known before it): run on each
+  // counting chunk before its count; a chunk it refuses counts nothing (false returned).
+  using CountingChunkPass = std::function<bool(int chunk, std::size_t begin, std::size_t end)>;
+  bool count_into_cells(std::size_t particle_count, std::size_t cell_count, int sort_chunks,
+                        const CountingChunkPass* first = nullptr);
 
   double cutoff_, skin_;
   std::vector<std::array<std::int32_t, 2>> excluded_;  // sorted, i < j

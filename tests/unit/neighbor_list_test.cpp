@@ -263,50 +263,54 @@ TEST(NeighborList, SameInputSameOrder) {
 // The caller's pass in the build's first job (the force engine's check and wrap): it sees
 // each particle once, before the build reads it, so a list built after it wraps positions
 // is the list of those wrapped positions; a chunk it refuses leaves no list, until a build
-// completes.
+// completes. In a periodic box (the particles wrapped, binned and counted in one job) and in
+// one open along z (the grid spans the particles: binned after the wrap's job).
 TEST(NeighborList, TheCallersFirstPassRunsBeforeTheBuildReadsEachChunk) {
   const testing::ThreadCount threads(2);  // two chunks where built with threads
-  const Box box({0, 0, 0}, {12, 12, 12}, {true, true, true});
-  const auto outside = random_positions(1500, box, 21, 1.5);
-  std::vector<Vec3> wrapped = outside;
-  for (Vec3& p : wrapped) {
-    std::array<int, 3> image{};
-    box.wrap(p, image);
-  }
-  NeighborList reference(2.5, 0.3);
-  reference.build(wrapped, box);
-
-  std::vector<Vec3> x = outside;
-  std::vector<int> seen(x.size(), 0);
-  const NeighborList::ChunkCheck wrap = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
+  for (const bool open_z : {false, true}) {
+    SCOPED_TRACE(open_z ? "open along z" : "periodic");
+    const Box box({0, 0, 0}, {12, 12, 12}, {true, true, !open_z});
+    const auto outside = random_positions(1500, box, 21, 1.5);
+    std::vector<Vec3> wrapped = outside;
+    for (Vec3& p : wrapped) {
       std::array<int, 3> image{};
-      box.wrap(x[i], image);
-      ++seen[i];
+      box.wrap(p, image);
     }
-    return true;
-  };
-  NeighborList list(2.5, 0.3);
-  ASSERT_TRUE(list.build(x, box, &wrap));
-  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<std::ptrdiff_t>(x.size()));
-  EXPECT_EQ(list.neighbors(), reference.neighbors());
-  EXPECT_EQ(list.offsets(), reference.offsets());
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const Vec3& kept = list.positions_at_build()[i];
-    EXPECT_TRUE(kept.x == wrapped[i].x && kept.y == wrapped[i].y && kept.z == wrapped[i].z) << i;
-  }
-  EXPECT_EQ(listed(list), brute_force(wrapped, box, 2.8));
+    NeighborList reference(2.5, 0.3);
+    reference.build(wrapped, box);
 
-  // A refused chunk (the one holding particle 1400): no list, and the next build makes one.
-  const NeighborList::ChunkCheck refuse = [](std::size_t begin, std::size_t end) {
-    return !(begin <= 1400 && 1400 < end);
-  };
-  EXPECT_FALSE(list.build(x, box, &refuse));
-  EXPECT_FALSE(list.built_for(x.size()));
-  EXPECT_TRUE(list.needs_rebuild(x));
-  ASSERT_TRUE(list.build(x, box, nullptr));
-  EXPECT_TRUE(list.built_for(x.size()));
-  EXPECT_EQ(list.neighbors(), reference.neighbors());
+    std::vector<Vec3> x = outside;
+    std::vector<int> seen(x.size(), 0);
+    const NeighborList::ChunkCheck wrap = [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        std::array<int, 3> image{};
+        box.wrap(x[i], image);
+        ++seen[i];
+      }
+      return true;
+    };
+    NeighborList list(2.5, 0.3);
+    ASSERT_TRUE(list.build(x, box, &wrap));
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<std::ptrdiff_t>(x.size()));
+    EXPECT_EQ(list.neighbors(), reference.neighbors());
+    EXPECT_EQ(list.offsets(), reference.offsets());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const Vec3& kept = list.positions_at_build()[i];
+      EXPECT_TRUE(kept.x == wrapped[i].x && kept.y == wrapped[i].y && kept.z == wrapped[i].z) << i;
+    }
+    EXPECT_EQ(listed(list), brute_force(wrapped, box, 2.8));
+
+    // A refused chunk (the one holding particle 1400): no list, and the next build makes one.
+    const NeighborList::ChunkCheck refuse = [](std::size_t begin, std::size_t end) {
+      return !(begin <= 1400 && 1400 < end);
+    };
+    EXPECT_FALSE(list.build(x, box, &refuse));
+    EXPECT_FALSE(list.built_for(x.size()));
+    EXPECT_TRUE(list.needs_rebuild(x));
+    ASSERT_TRUE(list.build(x, box, nullptr));
+    EXPECT_TRUE(list.built_for(x.size()));
+    EXPECT_EQ(list.neighbors(), reference.neighbors());
+  }
 }
 
 }  // namespace
