@@ -590,41 +590,52 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
   bool coded = grid.shifted;
   for (char c : chunk_coded) coded = coded && c;
   const std::size_t pairs = chunk_start.back();
+  // Without cell order the list by slot stays where it is; the list by particle is made from
+  // it when first asked for (the force loop reads it in place through built_order()): each
+  // particle's range in it, once every chunk's offsets are made.
+  if (!cell_order_) {
+    built_begin_.resize(static_cast<std::size_t>(n));
+    built_end_.resize(static_cast<std::size_t>(n));
+  }
+  auto built_ranges = [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t s = slot_of[i];
+      built_begin_[i] = slot_offsets_[s];
+      built_end_[i] = slot_offsets_[s + 1];
+    }
+  };
   if (chunks == 1) {
     // One chunk is the joined list already: exchanged, not copied (each keeps its memory).
     slot_neighbors_.swap(chunk_neighbors_[0]);
     slot_codes_.swap(chunk_codes_[0]);
     if (!coded) slot_codes_.clear();
+    if (!cell_order_) built_ranges(0, 0, static_cast<std::size_t>(n));
   } else {
     slot_neighbors_.resize(pairs);
     slot_codes_.resize(coded ? pairs : 0);
-    for_each_chunk(
-        static_cast<std::size_t>(n), chunks, [&](int chunk, std::size_t begin, std::size_t end) {
-          const std::size_t base = chunk_start[static_cast<std::size_t>(chunk)];
-          const std::vector<std::int32_t>& in = chunk_neighbors_[static_cast<std::size_t>(chunk)];
-          std::copy(in.begin(), in.end(),
-                    slot_neighbors_.begin() + static_cast<std::ptrdiff_t>(base));
-          if (coded) {
-            const std::vector<std::uint8_t>& codes = chunk_codes_[static_cast<std::size_t>(chunk)];
-            std::copy(codes.begin(), codes.end(),
-                      slot_codes_.begin() + static_cast<std::ptrdiff_t>(base));
-          }
-          for (std::size_t slot = begin; slot < end; ++slot) slot_offsets_[slot + 1] += base;
-        });
+    auto join_chunk = [&](int chunk, std::size_t begin, std::size_t end) {
+      const std::size_t base = chunk_start[static_cast<std::size_t>(chunk)];
+      const std::vector<std::int32_t>& in = chunk_neighbors_[static_cast<std::size_t>(chunk)];
+      std::copy(in.begin(), in.end(), slot_neighbors_.begin() + static_cast<std::ptrdiff_t>(base));
+      if (coded) {
+        const std::vector<std::uint8_t>& codes = chunk_codes_[static_cast<std::size_t>(chunk)];
+        std::copy(codes.begin(), codes.end(),
+                  slot_codes_.begin() + static_cast<std::ptrdiff_t>(base));
+      }
+      for (std::size_t slot = begin; slot < end; ++slot) slot_offsets_[slot + 1] += base;
+    };
+    if (cell_order_) {
+      for_each_chunk(static_cast<std::size_t>(n), chunks, join_chunk);
+    } else {
+      // The particles' ranges after a barrier in the join's job (a job of their own before).
+      for_each_chunk_then(static_cast<std::size_t>(n), static_cast<std::size_t>(n), chunks,
+                          join_chunk, built_ranges);
+    }
   }
 
   pairs_ = pairs;
   coded_ = coded;
   if (!cell_order_) {
-    // The list by slot stays where it is; the list by particle is made from it when first
-    // asked for (the force loop reads it in place through built_order()).
-    built_begin_.resize(static_cast<std::size_t>(n));
-    built_end_.resize(static_cast<std::size_t>(n));
-    parallel_for(static_cast<std::size_t>(n), [&](std::size_t i) {
-      const std::size_t s = slot_of[i];
-      built_begin_[i] = slot_offsets_[s];
-      built_end_[i] = slot_offsets_[s + 1];
-    });
     by_particle_.stale.store(true, std::memory_order_release);
   } else {
     // The list by slot, partners renamed by slot. The list by particle is made from it when

@@ -263,9 +263,11 @@ TEST(NeighborList, SameInputSameOrder) {
 // The caller's pass in the build's first job (the force engine's check and wrap): it sees
 // each particle once, before the build reads it, so a list built after it wraps positions
 // is the list of those wrapped positions; a chunk it refuses leaves no list, until a build
-// completes. In a periodic box (the particles wrapped, binned and counted in one job) and in
-// one open along z (the grid spans the particles: binned after the wrap's job).
-TEST(NeighborList, TheCallersFirstPassRunsBeforeTheBuildReadsEachChunk) {
+// completes. The list read in place (built_order(), made after a barrier in the join's job)
+// holds each particle's partners. In a periodic box (the particles wrapped, binned and counted
+// in one job) and in one open along z (the grid spans the particles: binned after the wrap's
+// job).
+TEST(NeighborList, TheCallersPassAndTheMergedJobsListTheWrappedPositions) {
   const testing::ThreadCount threads(2);  // two chunks where built with threads
   for (const bool open_z : {false, true}) {
     SCOPED_TRACE(open_z ? "open along z" : "periodic");
@@ -299,6 +301,17 @@ TEST(NeighborList, TheCallersFirstPassRunsBeforeTheBuildReadsEachChunk) {
       EXPECT_TRUE(kept.x == wrapped[i].x && kept.y == wrapped[i].y && kept.z == wrapped[i].z) << i;
     }
     EXPECT_EQ(listed(list), brute_force(wrapped, box, 2.8));
+    // The list as built (by slot), read in place through each particle's range: its partners.
+    const NeighborList::PartnerRanges built = list.built_order();
+    ASSERT_EQ(built.particles, x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const std::vector<std::int32_t> in_place(built.neighbors + built.begin[i],
+                                               built.neighbors + built.end[i]);
+      const std::vector<std::int32_t> by_particle(
+          list.neighbors().begin() + static_cast<std::ptrdiff_t>(list.offsets()[i]),
+          list.neighbors().begin() + static_cast<std::ptrdiff_t>(list.offsets()[i + 1]));
+      EXPECT_EQ(in_place, by_particle) << i;
+    }
 
     // A refused chunk (the one holding particle 1400): no list, and the next build makes one.
     const NeighborList::ChunkCheck refuse = [](std::size_t begin, std::size_t end) {
