@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -332,8 +333,25 @@ void Gvi::start_step(System& system) {
     // the test at x follows.
     if (prediction_read) {
       if (!p_made) parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
-      predict(system, ws_.p, ws_.predicted, false);
-      if (!engine_.neighbors_cover(ws_.predicted)) {
+      // predict()'s free prediction, with the start positions q copied and the new list's cover
+      // of the prediction tested (needs_rebuild's test) in its pass: three jobs before.
+      const NeighborList& list = engine_.neighbors();
+      std::vector<Vec3>& d = ws_.displacement;
+      std::vector<Vec3>& x = ws_.predicted;
+      x.resize(n);
+      ws_.q.resize(n);
+      std::atomic<std::size_t> beyond{0};
+      free_displacement(system, ws_.p, d, [&](std::size_t begin, std::size_t end) {
+        std::size_t count = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+          ws_.q[i] = P.position[i];
+          x[i] = P.position[i] + d[i];
+          count += !list.keeps_valid(i, x[i]) ? 1 : 0;
+        }
+        if (count > 0) beyond.fetch_add(count, std::memory_order_relaxed);
+      });
+      q_copied = true;
+      if (beyond.load(std::memory_order_relaxed) > 0) {
         throw SimulationError("step " + std::to_string(system.step + 1) +
                               ": a particle would move more than half the neighbour skin in one "
                               "step; increase [neighbor] skin or reduce the timestep");

@@ -510,6 +510,46 @@ TEST(Gvi, RodsAloneKeepTheListWhereOnlyTheFreeStepLeavesIt) {
     EXPECT_EQ(run.gvi->forces().force()[0].x, fresh.force[0].x);
   }
 }
+
+// Where the contact rows' search reads the prediction: a sphere whose free step (h v = 0.3)
+// is more than half the skin (0.15) leaves the list built at its start position too, and
+// the step is refused, naming the step and the remedy; at h v = 0.1 every step's prediction
+// is covered, by the list as it was or by one built at the step's start (the test made in
+// the prediction's pass after a build).
+TEST(Gvi, ASphereLeavingTheNewListInOneStepStopsTheRun) {
+  for (const int threads : {1, 2}) {
+    if (threads > 1 && !testing::kThreaded) continue;
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    const testing::ThreadCount count(threads);
+    auto fluid = [](double speed) {
+      std::vector<Atom> atoms;
+      for (int k = 0; k < 1200; ++k) {
+        atoms.push_back({{0.5 + 2.0 * (k % 10), 0.5 + 2.0 * ((k / 10) % 10), 0.5 + 2.0 * (k / 100)},
+                         {k == 7 ? speed : 0.0, 0, 0}});
+      }
+      return input_with_atoms("fast_sphere", atoms, "ppp", {0, 0, 0}, {20, 20, 24},
+                              kNoPairs + "[constraints]\nhard_spheres = { diameter = 1.0 }\n" +
+                                  "[neighbor]\nskin = 0.3\n" + with_timestep(0.01));
+    };
+    GviRun slow(fluid(10.0));
+    const NeighborList& list = slow.gvi->forces().neighbors();
+    const std::int64_t builds = list.builds();
+    for (int n = 0; n < 6; ++n) slow.step();
+    EXPECT_GE(list.builds(), builds + 2);
+    EXPECT_NEAR(slow.particles().position[7].x, 14.5 + 0.6, 1e-12);
+    GviRun fast(fluid(30.0));
+    try {
+      fast.step();
+      ADD_FAILURE() << "a step of 0.3 with a skin of 0.3 was taken";
+    } catch (const SimulationError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("step 1: a particle would move more than half the neighbour skin"),
+                std::string::npos)
+          << message;
+      EXPECT_NE(message.find("increase [neighbor] skin"), std::string::npos) << message;
+    }
+  }
+}
 // Pair contacts exchange momentum only: a hard-sphere gas in a periodic box keeps its total
 // momentum to rounding.
 TEST(Gvi, HardSphereGasKeepsLinearMomentum) {
