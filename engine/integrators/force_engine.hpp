@@ -1,6 +1,7 @@
 #pragma once
 
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "forces/force_field.hpp"
@@ -36,6 +37,11 @@ class ForceEngine {
   void restore_neighbors(System& system, const std::vector<Vec3>& build_positions);
   // Counts builds on from `builds` (an engine that takes over from another's).
   void continue_build_count(std::int64_t builds) { neighbors_.continue_build_count(builds); }
+  // The list's cell stencils, handed from an engine to its successor (NeighborList::Stencils).
+  NeighborList::Stencils take_list_stencils() { return neighbors_.take_stencils(); }
+  void adopt_list_stencils(NeighborList::Stencils stencils) {
+    neighbors_.adopt_stencils(std::move(stencils));
+  }
   // Whether the current list also holds every pair within reach at positions x.
   bool neighbors_cover(const std::vector<Vec3>& x) const { return !neighbors_.needs_rebuild(x); }
 

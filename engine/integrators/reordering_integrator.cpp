@@ -36,9 +36,11 @@ void ReorderingIntegrator::step(System& system, bool tally) {
   const NeighborList& list = inner_->forces().neighbors();
   const std::vector<Vec3> build_positions = permuted(list.positions_at_build(), order);
   const std::int64_t builds = list.builds();
+  NeighborList::Stencils stencils = inner_->engine().take_list_stencils();
   inner_.reset();
   inner_ = remake_(order);
   inner_->engine().continue_build_count(builds);
+  inner_->engine().adopt_list_stencils(std::move(stencils));
   inner_->resume(system, build_positions, state);
   ++sorts_;
 }

@@ -162,6 +162,30 @@ void NeighborList::make_stencils(const Grid& grid, const Box& box) {
     stencil_offsets_.push_back(stencil_cells_.size());
   }
   stencil_grid_ = grid;
+  stencil_periodic_ = {box.periodic(0), box.periodic(1), box.periodic(2)};
+}
+
+NeighborList::Stencils NeighborList::take_stencils() {
+  Stencils stencils{stencil_grid_,
+                    stencil_periodic_,
+                    std::move(stencil_offsets_),
+                    std::move(stencil_cells_),
+                    std::move(stencil_ends_),
+                    std::move(stencil_codes_)};
+  stencil_offsets_.clear();  // none: the next build makes them
+  stencil_cells_.clear();
+  stencil_ends_.clear();
+  stencil_codes_.clear();
+  return stencils;
+}
+
+void NeighborList::adopt_stencils(Stencils stencils) {
+  stencil_grid_ = stencils.grid;
+  stencil_periodic_ = stencils.periodic;
+  stencil_offsets_ = std::move(stencils.offsets);
+  stencil_cells_ = std::move(stencils.cells);
+  stencil_ends_ = std::move(stencils.ends);
+  stencil_codes_ = std::move(stencils.codes);
 }
 
 // The particles counted into cells by chunks of consecutive indices, then each cell's first
@@ -302,7 +326,10 @@ bool NeighborList::build(const std::vector<Vec3>& position, const Box& box,
   std::vector<std::size_t>& cell_start = cell_start_;
   cell_of.resize(static_cast<std::size_t>(n));
   auto use_grid = [&] {
-    if (!(grid == stencil_grid_) || stencil_offsets_.empty()) make_stencils(grid, box);
+    const std::array<bool, 3> periodic{box.periodic(0), box.periodic(1), box.periodic(2)};
+    if (!(grid == stencil_grid_) || periodic != stencil_periodic_ || stencil_offsets_.empty()) {
+      make_stencils(grid, box);
+    }
     cells = grid.count[0] * grid.count[1] * grid.count[2];
     cell_start.resize(static_cast<std::size_t>(cells) + 1);
   };

@@ -138,6 +138,25 @@ class NeighborList {
       return count == o.count && span == o.span && shifted == o.shifted;
     }
   };
+
+ public:
+  // The cells' stencils of the last build, a function of its grid and the box's periods alone.
+  // A list made anew for the same particles in the same box (at the particles' sort, which
+  // makes the integrator anew) takes them from its predecessor: making them took 0.5 ms a sort
+  // on the 4000-sphere fluid's 18 400 cells. A build whose grid or periods differ from them
+  // makes its own.
+  struct Stencils {
+    Grid grid;
+    std::array<bool, 3> periodic{};
+    std::vector<std::size_t> offsets;
+    std::vector<std::int32_t> cells, ends;
+    std::vector<std::uint8_t> codes;
+  };
+  // This list's stencils, moved out (it makes them again at its next build).
+  Stencils take_stencils();
+  void adopt_stencils(Stencils stencils);
+
+ private:
   Grid make_grid(const std::vector<Vec3>& inside, const Box& box) const;
   void by_particle() const {
     if (by_particle_.stale.load(std::memory_order_acquire)) make_by_particle();
@@ -163,6 +182,7 @@ class NeighborList {
   // with one periodic shift code each; kept while the grid is unchanged (always, for a
   // fixed periodic box).
   Grid stencil_grid_;
+  std::array<bool, 3> stencil_periodic_{};
   std::vector<std::size_t> stencil_offsets_;
   std::vector<std::int32_t> stencil_cells_, stencil_ends_;
   std::vector<std::uint8_t> stencil_codes_;

@@ -326,5 +326,32 @@ TEST(NeighborList, TheCallersPassAndTheMergedJobsListTheWrappedPositions) {
   }
 }
 
+// A list given another list's stencils (as the particles' sort hands them on) lists what a
+// list making its own does: stencils from a list in the same box, in a longer one (another
+// grid) and in one of the same size open along z (the same grid counts, other periods: no
+// stencil cell across the z faces).
+TEST(NeighborList, AdoptedStencilsListWhatOwnStencilsList) {
+  const Box box({0, 0, 0}, {10, 10, 10}, {true, true, true});
+  const auto x = random_positions(900, box, 31);
+  NeighborList own(2.5, 0.3);
+  own.build(x, box);
+  EXPECT_EQ(listed(own), brute_force(x, box, 2.8));
+  const std::vector<Box> givers = {box, Box({0, 0, 0}, {10, 10, 13}, {true, true, true}),
+                                   Box({0, 0, 0}, {10, 10, 10}, {true, true, false})};
+  for (const Box& from : givers) {
+    SCOPED_TRACE(from.length().z);
+    SCOPED_TRACE(from.periodic(2));
+    NeighborList giving(2.5, 0.3), adopting(2.5, 0.3);
+    giving.build(x, from);
+    adopting.adopt_stencils(giving.take_stencils());
+    adopting.build(x, box);
+    EXPECT_EQ(adopting.neighbors(), own.neighbors());
+    EXPECT_EQ(adopting.offsets(), own.offsets());
+    // The list that gave them up makes its own again.
+    giving.build(x, box);
+    EXPECT_EQ(giving.neighbors(), own.neighbors());
+  }
+}
+
 }  // namespace
 }  // namespace deli
