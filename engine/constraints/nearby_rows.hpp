@@ -63,9 +63,11 @@ class NearbyRows {
 
  private:
   // The short list at q; each particle's displacement since (moved_) starts at its reach
-  // (zero without particle reaches).
+  // (zero without particle reaches). `make_reaches`, where given, makes the reaches first:
+  // each chunk's, in the scan's job (its own job a build, before).
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
-            const NeighborList& list, const Box& box, const double* particle_reach);
+            const NeighborList& list, const Box& box, const double* particle_reach,
+            const ParticlePass* make_reaches);
 
   // ConstraintSet::unconstrained_pairs by first particle (a particle has a bond or two, so
   // a short scan instead of a binary search over all bonds, whose branches mispredict).
