@@ -19,6 +19,10 @@ ForceEngine::ForceEngine(const ForceField& force_field, double skin, double mini
 }
 
 bool ForceEngine::ensure_neighbors(System& system, bool force) {
+  return ensure_neighbors(system, force, nullptr);
+}
+
+bool ForceEngine::ensure_neighbors(System& system, bool force, const ParticleRange* after_wrap) {
   const TimedPhase timed(Phase::neighbor);
   Particles& p = system.particles;
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;
@@ -48,6 +52,7 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
     const NeighborList::ChunkCheck check_and_wrap = [&](std::size_t begin, std::size_t end) {
       if (!atoms_usable(p, system.box, begin, end)) return false;
       for (std::size_t i = begin; i < end; ++i) system.box.wrap(p.position[i], p.image[i]);
+      if (after_wrap) (*after_wrap)(begin, end);
       return true;
     };
     usable = neighbors_.build(p.position, system.box, &check_and_wrap);

@@ -324,7 +324,38 @@ void Gvi::start_step(System& system) {
   const bool pairs_matter = engine_.neighbors().cutoff() > 0;
   if (pairs_matter && !prediction_covered &&
       (prediction_known || !engine_.neighbors_cover(ws_.predicted))) {
-    engine_.ensure_neighbors(system, true);  // may wrap P.position
+    // Where the step reads the prediction, made again from the wrapped positions, with the
+    // start positions q copied and the new list's cover of it tested (needs_rebuild's test:
+    // the list's build positions are these positions) in the same pass: three jobs a build
+    // before. Verlet's free step (free_displacement's numbers) in the build's first job, each
+    // chunk's right after its wrap; otherwise after the build.
+    const bool verlet_in_build = prediction_read && p_made && lagrangian_ == Lagrangian::verlet;
+    std::vector<Vec3>& d = ws_.displacement;
+    std::vector<Vec3>& x = ws_.predicted;
+    if (prediction_read) {
+      d.resize(n);
+      x.resize(n);
+      ws_.q.resize(n);
+    }
+    const double limit2 = engine_.neighbors().valid_distance2();
+    std::atomic<std::size_t> beyond{0};
+    auto predicted_from = [&, limit2](std::size_t begin, std::size_t end) {
+      std::size_t count = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        ws_.q[i] = P.position[i];
+        x[i] = P.position[i] + d[i];
+        count += !(norm2(x[i] - P.position[i]) <= limit2) ? 1 : 0;
+      }
+      if (count > 0) beyond.fetch_add(count, std::memory_order_relaxed);
+    };
+    const ForceEngine::ParticleRange predict_in_build = [&, h = dt_](std::size_t begin,
+                                                                     std::size_t end) {
+      gvi_passes::half_kick(h, numbers(ws_.p), numbers(engine_.force()), P.mass.data(), nullptr,
+                            numbers(d), begin, end);
+      predicted_from(begin, end);
+    };
+    engine_.ensure_neighbors(system, true,
+                             verlet_in_build ? &predict_in_build : nullptr);  // wraps P.position
     q_copied = false;
     ws_.displacement2_of_prediction = false;
     ws_.reaches_of_prediction = false;
@@ -332,24 +363,12 @@ void Gvi::start_step(System& system) {
     // Where nothing reads the prediction (rods alone: the list built for other particles),
     // the test at x follows.
     if (prediction_read) {
-      if (!p_made) parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
-      // predict()'s free prediction, with the start positions q copied and the new list's cover
-      // of the prediction tested (needs_rebuild's test) in its pass: three jobs before.
-      const NeighborList& list = engine_.neighbors();
-      std::vector<Vec3>& d = ws_.displacement;
-      std::vector<Vec3>& x = ws_.predicted;
-      x.resize(n);
-      ws_.q.resize(n);
-      std::atomic<std::size_t> beyond{0};
-      free_displacement(system, ws_.p, d, [&](std::size_t begin, std::size_t end) {
-        std::size_t count = 0;
-        for (std::size_t i = begin; i < end; ++i) {
-          ws_.q[i] = P.position[i];
-          x[i] = P.position[i] + d[i];
-          count += !list.keeps_valid(i, x[i]) ? 1 : 0;
+      if (!verlet_in_build) {
+        if (!p_made) {
+          parallel_for(n, [&](std::size_t i) { ws_.p[i] = P.velocity[i] * P.mass[i]; });
         }
-        if (count > 0) beyond.fetch_add(count, std::memory_order_relaxed);
-      });
+        free_displacement(system, ws_.p, d, predicted_from);
+      }
       q_copied = true;
       if (beyond.load(std::memory_order_relaxed) > 0) {
         throw SimulationError("step " + std::to_string(system.step + 1) +
