@@ -786,7 +786,8 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
     const std::size_t cb = chunk_of(b);
     return ((a + b) & 1) != 0 ? ca : cb;
   };
-  // The seeds: the rows the last call left approaching, then the rows added.
+  // The seeds: the rows the last call left approaching, then the rows added (implicit where
+  // the chunks' threads walk: rows [first_new, rows.size())).
   std::vector<std::int32_t>& seeds = reflection_seeds_;
   seeds.clear();
   std::size_t first_new = first_new_row;
@@ -798,53 +799,42 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
       seeds.insert(seeds.end(), unsettled.value.begin(), unsettled.value.end());
     }
   }
-  row_components_.link(rows);
-  for (std::size_t r = first_new; r < rows.size(); ++r) {
-    seeds.push_back(static_cast<std::int32_t>(r));
-  }
   unsettled_of_chunk_.resize(slots);
   for (OnItsOwnLine<std::vector<std::int32_t>>& unsettled : unsettled_of_chunk_) {
     unsettled.value.clear();
   }
-  lone_rows_of_chunk_.resize(slots);
-  for (std::vector<std::int32_t>& lone : lone_rows_of_chunk_) lone.clear();
-  clusters_of_chunk_.resize(slots);
-  clusters_used_.assign(slots, 0);
-  std::size_t work = 0;  // the rows to reflect
-  row_components_.components_of(
-      seeds.data(), seeds.size(), [&](const std::int32_t* found, std::size_t count) {
-        work += count;
-        if (count == 1) {
-          const Constraint& row = rows[static_cast<std::size_t>(found[0])];
-          lone_rows_of_chunk_[owner(row.i, row.j)].push_back(found[0]);
-          return;
-        }
-        // reflect() reads the rows and the particles in ascending order, as find_clusters
-        // makes them.
-        std::vector<std::int32_t>& particles = component_particles_;
-        particles.clear();
-        for (std::size_t k = 0; k < count; ++k) {
-          const Constraint& row = rows[static_cast<std::size_t>(found[k])];
-          particles.push_back(row.i);
-          if (row.j >= 0) particles.push_back(row.j);
-        }
-        std::sort(particles.begin(), particles.end());
-        particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
-        const std::size_t c = owner(particles.front(), particles.back());
-        std::vector<Cluster>& clusters = clusters_of_chunk_[c];
-        if (clusters_used_[c] == clusters.size()) clusters.emplace_back();
-        Cluster& cluster = clusters[clusters_used_[c]++];
-        cluster.particles.assign(particles.begin(), particles.end());
-        cluster.rows.assign(found, found + count);
-        std::sort(cluster.rows.begin(), cluster.rows.end());
-      });
+  reflection_chunks_.resize(slots);
+  for (OnItsOwnLine<ReflectionChunk>& chunk : reflection_chunks_) {
+    chunk.value.lone_rows.clear();
+    chunk.value.clusters_used = 0;
+  }
+  // A component of several rows into chunk c's clusters: its rows and particles ascending, as
+  // find_clusters makes them and reflect() reads them.
+  auto add_cluster = [&](std::size_t c, const std::int32_t* found, std::size_t count) {
+    ReflectionChunk& chunk = reflection_chunks_[c].value;
+    std::vector<std::int32_t>& particles = chunk.particles;
+    particles.clear();
+    for (std::size_t k = 0; k < count; ++k) {
+      const Constraint& row = rows[static_cast<std::size_t>(found[k])];
+      particles.push_back(row.i);
+      if (row.j >= 0) particles.push_back(row.j);
+    }
+    std::sort(particles.begin(), particles.end());
+    particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
+    if (chunk.clusters_used == chunk.clusters.size()) chunk.clusters.emplace_back();
+    Cluster& cluster = chunk.clusters[chunk.clusters_used++];
+    cluster.particles.assign(particles.begin(), particles.end());
+    cluster.rows.assign(found, found + count);
+    std::sort(cluster.rows.begin(), cluster.rows.end());
+  };
   reflection_terms_.reset(rows.size());
   reflection_stats_.assign(slots, OnItsOwnLine<ConstraintStatistics>{});
   auto reflect_chunk = [&](std::size_t c) {
     const ReflectionTally tally{reflection_terms_, reflection_stats_[c].value};
     const int chunk = static_cast<int>(c);
     std::vector<std::int32_t>& unsettled = unsettled_of_chunk_[c].value;
-    for (const std::int32_t r : lone_rows_of_chunk_[c]) {
+    const ReflectionChunk& own = reflection_chunks_[c].value;
+    for (const std::int32_t r : own.lone_rows) {
       const Constraint& row = rows[static_cast<std::size_t>(r)];
       bool left_settled = false;
       if (!reflect_closed_form(system, row, r, x, p, tally, &left_settled)) {
@@ -861,33 +851,117 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
         (*after)(chunk, particles, row.j >= 0 ? 2 : 1);
       }
     }
-    const std::vector<Cluster>& clusters = clusters_of_chunk_[c];
-    for (std::size_t k = 0; k < clusters_used_[c]; ++k) {
-      const Cluster& cluster = clusters[k];
+    for (std::size_t k = 0; k < own.clusters_used; ++k) {
+      const Cluster& cluster = own.clusters[k];
       if (!reflect_cluster(system, rows, 0, cluster, x, p, nullptr, tally)) {
         unsettled.insert(unsettled.end(), cluster.rows.begin(), cluster.rows.end());
       }
       if (after) (*after)(chunk, cluster.particles.data(), cluster.particles.size());
     }
   };
-  auto reflect_in_chunk = [&](int c, std::size_t, std::size_t) {
-    reflect_chunk(static_cast<std::size_t>(c));
-  };
-  // With `then` (the active set's next test) the job is the test's own: a few rows are
-  // reflected there too, on the threads that hold their lines.
-  const bool split = chunks > 1 && (work >= kSplitRows || then);
-  if (!split) {
-    for (std::size_t c = 0; c < slots; ++c) reflect_chunk(c);
-  } else if (then) {
-    for_each_chunk_then(slots, then_count, chunks, reflect_in_chunk, *then);
+  if (chunks > 1 && then) {
+    // The job is the test's own (the active set's next): the rows are linked, walked and
+    // reflected in it too, each chunk's thread linking the rows' ends at its own particles,
+    // then walking from the seeds it owns (the row's owner, as for a lone row) to their
+    // components. A component is reflected by the owner of its lowest seed, whichever thread
+    // found it first. On the calling thread before the job, the link and the walk were a third
+    // of its time alone in the 4000-sphere fluid's active set (bench/README.md, "Stop 73").
+    row_components_.begin_link(rows.size());
+    // Which rows are seeds: those at or past first_new, and those marked with this call's
+    // number.
+    seed_mark_.resize(rows.size(), 0);
+    if (++seed_call_ == 0) {
+      std::fill(seed_mark_.begin(), seed_mark_.end(), 0);
+      seed_call_ = 1;
+    }
+    for (const std::int32_t r : seeds) seed_mark_[static_cast<std::size_t>(r)] = seed_call_;
+    const std::uint32_t call = seed_call_;
+    auto seed = [&, call, first_new](std::int32_t r) {
+      return static_cast<std::size_t>(r) >= first_new ||
+             seed_mark_[static_cast<std::size_t>(r)] == call;
+    };
+    auto row_owner = [&](std::int32_t r) {
+      const Constraint& row = rows[static_cast<std::size_t>(r)];
+      return owner(row.i, row.j);
+    };
+    ChunkSlots<IndexRange> then_range(slots);
+    for (std::size_t c = 0; c < slots; ++c) {
+      then_range[c] = chunk_range(then_count, static_cast<int>(c), chunks);
+    }
+    const auto link = [&](int c) {
+      const std::int32_t begin = c == 0 ? 0 : chunk_end[static_cast<std::size_t>(c) - 1];
+      row_components_.link_ends_at(rows, begin, chunk_end[static_cast<std::size_t>(c)]);
+    };
+    const auto walk_and_reflect = [&](int chunk) {
+      const auto c = static_cast<std::size_t>(chunk);
+      ReflectionChunk& own = reflection_chunks_[c].value;
+      own.seeds.clear();
+      for (const std::int32_t r : seeds) {
+        if (row_owner(r) == c) own.seeds.push_back(r);
+      }
+      for (std::size_t r = first_new; r < rows.size(); ++r) {
+        if (row_owner(static_cast<std::int32_t>(r)) == c) {
+          own.seeds.push_back(static_cast<std::int32_t>(r));
+        }
+      }
+      row_components_.components_of(
+          own.walker, own.seeds.data(), own.seeds.size(),
+          [&](const std::int32_t* found, std::size_t count) {
+            if (count == 1) {
+              own.lone_rows.push_back(found[0]);  // the seed, its own lowest
+              return;
+            }
+            std::int32_t lowest = std::numeric_limits<std::int32_t>::max();
+            for (std::size_t k = 0; k < count; ++k) {
+              if (seed(found[k])) lowest = std::min(lowest, found[k]);
+            }
+            if (row_owner(lowest) == c) add_cluster(c, found, count);
+          });
+      reflect_chunk(c);
+    };
+    const auto test = [&](int c) {
+      const IndexRange range = then_range[static_cast<std::size_t>(c)];
+      (*then)(c, range.begin, range.end);
+    };
+    for_each_chunk_in_phases(chunks, link, walk_and_reflect, test);
+    row_components_.end_link(rows.size());
   } else {
-    for_each_chunk(slots, chunks, reflect_in_chunk);
+    row_components_.link(rows);
+    for (std::size_t r = first_new; r < rows.size(); ++r) {
+      seeds.push_back(static_cast<std::int32_t>(r));
+    }
+    std::size_t work = 0;  // the rows to reflect
+    row_components_.components_of(
+        seeds.data(), seeds.size(), [&](const std::int32_t* found, std::size_t count) {
+          work += count;
+          if (count == 1) {
+            const Constraint& row = rows[static_cast<std::size_t>(found[0])];
+            reflection_chunks_[owner(row.i, row.j)].value.lone_rows.push_back(found[0]);
+            return;
+          }
+          const Constraint& first = rows[static_cast<std::size_t>(found[0])];
+          std::int32_t lowest = first.j >= 0 ? std::min(first.i, first.j) : first.i;
+          std::int32_t highest = std::max(first.i, first.j);
+          for (std::size_t k = 1; k < count; ++k) {
+            const Constraint& row = rows[static_cast<std::size_t>(found[k])];
+            lowest = std::min(lowest, row.j >= 0 ? std::min(row.i, row.j) : row.i);
+            highest = std::max({highest, row.i, row.j});
+          }
+          add_cluster(owner(lowest, highest), found, count);
+        });
+    if (chunks > 1 && work >= kSplitRows) {
+      for_each_chunk(slots, chunks, [&](int c, std::size_t, std::size_t) {
+        reflect_chunk(static_cast<std::size_t>(c));
+      });
+    } else {
+      for (std::size_t c = 0; c < slots; ++c) reflect_chunk(c);
+    }
   }
   reflection_terms_.add_to(step_virial_);
   for (const OnItsOwnLine<ConstraintStatistics>& figures : reflection_stats_) {
     stats_.add(figures.value);
   }
-  return split && then;
+  return chunks > 1 && then;
 }
 
 bool ConstrainedIntegrator::reflect_cluster(const System& system,

@@ -285,15 +285,23 @@ class ConstrainedIntegrator : public Integrator {
   ShadowPairs shadow_pairs_;
   // reflect_inequalities': the components of the rows of its calls within a step; per chunk
   // of a call, the rows sharing no particle that it reflects and its clusters of several
-  // rows (their lists' storage kept: clusters_used_ of them are the call's), and the rows it
-  // left approaching (the next call's seeds, with the rows it adds).
+  // rows (their lists' storage kept: clusters_used of them are the call's), where the chunks'
+  // threads walk the components their seeds, walker and a component's particles; and the rows
+  // it left approaching (the next call's seeds, with the rows it adds), marked with the call's
+  // number where the chunks' threads walk.
+  struct ReflectionChunk {
+    std::vector<std::int32_t> lone_rows;
+    std::vector<Cluster> clusters;
+    std::size_t clusters_used = 0;
+    std::vector<std::int32_t> seeds, particles;
+    GrowingRowComponents::Walker walker;
+  };
   GrowingRowComponents row_components_;
   std::vector<std::int32_t> reflection_seeds_;
-  std::vector<std::int32_t> component_particles_;
-  std::vector<std::vector<std::int32_t>> lone_rows_of_chunk_;
-  std::vector<std::vector<Cluster>> clusters_of_chunk_;
-  std::vector<std::size_t> clusters_used_;
+  std::vector<OnItsOwnLine<ReflectionChunk>> reflection_chunks_;
   std::vector<OnItsOwnLine<std::vector<std::int32_t>>> unsettled_of_chunk_;
+  std::vector<std::uint32_t> seed_mark_;
+  std::uint32_t seed_call_ = 0;
   // The reflections' virial terms, and per chunk of reflect_inequalities its counters.
   TermsByRow reflection_terms_;
   std::vector<OnItsOwnLine<ConstraintStatistics>> reflection_stats_;

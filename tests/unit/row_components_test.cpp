@@ -76,6 +76,58 @@ TEST(GrowingRowComponents, AreTheClustersHoldingTheSeedsAsRowsAreAdded) {
   }
 }
 
+// Linked in parts (the particles split in two ranges, the upper linked first, as threads may),
+// the links are link()'s: walked by two walkers, each with its own marks (the second after
+// the first has marked every row), the components are link()'s in the order link()'s walk
+// finds them, row by row.
+TEST(GrowingRowComponents, LinkedInPartsAndWalkedByTwoWalkersAreTheOneLink) {
+  std::mt19937 random(17);
+  GrowingRowComponents whole, parts;
+  GrowingRowComponents::Walker first, second;
+  using Found = std::vector<std::vector<std::int32_t>>;
+  auto walk = [](auto&& components_of, const std::vector<std::int32_t>& seeds) {
+    Found found;
+    components_of(seeds, [&](const std::int32_t* rows, std::size_t count) {
+      found.emplace_back(rows, rows + count);
+    });
+    return found;
+  };
+  for (int list = 0; list < 4; ++list) {
+    const int particles = 50 + 40 * list;
+    const std::int32_t cut = particles / 3 + list;
+    std::vector<Constraint> rows;
+    whole.restart(static_cast<std::size_t>(particles));
+    parts.restart(static_cast<std::size_t>(particles));
+    for (int batch = 0; batch < 4; ++batch) {
+      SCOPED_TRACE(::testing::Message() << "list " << list << " batch " << batch);
+      const std::size_t first_new = rows.size();
+      const std::vector<Constraint> added = random_rows(random, batch == 0 ? 30 : 3, particles);
+      rows.insert(rows.end(), added.begin(), added.end());
+      whole.link(rows);
+      parts.begin_link(rows.size());
+      parts.link_ends_at(rows, cut, particles);
+      parts.link_ends_at(rows, 0, cut);
+      parts.end_link(rows.size());
+      ASSERT_EQ(parts.linked(), rows.size());
+      std::vector<std::int32_t> seeds;
+      for (std::size_t r = first_new; r < rows.size(); ++r) seeds.push_back(static_cast<int>(r));
+      for (std::size_t r = 0; r < first_new; r += 4) seeds.push_back(static_cast<int>(r));
+      const Found expected =
+          walk([&](const std::vector<std::int32_t>& s,
+                   auto&& visit) { whole.components_of(s.data(), s.size(), visit); },
+               seeds);
+      for (GrowingRowComponents::Walker* walker : {&first, &second}) {
+        const Found found =
+            walk([&](const std::vector<std::int32_t>& s,
+                     auto&& visit) { parts.components_of(*walker, s.data(), s.size(), visit); },
+                 seeds);
+        EXPECT_EQ(found, expected);
+      }
+      EXPECT_FALSE(expected.empty());
+    }
+  }
+}
+
 // A restart forgets the rows linked: a particle's links to the rows before it are gone, even
 // where their row ends are numbers the new rows' ends also take.
 TEST(GrowingRowComponents, ARestartForgetsTheRowsLinked) {
