@@ -291,43 +291,6 @@ void for_each_chunk_then(std::size_t n, std::size_t m, int chunks, First&& first
   for_each_range_then(first_starts, second_starts, first, second);
 }
 
-// phase(c) for the chunks c = 0..chunks-1 of each phase in turn, in one job of the team: a
-// barrier between phases, so every chunk of a phase has ended before any chunk of the next
-// starts, and chunk c of every phase on one thread. An exception skips the later phases; the
-// first phase's lowest chunk's is rethrown once all have finished.
-template <class... Phases>
-void for_each_chunk_in_phases(int chunks, Phases&&... phases) {
-  if (chunks <= 1) {
-    (phases(0), ...);
-    return;
-  }
-  const auto slots = static_cast<std::size_t>(chunks);
-  ChunkSlots<std::exception_ptr> failed(sizeof...(Phases) * slots);
-  auto job = [&](int thread, int threads) {
-    std::size_t phase = 0;
-    bool stopped = false;
-    auto run = [&](auto& body) {
-      if (phase > 0) {
-        team_barrier();
-        for (std::size_t k = 0; k < phase * slots && !stopped; ++k) stopped = failed[k] != nullptr;
-      }
-      for (int c = thread; c < chunks && !stopped; c += threads) {
-        try {
-          body(c);
-        } catch (...) {
-          failed[phase * slots + static_cast<std::size_t>(c)] = std::current_exception();
-        }
-      }
-      ++phase;
-    };
-    (run(phases), ...);
-  };
-  run_on_team(std::min(chunks, thread_count()), job);
-  for (const std::exception_ptr& e : failed) {
-    if (e) std::rethrow_exception(e);
-  }
-}
-
 // body(i) for every i in [0, n), cheap items independent of each other: the same result on
 // any number of threads.
 template <class Body>

@@ -676,14 +676,15 @@ bool ConstrainedIntegrator::reflect_clusters(System& system, const std::vector<C
                                              const std::vector<Vec3>& x, std::vector<Vec3>& p,
                                              const AfterReflection* after,
                                              std::size_t first_new_row, const ChunkPass* then,
-                                             std::size_t then_count) {
+                                             std::size_t then_count, FurtherRounds* further) {
   const Particles& P = system.particles;
   // A lone contact (no other row in its cluster) in closed form, when reflect() would solve
   // the same single-row problem with H as its energy.
   const bool lone_rows_closed =
       energy_ == ReflectionEnergy::hamiltonian && reflection_ == ReflectionOperator::generalized;
   if (lone_rows_closed && first_inequality == 0) {
-    return reflect_inequalities(system, rows, x, p, after, first_new_row, then, then_count);
+    return reflect_inequalities(system, rows, x, p, after, first_new_row, then, then_count,
+                                further);
   }
   // Only the clusters holding an inequality are reflected: with the equality rows first (the
   // rods, prepared), found from the inequality rows alone. Clustering every row took the
@@ -763,7 +764,7 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
                                                  const std::vector<Vec3>& x, std::vector<Vec3>& p,
                                                  const AfterReflection* after,
                                                  std::size_t first_new_row, const ChunkPass* then,
-                                                 std::size_t then_count) {
+                                                 std::size_t then_count, FurtherRounds* further) {
   const std::size_t n = system.particles.size();
   // Below this many rows to reflect a job's start (about a microsecond) costs more than the
   // rows' lines fetched from the other cores.
@@ -866,19 +867,23 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
     // components. A component is reflected by the owner of its lowest seed, whichever thread
     // found it first. On the calling thread before the job, the link and the walk were a third
     // of its time alone in the 4000-sphere fluid's active set (bench/README.md, "Stop 73").
-    row_components_.begin_link(rows.size());
-    // Which rows are seeds: those at or past first_new, and those marked with this call's
-    // number.
-    seed_mark_.resize(rows.size(), 0);
-    if (++seed_call_ == 0) {
-      std::fill(seed_mark_.begin(), seed_mark_.end(), 0);
-      seed_call_ = 1;
-    }
-    for (const std::int32_t r : seeds) seed_mark_[static_cast<std::size_t>(r)] = seed_call_;
-    const std::uint32_t call = seed_call_;
-    auto seed = [&, call, first_new](std::int32_t r) {
-      return static_cast<std::size_t>(r) >= first_new ||
-             seed_mark_[static_cast<std::size_t>(r)] == call;
+    // With `further`, the active set's next rounds follow in the same job while they find rows.
+    std::size_t round_first_new = first_new;
+    // Which rows are seeds: those at or past round_first_new, and those marked with this
+    // round's number (the last round's rows it left approaching, in `seeds`).
+    auto mark_seeds = [&] {
+      row_components_.begin_link(rows.size());
+      seed_mark_.resize(rows.size(), 0);
+      if (++seed_call_ == 0) {
+        std::fill(seed_mark_.begin(), seed_mark_.end(), 0);
+        seed_call_ = 1;
+      }
+      for (const std::int32_t r : seeds) seed_mark_[static_cast<std::size_t>(r)] = seed_call_;
+    };
+    mark_seeds();
+    auto seed = [&](std::int32_t r) {
+      return static_cast<std::size_t>(r) >= round_first_new ||
+             seed_mark_[static_cast<std::size_t>(r)] == seed_call_;
     };
     auto row_owner = [&](std::int32_t r) {
       const Constraint& row = rows[static_cast<std::size_t>(r)];
@@ -899,7 +904,7 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
       for (const std::int32_t r : seeds) {
         if (row_owner(r) == c) own.seeds.push_back(r);
       }
-      for (std::size_t r = first_new; r < rows.size(); ++r) {
+      for (std::size_t r = round_first_new; r < rows.size(); ++r) {
         if (row_owner(static_cast<std::int32_t>(r)) == c) {
           own.seeds.push_back(static_cast<std::int32_t>(r));
         }
@@ -923,7 +928,76 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
       const IndexRange range = then_range[static_cast<std::size_t>(c)];
       (*then)(c, range.begin, range.end);
     };
-    for_each_chunk_in_phases(chunks, link, walk_and_reflect, test);
+    // Between rounds, on one thread while the others wait: the round's figures taken, the
+    // caller's start (the next round's rows joined), and that round's seeds (the rows this one
+    // left approaching and the rows joined) marked, its rows linked (a few: on one thread, a
+    // barrier fewer) and the chunks' lists emptied.
+    const auto next_round = [&] {
+      reflection_terms_.add_to(step_virial_);
+      for (const OnItsOwnLine<ConstraintStatistics>& figures : reflection_stats_) {
+        stats_.add(figures.value);
+      }
+      const std::size_t before = rows.size();
+      further->start();
+      row_components_.end_link(before);
+      round_first_new = before;
+      seeds.clear();
+      for (OnItsOwnLine<std::vector<std::int32_t>>& unsettled : unsettled_of_chunk_) {
+        seeds.insert(seeds.end(), unsettled.value.begin(), unsettled.value.end());
+        unsettled.value.clear();
+      }
+      for (OnItsOwnLine<ReflectionChunk>& chunk : reflection_chunks_) {
+        chunk.value.lone_rows.clear();
+        chunk.value.clusters_used = 0;
+      }
+      mark_seeds();
+      row_components_.link_ends_at(rows, 0, static_cast<std::int32_t>(n));
+      reflection_terms_.reset(rows.size());
+      reflection_stats_.assign(slots, OnItsOwnLine<ConstraintStatistics>{});
+    };
+    // Each chunk's first exception; one from next_round ends the job as well.
+    ChunkSlots<std::exception_ptr> failed(slots);
+    std::exception_ptr round_failed;
+    // body(c) for this thread's chunks, then (`barrier`) the barrier: whether every chunk
+    // went through, which every thread then reads alike (written before the barrier).
+    auto phase = [&](int thread, int threads, const auto& body, bool barrier) {
+      for (int c = thread; c < chunks; c += threads) {
+        try {
+          body(c);
+        } catch (...) {
+          failed[static_cast<std::size_t>(c)] = std::current_exception();
+        }
+      }
+      if (!barrier) return false;
+      team_barrier();
+      return std::none_of(failed.begin(), failed.end(),
+                          [](const std::exception_ptr& e) { return e != nullptr; });
+    };
+    auto job = [&](int thread, int threads) {
+      if (!phase(thread, threads, link, true) || !phase(thread, threads, walk_and_reflect, true) ||
+          !phase(thread, threads, test, further != nullptr)) {
+        return;
+      }
+      while (further->follows()) {
+        if (thread == 0) {
+          try {
+            next_round();
+          } catch (...) {
+            round_failed = std::current_exception();
+          }
+        }
+        team_barrier();
+        if (round_failed || !phase(thread, threads, walk_and_reflect, true) ||
+            !phase(thread, threads, test, true)) {
+          return;
+        }
+      }
+    };
+    run_on_team(std::min(chunks, thread_count()), job);
+    if (round_failed) std::rethrow_exception(round_failed);
+    for (const std::exception_ptr& e : failed) {
+      if (e) std::rethrow_exception(e);
+    }
     row_components_.end_link(rows.size());
   } else {
     row_components_.link(rows);

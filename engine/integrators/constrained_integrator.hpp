@@ -158,11 +158,20 @@ class ConstrainedIntegrator : public Integrator {
   // then(c, begin, end) for those chunks in the same job, once every reflection (and `after`)
   // is done, each on the thread of the reflections' chunk c; returns whether it ran.
   using ChunkPass = std::function<void(int chunk, std::size_t begin, std::size_t end)>;
+  // The active set's later rounds in the same job, where `then` runs there: once `then` has
+  // ended on every chunk, every thread asks follows() (the same answer on each: it reads what
+  // the chunks wrote before); where a round follows, start() on one thread, the others
+  // waiting, appends its rows to the rows reflected (`rows`, which grows) and readies the
+  // passes for its reflections, which then run, and `then` after them.
+  struct FurtherRounds {
+    std::function<bool()> follows;
+    std::function<void()> start;
+  };
   bool reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,
                         std::vector<Vec3>& p, const AfterReflection* after = nullptr,
                         std::size_t first_new_row = 0, const ChunkPass* then = nullptr,
-                        std::size_t then_count = 0);
+                        std::size_t then_count = 0, FurtherRounds* further = nullptr);
   // Where reflections leave their figures: the virial's terms by row of the rows reflected
   // (added to the step's virial in row order), and the counters (one set per thread where
   // reflections run on several).
@@ -188,7 +197,7 @@ class ConstrainedIntegrator : public Integrator {
   bool reflect_inequalities(System& system, const std::vector<Constraint>& rows,
                             const std::vector<Vec3>& x, std::vector<Vec3>& p,
                             const AfterReflection* after, std::size_t first_new_row,
-                            const ChunkPass* then, std::size_t then_count);
+                            const ChunkPass* then, std::size_t then_count, FurtherRounds* further);
   // Projects the momenta p onto the rows' tangent space at x, cluster by cluster (`passes`
   // as for solve_positions); returns the projection's virial.
   double project_momenta(System& system, const std::vector<Constraint>& rows,

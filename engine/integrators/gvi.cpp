@@ -708,9 +708,29 @@ void Gvi::find_active_set(System& system) {
           ws_.reflections_test_kept[static_cast<std::size_t>(chunk)] = at - begin;
         };
       }
+      // The next rounds in the same job while each finds rows and has a round after it for its
+      // own test (test_with's condition): a job and the calling thread's work between two
+      // rounds fewer each (hs_4000: two rounds of reflections a step, bench/README.md, "Stop
+      // 73").
+      int rounds_in_job = 0;
+      FurtherRounds further;
+      if (test_with) {
+        further.follows = [&, round, chunks] {
+          if (round + rounds_in_job + 2 >= constraints_.limits.active_set_rounds) return false;
+          for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
+            if (ws_.reflections_test_kept[c] > 0) return true;
+          }
+          return false;
+        };
+        further.start = [&, count, chunks] {
+          ++rounds_in_job;
+          join_kept(count, chunks, ws_.candidate_passing, ws_.reflections_test_kept, join);
+        };
+      }
       largest2_bound =
           reflect_and_predict(system, *rows, reflected_rows, test_with ? &test_next : nullptr,
-                              count, &tested_in_reflections);
+                              count, &tested_in_reflections, test_with ? &further : nullptr);
+      round += rounds_in_job;
       reflections_test_chunks = chunks;
       reflected_rows = rows->size();
       continue;
@@ -745,7 +765,8 @@ void Gvi::find_active_set(System& system) {
 // whose prediction changed and returns the bound on max |prediction - q|^2.
 double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& rows,
                                 std::size_t first_new_row, const ChunkPass* next_test,
-                                std::size_t test_count, bool* tested) {
+                                std::size_t test_count, bool* tested,
+                                const FurtherRounds* further) {
   const Particles& P = system.particles;
   const double h = dt_;
   const std::vector<Vec3>& f = engine_.force();
@@ -802,8 +823,29 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
       (*next_test)(chunk, begin, end);
     };
   }
+  // A round follows in the job where the test ran; its start unmarks the particles the last
+  // round changed (as above, for the next test), on one thread while the others wait.
+  FurtherRounds rounds;
+  if (further && next_test) {
+    rounds.follows = [&, limit2] {
+      if (!limit2) return false;
+      for (const OnItsOwnLine<GviWorkspace::ChangedTally>& tally : ws_.changed_tally) {
+        if (tally.value.outgrown > 0) return false;
+      }
+      return further->follows();
+    };
+    rounds.start = [&] {
+      for (std::size_t c = 0; c < shares; ++c) {
+        for (const std::int32_t i : ws_.changed_of_chunk[c].value) ws_.prediction_changed[i] = 0;
+        ws_.changed_of_chunk[c].value.clear();
+        ws_.changed_tally[c].value = GviWorkspace::ChangedTally{ws_.largest2, std::size_t{0}};
+      }
+      further->start();
+    };
+  }
   const bool test_ran = reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again, first_new_row,
-                                         next_test ? &test_if_covered : nullptr, test_count);
+                                         next_test ? &test_if_covered : nullptr, test_count,
+                                         further && next_test ? &rounds : nullptr);
   double largest2_bound = ws_.largest2;
   ws_.changed_cover_known = limit2 != nullptr;
   ws_.changed_covered = true;

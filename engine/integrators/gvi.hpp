@@ -151,9 +151,12 @@ class Gvi final : public ConstrainedIntegrator {
   // Given `next_test`, run in the reflections' job where they run in one (reflect_clusters'
   // `then` over `test_count` rows), once every prediction is made, unless a changed one left
   // its particle's reach; `*tested` tells whether it ran so.
+  // With `further` as well, the active set's next rounds in the same job (reflect_clusters'),
+  // while the test ran and further->follows(): further->start() then joins a round's rows.
   double reflect_and_predict(System& system, const std::vector<Constraint>& rows,
                              std::size_t first_new_row, const ChunkPass* next_test = nullptr,
-                             std::size_t test_count = 0, bool* tested = nullptr);
+                             std::size_t test_count = 0, bool* tested = nullptr,
+                             const FurtherRounds* further = nullptr);
   // One solve of the position update for the rows held, with its midpoint fixed point.
   // Returns true where it left the half kick to displaced() (Verlet, no row held: nothing
   // reads it before the end positions).

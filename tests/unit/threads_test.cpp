@@ -14,7 +14,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <numeric>
 #include <random>
 #include <thread>
 
@@ -482,60 +481,6 @@ TEST(Threads, ChunksThenFirstPassExceptionSkipsTheSecond) {
   EXPECT_EQ(second.load(), 0);
 }
 
-// for_each_chunk_in_phases: every chunk of a phase has ended before any chunk of the next
-// starts (each phase reads what every chunk of the one before wrote, the chunk writing late),
-// chunk c of every phase on one thread; on three threads of two cores as well.
-TEST(Threads, ChunksInPhasesEachPhaseSeesTheWholePhaseBefore) {
-  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  for (const int count : {2, 3}) {
-    SCOPED_TRACE(count);
-    const ThreadCount threads(count);
-    const auto chunks = static_cast<std::size_t>(count);
-    std::vector<int> written(chunks, -1), summed(chunks, -1), read(chunks, -1);
-    std::vector<std::vector<int>> thread_of(3, std::vector<int>(chunks, -1));
-    for_each_chunk_in_phases(
-        count,
-        [&](int c) {
-          thread_of[0][static_cast<std::size_t>(c)] = team_thread();
-          if (c == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-          written[static_cast<std::size_t>(c)] = c + 1;
-        },
-        [&](int c) {
-          thread_of[1][static_cast<std::size_t>(c)] = team_thread();
-          if (c == count - 1) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-          summed[static_cast<std::size_t>(c)] = std::accumulate(written.begin(), written.end(), 0);
-        },
-        [&](int c) {
-          thread_of[2][static_cast<std::size_t>(c)] = team_thread();
-          read[static_cast<std::size_t>(c)] = std::accumulate(summed.begin(), summed.end(), 0);
-        });
-    const int total = count * (count + 1) / 2;
-    EXPECT_EQ(summed, std::vector<int>(chunks, total));
-    EXPECT_EQ(read, std::vector<int>(chunks, count * total));
-    EXPECT_EQ(thread_of[1], thread_of[0]);
-    EXPECT_EQ(thread_of[2], thread_of[0]);
-  }
-}
-
-// An exception skips the later phases (every chunk of them) and is the earliest phase's
-// lowest chunk's.
-TEST(Threads, ChunksInPhasesAnExceptionSkipsTheLaterPhases) {
-  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  const ThreadCount threads(2);
-  std::atomic<int> first{0}, third{0};
-  try {
-    for_each_chunk_in_phases(
-        2, [&](int) { ++first; },
-        [](int c) { throw std::runtime_error("phase 2 chunk " + std::to_string(c)); },
-        [&](int) { ++third; });
-    FAIL() << "no exception";
-  } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "phase 2 chunk 0");
-  }
-  EXPECT_EQ(first.load(), 2);
-  EXPECT_EQ(third.load(), 0);
-}
-
 // Jobs of the team of every size from 1 to 4 threads in a random order, each with a barrier:
 // every thread number runs once a job, thread 0 on the calling thread and thread t on the
 // team's worker t (the same thread in every job), and after the barrier each sees what every
@@ -846,6 +791,20 @@ TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) 
   input.constraints.limits.active_set_rounds = 1;
   const GviTrajectory one = expect_two_threads_repeat_one(input);
   EXPECT_GT(testing::statistic(one.statistics, "landings"), 0.0);
+}
+
+// The active set's rounds capped at three, at twice the step (rounds that go on growing): on
+// two threads the rounds after the first run in the reflections' job while each finds rows
+// and has a round after it for its test, the third on the calling thread. The same
+// trajectory and caps as one thread's; a job that ran a round past the cap would reflect rows
+// one thread leaves to the feasibility guard.
+TEST(ThreadsGvi, HardSpheresActiveSetCappedOnTwoThreadsIsTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  RunInput input = testing::hard_sphere_fluid(10);
+  input.gvi.timestep = 0.04;
+  input.constraints.limits.active_set_rounds = 3;
+  const GviTrajectory one = expect_two_threads_repeat_one(input);
+  EXPECT_GT(testing::statistic(one.statistics, "active_set_caps"), 0.0);
 }
 
 // Reflections capped at one solve leave rows approaching; a later round of the active set
