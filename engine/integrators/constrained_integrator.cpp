@@ -973,12 +973,18 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
       return std::none_of(failed.begin(), failed.end(),
                           [](const std::exception_ptr& e) { return e != nullptr; });
     };
+    const auto start_walk_and_reflect = [&](int c) {
+      further->start_chunk(c);
+      walk_and_reflect(c);
+    };
     auto job = [&](int thread, int threads) {
       if (!phase(thread, threads, link, true) || !phase(thread, threads, walk_and_reflect, true) ||
           !phase(thread, threads, test, further != nullptr)) {
         return;
       }
-      while (further->follows()) {
+      // Each thread's own count: next_round changes nothing follows() reads, and a thread may
+      // still be asking while thread 0 has begun the round.
+      for (int followed = 0; further->follows(followed); ++followed) {
         if (thread == 0) {
           try {
             next_round();
@@ -987,7 +993,7 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
           }
         }
         team_barrier();
-        if (round_failed || !phase(thread, threads, walk_and_reflect, true) ||
+        if (round_failed || !phase(thread, threads, start_walk_and_reflect, true) ||
             !phase(thread, threads, test, true)) {
           return;
         }

@@ -159,13 +159,16 @@ class ConstrainedIntegrator : public Integrator {
   // is done, each on the thread of the reflections' chunk c; returns whether it ran.
   using ChunkPass = std::function<void(int chunk, std::size_t begin, std::size_t end)>;
   // The active set's later rounds in the same job, where `then` runs there: once `then` has
-  // ended on every chunk, every thread asks follows() (the same answer on each: it reads what
-  // the chunks wrote before); where a round follows, start() on one thread, the others
-  // waiting, appends its rows to the rows reflected (`rows`, which grows) and readies the
-  // passes for its reflections, which then run, and `then` after them.
+  // ended on every chunk, every thread asks follows(followed), `followed` the rounds that have
+  // followed in the job so far (the same answer on each: it reads what the chunks wrote
+  // before). Where a round follows, start() on one thread appends its rows to the rows
+  // reflected (`rows`, which grows) and readies the passes for its reflections; it must leave
+  // what follows() reads as it is, as the other threads may still be reading it. Then, once
+  // every thread has, start_chunk(c) on each chunk's thread, its reflections and `then`.
   struct FurtherRounds {
-    std::function<bool()> follows;
+    std::function<bool(int followed)> follows;
     std::function<void()> start;
+    std::function<void(int chunk)> start_chunk;
   };
   bool reflect_clusters(System& system, const std::vector<Constraint>& rows,
                         std::size_t first_inequality, const std::vector<Vec3>& x,

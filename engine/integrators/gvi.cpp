@@ -715,8 +715,8 @@ void Gvi::find_active_set(System& system) {
       int rounds_in_job = 0;
       FurtherRounds further;
       if (test_with) {
-        further.follows = [&, round, chunks] {
-          if (round + rounds_in_job + 2 >= constraints_.limits.active_set_rounds) return false;
+        further.follows = [&, round, chunks](int followed) {
+          if (round + followed + 2 >= constraints_.limits.active_set_rounds) return false;
           for (std::size_t c = 0; c < static_cast<std::size_t>(chunks); ++c) {
             if (ws_.reflections_test_kept[c] > 0) return true;
           }
@@ -824,23 +824,27 @@ double Gvi::reflect_and_predict(System& system, const std::vector<Constraint>& r
     };
   }
   // A round follows in the job where the test ran; its start unmarks the particles the last
-  // round changed (as above, for the next test), on one thread while the others wait.
+  // round changed (as above, for the next test), and each chunk's start empties its tally
+  // (which follows() reads).
   FurtherRounds rounds;
   if (further && next_test) {
-    rounds.follows = [&, limit2] {
+    rounds.follows = [&, limit2](int followed) {
       if (!limit2) return false;
       for (const OnItsOwnLine<GviWorkspace::ChangedTally>& tally : ws_.changed_tally) {
         if (tally.value.outgrown > 0) return false;
       }
-      return further->follows();
+      return further->follows(followed);
     };
     rounds.start = [&] {
       for (std::size_t c = 0; c < shares; ++c) {
         for (const std::int32_t i : ws_.changed_of_chunk[c].value) ws_.prediction_changed[i] = 0;
         ws_.changed_of_chunk[c].value.clear();
-        ws_.changed_tally[c].value = GviWorkspace::ChangedTally{ws_.largest2, std::size_t{0}};
       }
       further->start();
+    };
+    rounds.start_chunk = [&](int chunk) {
+      ws_.changed_tally[static_cast<std::size_t>(chunk)].value =
+          GviWorkspace::ChangedTally{ws_.largest2, std::size_t{0}};
     };
   }
   const bool test_ran = reflect_clusters(system, rows, 0, ws_.q, ws_.p, &again, first_new_row,

@@ -779,32 +779,33 @@ TEST(ThreadsGvi, HardSpheresReflectedPredictionsAreTheWholePredictionMadeAgain) 
   }
 }
 
-// The same fluid at twice the step with one active-set round: a reflection can then send a
-// sphere into a contact no prediction saw, and the feasibility guard lands the rows that
-// overlap at the end positions (deli run of the same input: 49 landings in the first 4
-// steps, 6 of them in step 3). Its scan of the candidates at x runs in chunks on 2 threads;
-// a row one chunk found and the join dropped would change the trajectory.
-TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) {
-  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+// The 4000-sphere fluid at twice the step with its active set capped at `rounds` rounds: the
+// same trajectory on one and two threads, with `left` (what the cap leaves) above zero.
+void expect_capped_fluid_on_two_threads_repeats_one(int rounds, const char* left) {
   RunInput input = testing::hard_sphere_fluid(10);
   input.gvi.timestep = 0.04;
-  input.constraints.limits.active_set_rounds = 1;
+  input.constraints.limits.active_set_rounds = rounds;
   const GviTrajectory one = expect_two_threads_repeat_one(input);
-  EXPECT_GT(testing::statistic(one.statistics, "landings"), 0.0);
+  EXPECT_GT(testing::statistic(one.statistics, left), 0.0);
 }
 
-// The active set's rounds capped at three, at twice the step (rounds that go on growing): on
-// two threads the rounds after the first run in the reflections' job while each finds rows
-// and has a round after it for its test, the third on the calling thread. The same
-// trajectory and caps as one thread's; a job that ran a round past the cap would reflect rows
-// one thread leaves to the feasibility guard.
+// One active-set round: a reflection can then send a sphere into a contact no prediction
+// saw, and the feasibility guard lands the rows that overlap at the end positions (deli run of
+// the same input: 49 landings in the first 4 steps, 6 of them in step 3). Its scan of the
+// candidates at x runs in chunks on 2 threads; a row one chunk found and the join dropped
+// would change the trajectory.
+TEST(ThreadsGvi, HardSpheresTheGuardLandsOnTwoThreadsAreTheOneThreadTrajectory) {
+  if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
+  expect_capped_fluid_on_two_threads_repeats_one(1, "landings");
+}
+
+// Three rounds (rounds that go on growing at this step): on two threads the rounds after the
+// first run in the reflections' job while each finds rows and has a round after it for its
+// test, the third on the calling thread. The same trajectory and caps as one thread's; a job
+// that ran a round past the cap would reflect rows one thread leaves to the feasibility guard.
 TEST(ThreadsGvi, HardSpheresActiveSetCappedOnTwoThreadsIsTheOneThreadTrajectory) {
   if (!kThreaded) GTEST_SKIP() << "built without OpenMP";
-  RunInput input = testing::hard_sphere_fluid(10);
-  input.gvi.timestep = 0.04;
-  input.constraints.limits.active_set_rounds = 3;
-  const GviTrajectory one = expect_two_threads_repeat_one(input);
-  EXPECT_GT(testing::statistic(one.statistics, "active_set_caps"), 0.0);
+  expect_capped_fluid_on_two_threads_repeats_one(3, "active_set_caps");
 }
 
 // Reflections capped at one solve leave rows approaching; a later round of the active set
