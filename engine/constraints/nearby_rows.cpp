@@ -12,7 +12,7 @@ namespace deli {
 
 void NearbyRows::make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                       const NeighborList& list, const Box& box, const double* particle_reach,
-                      const ParticlePass* make_reaches) {
+                      const RangePass* make_reaches) {
   const bool bonded_pairs = !set.unconstrained_pairs.empty();
   if (bonded_pairs) index_bonded_pairs(set, particles.size());
   shifted_ = list.coded();
@@ -186,7 +186,7 @@ bool NearbyRows::collect(const ConstraintSet& set, const Particles& particles, c
                          const NeighborList& list, const Box& box, double reach,
                          const double* particle_reach, double exact_below,
                          std::vector<Constraint>& out, std::vector<double>& gap_at_q,
-                         const ParticlePass* make_reaches, RowStretches* stretches,
+                         const RangePass* make_reaches, RowStretches* stretches,
                          const double* anchored_largest2, const StretchPass* then) {
   out.clear();
   gap_at_q.clear();

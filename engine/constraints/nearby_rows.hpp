@@ -7,6 +7,7 @@
 
 #include "constraints/constraint_set.hpp"
 #include "constraints/row_stretches.hpp"
+#include "core/range_pass.hpp"
 
 namespace deli {
 
@@ -44,13 +45,12 @@ class NearbyRows {
   // Given `then`, where the rows are left as `stretches` by the threads that screened them
   // (returns true): then(s, rows, gaps, count) for each stretch s, with its rows and gaps, on
   // that thread in the same job, right after it screened them.
-  using ParticlePass = std::function<void(std::size_t begin, std::size_t end)>;
   using StretchPass = std::function<void(int stretch, const Constraint* rows, const double* gaps,
                                          std::size_t count)>;
   bool collect(const ConstraintSet& set, const Particles& particles, const Vec3* q,
                const NeighborList& list, const Box& box, double reach, const double* particle_reach,
                double exact_below, std::vector<Constraint>& out, std::vector<double>& gap_at_q,
-               const ParticlePass* make_reaches = nullptr, RowStretches* stretches = nullptr,
+               const RangePass* make_reaches = nullptr, RowStretches* stretches = nullptr,
                const double* anchored_largest2 = nullptr, const StretchPass* then = nullptr);
   // Where the short list is the one made from `list` as now built, for `particle_count`
   // particles: its anchor positions, and the buffer for their displacements that a pass of
@@ -67,7 +67,7 @@ class NearbyRows {
   // each chunk's, in the scan's job (its own job a build, before).
   void make(const ConstraintSet& set, const Particles& particles, const Vec3* q,
             const NeighborList& list, const Box& box, const double* particle_reach,
-            const ParticlePass* make_reaches);
+            const RangePass* make_reaches);
 
   // ConstraintSet::unconstrained_pairs by first particle (a particle has a bond or two, so
   // a short scan instead of a binary search over all bonds, whose branches mispredict).

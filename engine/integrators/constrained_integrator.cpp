@@ -809,11 +809,10 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
     chunk.value.lone_rows.clear();
     chunk.value.clusters_used = 0;
   }
-  // A component of several rows into chunk c's clusters: its rows and particles ascending, as
-  // find_clusters makes them and reflect() reads them.
-  auto add_cluster = [&](std::size_t c, const std::int32_t* found, std::size_t count) {
-    ReflectionChunk& chunk = reflection_chunks_[c].value;
-    std::vector<std::int32_t>& particles = chunk.particles;
+  // A component's particles, ascending (as find_clusters makes them and reflect() reads them),
+  // into `particles`.
+  auto particles_of = [&](const std::int32_t* found, std::size_t count,
+                          std::vector<std::int32_t>& particles) {
     particles.clear();
     for (std::size_t k = 0; k < count; ++k) {
       const Constraint& row = rows[static_cast<std::size_t>(found[k])];
@@ -822,6 +821,12 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
     }
     std::sort(particles.begin(), particles.end());
     particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
+  };
+  // A component of several rows (`particles`: particles_of's) into chunk c's clusters, its
+  // rows ascending.
+  auto add_cluster = [&](std::size_t c, const std::vector<std::int32_t>& particles,
+                         const std::int32_t* found, std::size_t count) {
+    ReflectionChunk& chunk = reflection_chunks_[c].value;
     if (chunk.clusters_used == chunk.clusters.size()) chunk.clusters.emplace_back();
     Cluster& cluster = chunk.clusters[chunk.clusters_used++];
     cluster.particles.assign(particles.begin(), particles.end());
@@ -920,7 +925,9 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
             for (std::size_t k = 0; k < count; ++k) {
               if (seed(found[k])) lowest = std::min(lowest, found[k]);
             }
-            if (row_owner(lowest) == c) add_cluster(c, found, count);
+            if (row_owner(lowest) != c) return;
+            particles_of(found, count, own.particles);
+            add_cluster(c, own.particles, found, count);
           });
       reflect_chunk(c);
     };
@@ -1019,15 +1026,9 @@ bool ConstrainedIntegrator::reflect_inequalities(System& system,
             reflection_chunks_[owner(row.i, row.j)].value.lone_rows.push_back(found[0]);
             return;
           }
-          const Constraint& first = rows[static_cast<std::size_t>(found[0])];
-          std::int32_t lowest = first.j >= 0 ? std::min(first.i, first.j) : first.i;
-          std::int32_t highest = std::max(first.i, first.j);
-          for (std::size_t k = 1; k < count; ++k) {
-            const Constraint& row = rows[static_cast<std::size_t>(found[k])];
-            lowest = std::min(lowest, row.j >= 0 ? std::min(row.i, row.j) : row.i);
-            highest = std::max({highest, row.i, row.j});
-          }
-          add_cluster(owner(lowest, highest), found, count);
+          std::vector<std::int32_t>& particles = component_particles_;
+          particles_of(found, count, particles);
+          add_cluster(owner(particles.front(), particles.back()), particles, found, count);
         });
     if (chunks > 1 && work >= kSplitRows) {
       for_each_chunk(slots, chunks, [&](int c, std::size_t, std::size_t) {

@@ -309,7 +309,7 @@ class ConstrainedIntegrator : public Integrator {
     GrowingRowComponents::Walker walker;
   };
   GrowingRowComponents row_components_;
-  std::vector<std::int32_t> reflection_seeds_;
+  std::vector<std::int32_t> reflection_seeds_, component_particles_;
   std::vector<OnItsOwnLine<ReflectionChunk>> reflection_chunks_;
   std::vector<OnItsOwnLine<std::vector<std::int32_t>>> unsettled_of_chunk_;
   std::vector<std::uint32_t> seed_mark_;

@@ -22,7 +22,7 @@ bool ForceEngine::ensure_neighbors(System& system, bool force) {
   return ensure_neighbors(system, force, nullptr);
 }
 
-bool ForceEngine::ensure_neighbors(System& system, bool force, const ParticleRange* after_wrap) {
+bool ForceEngine::ensure_neighbors(System& system, bool force, const RangePass* after_wrap) {
   const TimedPhase timed(Phase::neighbor);
   Particles& p = system.particles;
   if (!force && !neighbors_.needs_rebuild(p.position)) return false;

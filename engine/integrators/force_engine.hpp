@@ -1,10 +1,10 @@
 #pragma once
 
-#include <functional>
 #include <optional>
 #include <utility>
 #include <vector>
 
+#include "core/range_pass.hpp"
 #include "forces/force_field.hpp"
 #include "neighbor/neighbor_list.hpp"
 #include "system/system.hpp"
@@ -37,8 +37,7 @@ class ForceEngine {
   // ensure_neighbors, with `after_wrap` run on each chunk of the particles after its check
   // and wrap, in the build's first job, where a build runs (a caller's pass over the wrapped
   // positions: a job fewer).
-  using ParticleRange = std::function<void(std::size_t begin, std::size_t end)>;
-  bool ensure_neighbors(System& system, bool force, const ParticleRange* after_wrap);
+  bool ensure_neighbors(System& system, bool force, const RangePass* after_wrap);
   // Rebuilds the list from `build_positions` (a checkpoint's), leaving the system's own.
   void restore_neighbors(System& system, const std::vector<Vec3>& build_positions);
   // Counts builds on from `builds` (an engine that takes over from another's).

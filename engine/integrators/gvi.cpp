@@ -348,8 +348,7 @@ void Gvi::start_step(System& system) {
       }
       if (count > 0) beyond.fetch_add(count, std::memory_order_relaxed);
     };
-    const ForceEngine::ParticleRange predict_in_build = [&, h = dt_](std::size_t begin,
-                                                                     std::size_t end) {
+    const RangePass predict_in_build = [&, h = dt_](std::size_t begin, std::size_t end) {
       gvi_passes::half_kick(h, numbers(ws_.p), numbers(engine_.force()), P.mass.data(), nullptr,
                             numbers(d), begin, end);
       predicted_from(begin, end);
@@ -545,7 +544,7 @@ bool Gvi::collect_by_particle_reach(const System& system, const std::vector<Vec3
   // As packets (std::sqrt, which may set errno, does not vectorise), chunk by chunk; the
   // step's first reaches grow from zero, set here by the thread that holds the lines. Made
   // in the collection's first pass over the particles (their own job a step, before).
-  const NearbyRows::ParticlePass make_reaches = [=](std::size_t begin, std::size_t end) {
+  const RangePass make_reaches = [=](std::size_t begin, std::size_t end) {
     const auto length = static_cast<Eigen::Index>(end - begin);
     Eigen::Map<Eigen::ArrayXd> out(reach + begin, length), out_limit2(limit2 + begin, length);
     const Eigen::Map<const Eigen::ArrayXd> in(moved2 + begin, length);
