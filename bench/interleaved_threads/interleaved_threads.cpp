@@ -1,22 +1,22 @@
-// Two thread counts' speeds on one input, measured in one process in short alternating bursts
-// of steps (not a test): the ratio bench/threads.sh reports (two threads over one), but
-// with the machine's drift shared by both counts. On the shared virtual machines deli is
-// benchmarked on, one-thread runs of one binary moved up to 30 % apart within minutes, and the
-// ratio of two whole runs (bench/threads.sh alternates processes of a second or more) read
-// anywhere from 1.3x to 1.8x for the same code within one session. Here the run is cut into
-// bursts of a tenth of a second or so, the counts alternate burst by burst (A B B A ...: a
-// drift within a pair of bursts falls on both alike), and the ratio is the two counts' summed
-// loop times', beside the spread of the pairs' own ratios and the ratio phase by phase.
-// A burst at another count continues as a restart does. Hard spheres and rods alone follow
-// the input's one trajectory whatever the counts and bursts (README, "Threads and vector
-// instructions"; the final sums printed say so); with pair forces each count regroups the
-// sums, and the trajectory separates from a one-count run's in its last bits, as a run on
-// another count does.
+// Two thread counts' speeds on one input, measured in one process in alternating bursts of
+// steps (not a test): the ratio bench/threads.sh reports (two threads over one), with the
+// machine's drift shared by both counts, and the machine's ceiling measured in the same
+// rounds. On the shared virtual machines deli is benchmarked on, one-thread runs of one binary
+// moved up to 30 % apart within minutes, and the ratio of whole runs (bench/threads.sh
+// alternates processes) read from 1.3x to 1.8x for the same code within one session. Here
+// each round runs a burst of each kind: A threads, B threads, and (A = 1) B one-thread copies
+// of the input at once, in turn and then the other way round (A B C, C B A, ...: a drift
+// within a round falls on every kind alike). The ratio is the kinds' summed loop times', beside
+// the spread of the rounds' own ratios, the fraction of the ceiling reached and the ratio
+// phase by phase. Each count runs its own copy of the input from the input's start (its bursts
+// one run of it); the set-up and a first burst of each kind are not timed, and the input's
+// outputs (thermo, trajectory) are not written.
 //   cmake --build build --target deli-interleaved-threads
-//   build/bench/interleaved_threads/deli-interleaved-threads INPUT.toml [PAIRS [STEPS [A B]]]
-// PAIRS (default 20): bursts at each count; STEPS (default 300): steps a burst; A and B
-// (default 1 and 2): the thread counts. The set-up and a first burst at each count are not
-// timed. Outputs of the input (thermo, trajectory) are not written.
+//   build/bench/interleaved_threads/deli-interleaved-threads INPUT.toml [ROUNDS [STEPS [A B]]]
+// ROUNDS (default 10): bursts of each kind; STEPS (default 1000): steps a burst, a few tenths
+// of a second at least (bursts of 300 steps of the 4000-sphere fluid, 0.07 s on two threads,
+// read 1.22-1.28x where bursts of 1500 read 1.33-1.37x); A and B (default 1 and 2): the
+// thread counts.
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -25,12 +25,14 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cli/integrator_factory.hpp"
 #include "core/chunk_balance.hpp"
 #include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
+#include "core/thread_team.hpp"
 #include "input/run_input.hpp"
 #include "simulation/run_loop.hpp"
 
@@ -60,84 +62,122 @@ double quantile(std::vector<double> v, double q) {
   return v[k] + (at - static_cast<double>(k)) * (v[k + 1] - v[k]);
 }
 
-int measure(int argc, char** argv) {
-  if (argc < 2 || argc > 6 || argc == 5) {
-    std::fprintf(stderr, "usage: %s INPUT.toml [PAIRS [STEPS [A B]]]\n", argv[0]);
-    return 2;
-  }
-  const std::string path = argv[1];
-  const long pairs = argc > 2 ? parse_count(argv[2], "PAIRS", 1) : 20;
-  const long steps = argc > 3 ? parse_count(argv[3], "STEPS", 1) : 300;
-  const std::array<int, 2> counts{argc > 5 ? static_cast<int>(parse_count(argv[4], "A", 1)) : 1,
-                                  argc > 5 ? static_cast<int>(parse_count(argv[5], "B", 1)) : 2};
+// The input loaded as `deli run` loads it, refused where it asks for a minimisation first.
+RunInput load(const std::string& path) {
   RunInput input = load_run_input(path);
   if (input.minimize.max_steps != 0) {
     throw std::invalid_argument(path +
                                 ": asks for a minimisation first ([minimize]); measure the "
                                 "input it writes, or one without [minimize]");
   }
+  return input;
+}
+
+// An input's system and integrator on a thread count of its own, run in bursts of steps.
+// Each count runs its own copy of the input: an integrator's workspaces are split for the
+// count it was set up with (the contact search's stretches, one per thread), which a run does
+// not change, and one made anew at each change of count would start each burst cold.
+class Runner {
+ public:
+  Runner(const std::string& path, int threads) : input_(load(path)), threads_(threads) {
+    options_.degrees_of_freedom = input_.degrees_of_freedom;
+    options_.start_temperature = input_.start_temperature;
+  }
+  // Runs `steps` steps; the count is set for the calling thread (OpenMP's setting is each
+  // thread's own: a thread started by std::thread begins at the default count).
+  Burst burst(long steps) {
+    set_thread_count(threads_);
+    if (!integrator_) integrator_ = make_integrator(input_);
+    const RunStatistics stats = run(input_.system, *integrator_, steps, 0, {}, options_);
+    options_.set_up = false;
+    options_.start_temperature.reset();
+    return Burst{stats.loop_seconds, stats.phase_seconds};
+  }
+  const RunInput& input() const { return input_; }
+
+ private:
+  RunInput input_;
+  int threads_;
+  RunOptions options_;
+  std::unique_ptr<Integrator> integrator_;
+};
+
+int measure(int argc, char** argv) {
+  if (argc < 2 || argc > 6 || argc == 5) {
+    std::fprintf(stderr, "usage: %s INPUT.toml [ROUNDS [STEPS [A B]]]\n", argv[0]);
+    return 2;
+  }
+  const std::string path = argv[1];
+  const long rounds = argc > 2 ? parse_count(argv[2], "ROUNDS", 1) : 10;
+  const long steps = argc > 3 ? parse_count(argv[3], "STEPS", 1) : 1000;
+  const std::array<int, 2> counts{argc > 5 ? static_cast<int>(parse_count(argv[4], "A", 1)) : 1,
+                                  argc > 5 ? static_cast<int>(parse_count(argv[5], "B", 1)) : 2};
+  std::array<std::unique_ptr<Runner>, 2> runners{std::make_unique<Runner>(path, counts[0]),
+                                                 std::make_unique<Runner>(path, counts[1])};
+  const RunInput& input = runners[0]->input();
   set_chunk_balance(input.balance_threads);
   if (!input.split_small_loops) {
     set_cheap_chunk_minimum(kUnsplitCheapChunk);
     set_cluster_chunk_minimum(kUnsplitClusterChunk);
   }
-  std::unique_ptr<Integrator> integrator = make_integrator(input);
-  RunOptions options;
-  options.degrees_of_freedom = input.degrees_of_freedom;
-  options.start_temperature = input.start_temperature;
-  const std::vector<Observer*> none;
-  // A burst at another count continues as a restart does, with an integrator made anew
-  // (bit for bit the run's own trajectory): an integrator's workspaces are split for the count
-  // it was set up with (the contact search's stretches, one per thread), which a run does not
-  // change.
-  int last_threads = 0;
-  auto burst = [&](int threads) {
-    if (last_threads != 0 && threads != last_threads) {
-      const std::vector<double> state = integrator->saved_state();
-      const std::vector<Vec3> build_positions =
-          integrator->forces().neighbors().positions_at_build();
-      integrator.reset();
-      set_thread_count(threads);
-      integrator = make_integrator(input);
-      integrator->resume(input.system, build_positions, state);
+  // The machine's ceiling, with A = 1: B one-thread copies of the input at once (each on a
+  // thread of its own, the first A's runner), their rates summed, over one alone. No code on
+  // B threads can beat it; cores that slow each other (shared caches, a host's other tenants)
+  // put it below B.
+  const bool ceiling = counts[0] == 1 && counts[1] > 1;
+  std::vector<std::unique_ptr<Runner>> copies;
+  if (ceiling) {
+    for (int k = 1; k < counts[1]; ++k) copies.push_back(std::make_unique<Runner>(path, 1));
+  }
+  // A burst of each copy's and of A's runner at once: the runner's burst; each copy's loop time
+  // into copy_seconds.
+  auto copies_at_once = [&](std::vector<double>& copy_seconds) {
+    std::vector<Burst> of_copy(copies.size());
+    std::vector<std::exception_ptr> failed(copies.size());
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < copies.size(); ++k) {
+      threads.emplace_back([&, k] {
+        try {
+          of_copy[k] = copies[k]->burst(steps);
+        } catch (...) {
+          failed[k] = std::current_exception();
+        }
+      });
     }
-    set_thread_count(threads);
-    last_threads = threads;
-    const RunStatistics stats = run(input.system, *integrator, steps, 0, none, options);
-    options.set_up = false;
-    options.start_temperature.reset();
-    return Burst{stats.loop_seconds, stats.phase_seconds};
+    const Burst own = runners[0]->burst(steps);
+    for (std::thread& t : threads) t.join();
+    for (const std::exception_ptr& e : failed) {
+      if (e) std::rethrow_exception(e);
+    }
+    for (const Burst& b : of_copy) copy_seconds.push_back(b.loop_seconds);
+    return own;
   };
-  for (const int threads : counts) burst(threads);  // the set-up, the team started, warm
-  std::array<std::vector<Burst>, 2> bursts;
-  for (long pair = 0; pair < pairs; ++pair) {
-    for (int k = 0; k < 2; ++k) {
-      const int which = pair % 2 == 0 ? k : 1 - k;  // A B, then B A
-      bursts[static_cast<std::size_t>(which)].push_back(
-          burst(counts[static_cast<std::size_t>(which)]));
+  // The set-up, the team started, everything warm: not timed.
+  for (const std::unique_ptr<Runner>& r : runners) r->burst(steps);
+  std::vector<double> unused;
+  if (ceiling) copies_at_once(unused);
+  // Kinds: A threads, B threads, the copies at once. Each pair of bursts in turn, then the
+  // other way round (A B C, C B A, ...): a drift within a round falls on every kind alike.
+  const std::size_t kinds = ceiling ? 3 : 2;
+  std::array<std::vector<Burst>, 3> bursts;
+  std::vector<double> copy_seconds;  // per copy burst, copies.size() of them in a row
+  for (long round = 0; round < rounds; ++round) {
+    for (std::size_t k = 0; k < kinds; ++k) {
+      const std::size_t kind = round % 2 == 0 ? k : kinds - 1 - k;
+      bursts[kind].push_back(kind == 2 ? copies_at_once(copy_seconds)
+                                       : runners[kind]->burst(steps));
     }
   }
   const std::size_t atoms = input.system.particles.size();
-  // The trajectory is the same whichever counts and bursts ran it: these sums say so when two
-  // invocations (other counts, other bursts, the same total steps) are compared.
-  double position_sum = 0, velocity_sum = 0;
-  for (std::size_t i = 0; i < atoms; ++i) {
-    const Vec3& x = input.system.particles.position[i];
-    const Vec3& v = input.system.particles.velocity[i];
-    position_sum += x.x + x.y + x.z;
-    velocity_sum += v.x + v.y + v.z;
-  }
-  std::printf("%s: %zu atoms, %ld pairs of bursts of %ld steps, %d and %d threads\n", path.c_str(),
-              atoms, pairs, steps, counts[0], counts[1]);
-  std::printf("  at step %lld: positions' sum %.17g, velocities' sum %.17g\n",
-              static_cast<long long>(input.system.step), position_sum, velocity_sum);
+  std::printf("%s: %zu atoms, %ld rounds of bursts of %ld steps, %d and %d threads\n", path.c_str(),
+              atoms, rounds, steps, counts[0], counts[1]);
+  const double atom_steps = static_cast<double>(atoms) * static_cast<double>(steps * rounds);
   std::array<Burst, 2> total{};
   for (std::size_t c = 0; c < 2; ++c) {
     for (const Burst& b : bursts[c]) {
       total[c].loop_seconds += b.loop_seconds;
       for (std::size_t p = 0; p < phase_count; ++p) total[c].phase_seconds[p] += b.phase_seconds[p];
     }
-    const double atom_steps = static_cast<double>(atoms) * static_cast<double>(steps * pairs);
     std::printf("  %d thread%s: %.4g atom-steps/s (loop %.3f s)\n", counts[c],
                 counts[c] == 1 ? "" : "s", atom_steps / total[c].loop_seconds,
                 total[c].loop_seconds);
@@ -146,11 +186,36 @@ int measure(int argc, char** argv) {
   for (std::size_t k = 0; k < bursts[0].size(); ++k) {
     ratios.push_back(bursts[0][k].loop_seconds / bursts[1][k].loop_seconds);
   }
+  const double scaling = total[0].loop_seconds / total[1].loop_seconds;
   std::printf(
-      "  %d over %d threads: %.3fx (the summed loop times); pairs of bursts: median %.3fx, "
-      "quartiles %.3fx and %.3fx, range %.3fx to %.3fx\n",
-      counts[1], counts[0], total[0].loop_seconds / total[1].loop_seconds, quantile(ratios, 0.5),
-      quantile(ratios, 0.25), quantile(ratios, 0.75), quantile(ratios, 0.0), quantile(ratios, 1.0));
+      "  %d over %d threads: %.3fx (the summed loop times); rounds: median %.3fx, quartiles "
+      "%.3fx and %.3fx, range %.3fx to %.3fx\n",
+      counts[1], counts[0], scaling, quantile(ratios, 0.5), quantile(ratios, 0.25),
+      quantile(ratios, 0.75), quantile(ratios, 0.0), quantile(ratios, 1.0));
+  if (ceiling) {
+    // Each copy's rate over its bursts' summed loop times, A's runner's among them.
+    double own_seconds = 0;
+    for (const Burst& b : bursts[2]) own_seconds += b.loop_seconds;
+    double rate = atom_steps / own_seconds;
+    for (std::size_t k = 0; k < copies.size(); ++k) {
+      double seconds = 0;
+      for (std::size_t b = k; b < copy_seconds.size(); b += copies.size()) {
+        seconds += copy_seconds[b];
+      }
+      rate += atom_steps / seconds;
+    }
+    const double one = atom_steps / total[0].loop_seconds;
+    std::printf(
+        "  the machine's ceiling (%d one-thread copies at once, their rates summed, over one): "
+        "%.3fx; %d threads reach %.0f %% of it\n",
+        counts[1], rate / one, counts[1], 100.0 * scaling / (rate / one));
+  }
+  if (const long long spells = crowded_spells(); spells > 0) {
+    std::printf(
+        "  the team waited as passive %lld time%s (other threads crowded the CPUs: README, "
+        "\"Threads and vector instructions\"); the figures above include those spells\n",
+        spells, spells == 1 ? "" : "s");
+  }
   std::printf("  %-20s %10s %10s %8s\n", "phase", "A (s)", "B (s)", "A / B");
   for (std::size_t p = 0; p < phase_count; ++p) {
     const double a = total[0].phase_seconds[p], b = total[1].phase_seconds[p];
