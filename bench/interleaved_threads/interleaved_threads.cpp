@@ -85,17 +85,26 @@ class Runner {
   }
   // Runs `steps` steps; the count is set for the calling thread (OpenMP's setting is each
   // thread's own: a thread started by std::thread begins at the default count).
+  // A tenth as many steps first, not timed: a worker that slept through the other kinds'
+  // bursts is woken (possibly onto its waker's CPU, until the scheduler moves it) and spins
+  // again, and the burst's lines are brought back to the cores, as in a run's steady state.
   Burst burst(long steps) {
     set_thread_count(threads_);
     if (!integrator_) integrator_ = make_integrator(input_);
-    const RunStatistics stats = run(input_.system, *integrator_, steps, 0, {}, options_);
-    options_.set_up = false;
-    options_.start_temperature.reset();
+    advance(std::max(1L, steps / 10));
+    const RunStatistics stats = advance(steps);
     return Burst{stats.loop_seconds, stats.phase_seconds};
   }
   const RunInput& input() const { return input_; }
 
  private:
+  RunStatistics advance(long steps) {
+    const RunStatistics stats = run(input_.system, *integrator_, steps, 0, {}, options_);
+    options_.set_up = false;
+    options_.start_temperature.reset();
+    return stats;
+  }
+
   RunInput input_;
   int threads_;
   RunOptions options_;
