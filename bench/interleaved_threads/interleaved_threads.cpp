@@ -8,15 +8,14 @@
 // of the input at once, in turn and then the other way round (A B C, C B A, ...: a drift
 // within a round falls on every kind alike). The ratio is the kinds' summed loop times', beside
 // the spread of the rounds' own ratios, the fraction of the ceiling reached and the ratio
-// phase by phase. Each count runs its own copy of the input from the input's start (its bursts
-// one run of it); the set-up and a first burst of each kind are not timed, and the input's
-// outputs (thermo, trajectory) are not written.
+// phase by phase. Each count, and each copy, runs its own copy of the input from the input's
+// start (its bursts one run of it, a step per step of every burst); the set-up and a first
+// burst of each kind are not timed, each burst follows a tenth as many untimed steps (Runner),
+// and the input's outputs (thermo, trajectory) are not written.
 //   cmake --build build --target deli-interleaved-threads
 //   build/bench/interleaved_threads/deli-interleaved-threads INPUT.toml [ROUNDS [STEPS [A B]]]
-// ROUNDS (default 10): bursts of each kind; STEPS (default 1000): steps a burst, a few tenths
-// of a second at least (bursts of 300 steps of the 4000-sphere fluid, 0.07 s on two threads,
-// read 1.22-1.28x where bursts of 1500 read 1.33-1.37x); A and B (default 1 and 2): the
-// thread counts.
+// ROUNDS (default 10): bursts of each kind; STEPS (default 1000): steps a burst (a few tenths
+// of a second at least); A and B (default 1 and 2): the thread counts.
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -129,22 +128,23 @@ int measure(int argc, char** argv) {
     set_cheap_chunk_minimum(kUnsplitCheapChunk);
     set_cluster_chunk_minimum(kUnsplitClusterChunk);
   }
-  // The machine's ceiling, with A = 1: B one-thread copies of the input at once (each on a
-  // thread of its own, the first A's runner), their rates summed, over one alone. No code on
-  // B threads can beat it; cores that slow each other (shared caches, a host's other tenants)
-  // put it below B.
+  // The machine's ceiling, with A = 1: B one-thread copies of the input at once, each on a
+  // thread of its own (runners of their own: A's runner and B's advance alike, a step per step
+  // of a burst, and reach the input's later stretches together), their rates summed, over
+  // one alone. No code on B threads can beat it; cores that slow each other (shared caches, a
+  // host's other tenants) put it below B.
   const bool ceiling = counts[0] == 1 && counts[1] > 1;
   std::vector<std::unique_ptr<Runner>> copies;
   if (ceiling) {
-    for (int k = 1; k < counts[1]; ++k) copies.push_back(std::make_unique<Runner>(path, 1));
+    for (int k = 0; k < counts[1]; ++k) copies.push_back(std::make_unique<Runner>(path, 1));
   }
-  // A burst of each copy's and of A's runner at once: the runner's burst; each copy's loop time
-  // into copy_seconds.
+  // A burst of every copy's at once, the first on this thread: each copy's loop time into
+  // copy_seconds.
   auto copies_at_once = [&](std::vector<double>& copy_seconds) {
     std::vector<Burst> of_copy(copies.size());
     std::vector<std::exception_ptr> failed(copies.size());
     std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < copies.size(); ++k) {
+    for (std::size_t k = 1; k < copies.size(); ++k) {
       threads.emplace_back([&, k] {
         try {
           of_copy[k] = copies[k]->burst(steps);
@@ -153,28 +153,34 @@ int measure(int argc, char** argv) {
         }
       });
     }
-    const Burst own = runners[0]->burst(steps);
+    try {
+      of_copy[0] = copies[0]->burst(steps);
+    } catch (...) {
+      failed[0] = std::current_exception();
+    }
     for (std::thread& t : threads) t.join();
     for (const std::exception_ptr& e : failed) {
       if (e) std::rethrow_exception(e);
     }
     for (const Burst& b : of_copy) copy_seconds.push_back(b.loop_seconds);
-    return own;
   };
   // The set-up, the team started, everything warm: not timed.
   for (const std::unique_ptr<Runner>& r : runners) r->burst(steps);
-  std::vector<double> unused;
-  if (ceiling) copies_at_once(unused);
-  // Kinds: A threads, B threads, the copies at once. Each pair of bursts in turn, then the
+  std::vector<double> copy_seconds;  // per round, copies.size() of them in a row
+  if (ceiling) copies_at_once(copy_seconds);
+  copy_seconds.clear();
+  // Kinds: A threads, B threads, the copies at once. Each kind's burst in turn, then the
   // other way round (A B C, C B A, ...): a drift within a round falls on every kind alike.
   const std::size_t kinds = ceiling ? 3 : 2;
-  std::array<std::vector<Burst>, 3> bursts;
-  std::vector<double> copy_seconds;  // per copy burst, copies.size() of them in a row
+  std::array<std::vector<Burst>, 2> bursts;
   for (long round = 0; round < rounds; ++round) {
     for (std::size_t k = 0; k < kinds; ++k) {
       const std::size_t kind = round % 2 == 0 ? k : kinds - 1 - k;
-      bursts[kind].push_back(kind == 2 ? copies_at_once(copy_seconds)
-                                       : runners[kind]->burst(steps));
+      if (kind == 2) {
+        copies_at_once(copy_seconds);
+      } else {
+        bursts[kind].push_back(runners[kind]->burst(steps));
+      }
     }
   }
   const std::size_t atoms = input.system.particles.size();
@@ -202,10 +208,8 @@ int measure(int argc, char** argv) {
       counts[1], counts[0], scaling, quantile(ratios, 0.5), quantile(ratios, 0.25),
       quantile(ratios, 0.75), quantile(ratios, 0.0), quantile(ratios, 1.0));
   if (ceiling) {
-    // Each copy's rate over its bursts' summed loop times, A's runner's among them.
-    double own_seconds = 0;
-    for (const Burst& b : bursts[2]) own_seconds += b.loop_seconds;
-    double rate = atom_steps / own_seconds;
+    // Each copy's rate over its bursts' summed loop times.
+    double rate = 0;
     for (std::size_t k = 0; k < copies.size(); ++k) {
       double seconds = 0;
       for (std::size_t b = k; b < copy_seconds.size(); b += copies.size()) {
