@@ -59,6 +59,14 @@ int run_with_output(RunInput& input, const std::string& path, const std::string&
                     const Checkpoint& checkpoint, std::uint64_t fingerprint, RunLog& out);
 }  // namespace
 
+void apply_chunk_settings(const RunInput& input) {
+  set_chunk_balance(input.balance_threads);
+  if (!input.split_small_loops) {
+    set_cheap_chunk_minimum(kUnsplitCheapChunk);
+    set_cluster_chunk_minimum(kUnsplitClusterChunk);
+  }
+}
+
 int command_run(const std::vector<std::string>& args) {
   std::string path, restart;
   int threads = 0;
@@ -100,11 +108,7 @@ int command_run(const std::vector<std::string>& args) {
                           std::to_string(quota) + " thread" + (quota == 1 ? "" : "s") +
                           " by default (--threads N to choose)");
   }
-  set_chunk_balance(input.balance_threads);
-  if (!input.split_small_loops) {
-    set_cheap_chunk_minimum(kUnsplitCheapChunk);
-    set_cluster_chunk_minimum(kUnsplitClusterChunk);
-  }
+  apply_chunk_settings(input);
   const std::uint64_t fingerprint = system_fingerprint(input.system, input.model_text);
   Checkpoint checkpoint;
   if (!restart.empty()) {

@@ -5,6 +5,12 @@
 
 namespace deli {
 
+struct RunInput;
+
+// The input's [run] settings of how the loops are cut into chunks (balance_threads,
+// split_small_loops), for this process, as `deli run` applies them.
+void apply_chunk_settings(const RunInput& input);
+
 // Each returns the process exit status; errors are thrown (InputError, SimulationError).
 int command_run(const std::vector<std::string>& args);
 int command_write_data(const std::vector<std::string>& args);

@@ -27,8 +27,8 @@
 #include <thread>
 #include <vector>
 
+#include "cli/commands.hpp"
 #include "cli/integrator_factory.hpp"
-#include "core/chunk_balance.hpp"
 #include "core/parallel.hpp"
 #include "core/phase_timer.hpp"
 #include "core/thread_team.hpp"
@@ -123,11 +123,7 @@ int measure(int argc, char** argv) {
   std::array<std::unique_ptr<Runner>, 2> runners{std::make_unique<Runner>(path, counts[0]),
                                                  std::make_unique<Runner>(path, counts[1])};
   const RunInput& input = runners[0]->input();
-  set_chunk_balance(input.balance_threads);
-  if (!input.split_small_loops) {
-    set_cheap_chunk_minimum(kUnsplitCheapChunk);
-    set_cluster_chunk_minimum(kUnsplitClusterChunk);
-  }
+  apply_chunk_settings(input);
   // The machine's ceiling, with A = 1: B one-thread copies of the input at once, each on a
   // thread of its own (runners of their own: A's runner and B's advance alike, a step per step
   // of a burst, and reach the input's later stretches together), their rates summed, over
