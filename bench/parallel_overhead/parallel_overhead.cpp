@@ -8,17 +8,22 @@
 // between the threads' cores costs: a cache line handed back and forth, and the chunked
 // kick with the chunks' owners swapped every pass (each pass reads the lines the other
 // core wrote last), against the same kick with the chunks kept; per line, reads of many
-// lines the other core wrote last (in order and shuffled) and stores to lines it read; and a
-// step's exchange of two halves as a 4000-particle box's pair loop makes it.
+// lines the other core wrote last (in order and shuffled) and stores to lines it read; a
+// step's exchange of two halves as a 4000-particle box's pair loop makes it; and how much the
+// same fixed work's time wanders from call to call, and between two threads within a call
+// (what a loop of fixed chunks loses at its end, whatever its code).
 //   cmake --build build --target deli-parallel-overhead
 //   OMP_NUM_THREADS=2 build/bench/parallel_overhead/deli-parallel-overhead
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -300,6 +305,107 @@ void HalvesExchanged(benchmark::State& state) {
   state.counters["sums_us"] = 1e6 * sums / steps;
 }
 BENCHMARK(HalvesExchanged)->UseRealTime();
+
+// The same fixed work (state.range(0) microseconds on one thread) again and again: on one
+// thread, how much a call's time changes from the call before; on two threads in one job of
+// the team, each making the same work, how far apart their times are within a call and what
+// the slower of the two costs over the mean. A loop whose chunks are fixed and must all end
+// before the next pass (the pair forces' sums, in equal chunks for their bits) pays that on
+// every call whatever its code: where a core's speed wanders from one tenth of a millisecond
+// to the next (a virtual machine's vCPUs), it shows here. state.range(1): 0, arithmetic on
+// data in L1; 1, a pair list's reads (a 4000-particle liquid's 150 000 listed partners, 0.6
+// MB, each partner's position gathered from 128 KB, as the pair loop reads them).
+class FixedWork {
+ public:
+  explicit FixedWork(bool gathers) : gathers_(gathers) {
+    for (std::size_t i = 0; i < data_.size(); ++i) data_[i] = 1.0 + 1e-3 * static_cast<double>(i);
+    if (!gathers_) return;
+    std::mt19937 random(7);
+    std::uniform_int_distribution<std::uint32_t> pick(0, kParticles - 1);
+    partner_.resize(150000);
+    for (std::uint32_t& j : partner_) j = pick(random);
+    position_.assign(4 * kParticles, 1.0);
+  }
+  double run(std::size_t passes) const {
+    double sum = 0.0;
+    for (std::size_t p = 0; p < passes; ++p) {
+      if (gathers_) {
+        for (const std::uint32_t j : partner_) sum += position_[4 * j] * position_[4 * j + 1];
+      } else {
+        for (const double d : data_) sum += 1.0 / (d * d + sum * 1e-300);
+      }
+      benchmark::DoNotOptimize(sum);
+    }
+    return sum;
+  }
+  // Passes that take about `us` microseconds on this thread.
+  std::size_t passes_for(double us) const {
+    using Clock = std::chrono::steady_clock;
+    const std::size_t trial = gathers_ ? 2 : 200;
+    const auto t0 = Clock::now();
+    for (int k = 0; k < 5; ++k) benchmark::DoNotOptimize(run(trial));
+    const double per_pass = std::chrono::duration<double, std::micro>(Clock::now() - t0).count() /
+                            (5.0 * static_cast<double>(trial));
+    return std::max<std::size_t>(1, static_cast<std::size_t>(us / per_pass));
+  }
+
+ private:
+  bool gathers_;
+  std::array<double, 512> data_{};
+  std::vector<std::uint32_t> partner_;
+  std::vector<double> position_;
+};
+
+void FixedWorkJitterOneThread(benchmark::State& state) {
+  using Clock = std::chrono::steady_clock;
+  const FixedWork work(state.range(1) != 0);
+  const std::size_t passes = work.passes_for(static_cast<double>(state.range(0)));
+  double total = 0.0, change = 0.0, last = 0.0;
+  std::int64_t calls = 0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    benchmark::DoNotOptimize(work.run(passes));
+    const double t = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    if (calls > 0) change += std::abs(t - last);
+    last = t, total += t, ++calls;
+  }
+  const double mean = total / static_cast<double>(calls);
+  state.counters["mean_us"] = mean;
+  state.counters["change_pct"] = 100.0 * change / static_cast<double>(calls - 1) / mean;
+}
+BENCHMARK(FixedWorkJitterOneThread)->Args({300, 0})->Args({300, 1})->UseRealTime();
+
+void FixedWorkJitterTwoThreads(benchmark::State& state) {
+  using Clock = std::chrono::steady_clock;
+  // One copy a thread, made by its thread (its lines in its core's caches).
+  std::array<std::unique_ptr<FixedWork>, 2> work;
+  auto make = [&](int thread, int) {
+    work[static_cast<std::size_t>(thread)] = std::make_unique<FixedWork>(state.range(1) != 0);
+  };
+  run_on_team(2, make);
+  const std::size_t passes = work[0]->passes_for(static_cast<double>(state.range(0)));
+  double total = 0.0, apart = 0.0, slower = 0.0;
+  std::int64_t calls = 0;
+  for (auto _ : state) {
+    double t[2] = {0.0, 0.0};
+    auto job = [&](int thread, int) {
+      const auto t0 = Clock::now();
+      benchmark::DoNotOptimize(work[static_cast<std::size_t>(thread)]->run(passes));
+      t[thread] = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    };
+    run_on_team(2, job);
+    total += t[0] + t[1];
+    apart += std::abs(t[0] - t[1]);
+    slower += std::max(t[0], t[1]);
+    ++calls;
+  }
+  const double mean = total / (2.0 * static_cast<double>(calls));
+  state.counters["mean_us"] = mean;
+  state.counters["apart_pct"] = 100.0 * apart / static_cast<double>(calls) / mean;
+  state.counters["slower_over_mean_pct"] =
+      100.0 * (slower / static_cast<double>(calls) / mean - 1.0);
+}
+BENCHMARK(FixedWorkJitterTwoThreads)->Args({300, 0})->Args({300, 1})->UseRealTime();
 
 }  // namespace
 }  // namespace deli
