@@ -28,6 +28,7 @@
 #include <random>
 #include <vector>
 
+#include "core/cache_line.hpp"
 #include "core/parallel.hpp"
 #include "core/thread_team.hpp"
 #include "core/vec3.hpp"
@@ -371,7 +372,9 @@ void FixedWorkJitterOneThread(benchmark::State& state) {
   }
   const double mean = total / static_cast<double>(calls);
   state.counters["mean_us"] = mean;
-  state.counters["change_pct"] = 100.0 * change / static_cast<double>(calls - 1) / mean;
+  // A single call has no change to measure.
+  state.counters["change_pct"] =
+      calls > 1 ? 100.0 * change / static_cast<double>(calls - 1) / mean : 0.0;
 }
 BENCHMARK(FixedWorkJitterOneThread)->Args({300, 0})->Args({300, 1})->UseRealTime();
 
@@ -387,16 +390,18 @@ void FixedWorkJitterTwoThreads(benchmark::State& state) {
   double total = 0.0, apart = 0.0, slower = 0.0;
   std::int64_t calls = 0;
   for (auto _ : state) {
-    double t[2] = {0.0, 0.0};
+    // Each thread's time on a line of its own, written once a call.
+    std::array<OnItsOwnLine<double>, 2> t;
     auto job = [&](int thread, int) {
       const auto t0 = Clock::now();
       benchmark::DoNotOptimize(work[static_cast<std::size_t>(thread)]->run(passes));
-      t[thread] = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+      t[static_cast<std::size_t>(thread)].value =
+          std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
     };
     run_on_team(2, job);
-    total += t[0] + t[1];
-    apart += std::abs(t[0] - t[1]);
-    slower += std::max(t[0], t[1]);
+    total += t[0].value + t[1].value;
+    apart += std::abs(t[0].value - t[1].value);
+    slower += std::max(t[0].value, t[1].value);
     ++calls;
   }
   const double mean = total / (2.0 * static_cast<double>(calls));
