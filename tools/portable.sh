@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The build without the build machine's instruction set (`-DDELI_NATIVE=OFF`: the pair
-# kernels, the rod chains' passes, the list build's candidate test and the Langevin draws in
-# their portable x86-64 forms, build-portable/) and the whole suite on it, as the README's
+# kernels, the rod chains' passes, the list build's candidate test, GVI's particle passes and
+# the Langevin draws in their portable x86-64 forms, build-portable/) and the whole suite on it, as the README's
 # test command runs it: the tests pass with DELI_NATIVE on and off. By hand: CI runs the
 # suite on a portable build in its sanitizer pass (tools/sanitize.sh), not here.
 #   tools/portable.sh            DELI_JOBS=N for N parallel compiles and tests (default: nproc)
