@@ -46,10 +46,9 @@ flags="-O1 -g1 -fno-omit-frame-pointer -fsanitize=address,undefined,float-cast-o
 # start and leak-check at exit (10 ms in the plain build), which over ~600 cases was about a
 # fifth of this pass's test time. Extra arguments to ctest (-R) match the groups' names
 # (a suite's, or "Suite[1-16]").
-# DELI_NATIVE=OFF: this pass is also CI's run of the suite on the portable build (the pair
-# kernels, the rod chains' passes, the list build's candidate test, the Langevin draws and
-# GVI's particle passes in their portable forms), so that the tests pass with the build
-# machine's instruction set (the plain pass) and without it (here). A Release build of its
+# DELI_NATIVE=OFF: this pass is also CI's run of the suite on the portable build (the files
+# the README's "Vector instructions" names, in their portable forms), so that the tests pass
+# with the build machine's instruction set (the plain pass) and without it (here). A Release build of its
 # own for that (tools/portable.sh) took 477 of CI's 1612 s on the 2-vCPU Intel Xeon machine
 # (stop 75), and CI's budget is 20 minutes. The vector forms run in the plain pass, not under
 # the sanitizers, which would not check their masked loads and gathers anyway (GCC 12: an
